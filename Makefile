@@ -1,0 +1,42 @@
+# biped-sim: every target sets up its own environment on a fresh machine (Python 3.11 + pip).
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+CONFIG ?= configs/round_foot_walker.yaml
+
+.PHONY: setup setup-bench run test validate bench lint format sweep-demo clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test,dask]"
+	touch $(STAMP)
+
+setup: $(STAMP)            ## create .venv and install the package (editable) with test extras
+
+setup-bench: $(STAMP)      ## also install MuJoCo for the benchmark comparison
+	$(BIN)/python -m pip install --quiet -e ".[bench]"
+
+run: $(STAMP)              ## simulate the default walker; print its step table and where its files went
+	$(BIN)/biped-sim run $(CONFIG)
+
+test: $(STAMP)             ## the fast test suite
+	$(BIN)/python -m pytest -q
+
+validate: $(STAMP)         ## long physics checks against analytic and published numbers
+	$(BIN)/biped-sim validate
+
+bench: $(STAMP)            ## performance benchmark (writes results/bench/)
+	$(BIN)/biped-sim bench
+
+lint: $(STAMP)
+	$(BIN)/ruff check src tests
+	$(BIN)/ruff format --check src tests
+
+format: $(STAMP)
+	$(BIN)/ruff format src tests
+	$(BIN)/ruff check --fix src tests
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache

@@ -1,0 +1,16 @@
+"""biped-sim: passive dynamic walkers with compliant, dissipative foot-ground contact and friction.
+
+The public API::
+
+    from biped_sim import load_config, simulate, run
+    result = simulate(load_config("configs/round_foot_walker.yaml", ["ground.slope=0.03"]))
+"""
+
+from __future__ import annotations
+
+from biped_sim.config import Config, config_from_dict, load_config
+from biped_sim.errors import ConfigError
+from biped_sim.simulate import RunResult, run, simulate
+
+__version__ = "0.1.0"
+__all__ = ["Config", "ConfigError", "RunResult", "config_from_dict", "load_config", "run", "simulate"]

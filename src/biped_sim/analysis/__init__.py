@@ -1,0 +1,1 @@
+"""Analysis: gait metrics, energy audit, drop test, limit cycles, validation."""

@@ -1,0 +1,15 @@
+"""The ``biped-sim`` command line: a thin typer layer over the Python API.
+
+Each command module registers its commands on :data:`app`; every command turns bad input
+(:class:`~biped_sim.errors.ConfigError`) into a one-line message and exit code 2.
+"""
+
+from __future__ import annotations
+
+from biped_sim.cli import run_commands  # noqa: F401  (registers commands)
+from biped_sim.cli.common import app
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()

@@ -1,0 +1,134 @@
+"""``biped-sim run`` and ``biped-sim drop-test``."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
+from biped_sim.config import default_output_dir
+from biped_sim.errors import ConfigError
+from biped_sim.simulate import RunResult, simulate
+from biped_sim.walkers import build_model
+
+
+def _fmt(value: float, digits: int = 5) -> str:
+    return "" if not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def step_table_rich(result: RunResult) -> Table:
+    """The per-step table printed after a run."""
+    table = Table(title="Steps", show_lines=False)
+    for column in ("step", "t [s]", "foot", "period [s]", "length [m]", "slip [m]", "stance [rad]", "swing [rad]"):
+        table.add_column(column, justify="right")
+    s = result.steps
+    for k in range(len(s.strike_time)):
+        table.add_row(
+            str(k + 1),
+            _fmt(s.strike_time[k], 4),
+            str(int(s.foot[k])),
+            _fmt(s.period[k]),
+            _fmt(s.length[k]),
+            f"{s.slip[k]:.2e}" if math.isfinite(s.slip[k]) else "",
+            _fmt(s.stance_angle[k], 4),
+            _fmt(s.swing_angle[k], 4),
+        )
+    return table
+
+
+def summary_line(result: RunResult) -> str:
+    """One line: status, steps, mean period, speed, energy residual, constraint violation, cost."""
+    s = result.summary
+    status = s["status"] + (f" at t={s['stop_time']:.3f} s" if s["stop_time"] is not None else "")
+    period = s["mean_step_period"]
+    return (
+        f"{status}: {s['n_steps']} steps, mean period {period:.5f} s, speed {s['mean_speed']:.4f} m/s, "
+        if period is not None
+        else f"{status}: {s['n_steps']} steps, "
+    ) + (
+        f"energy residual {s['energy_residual_max_relative']:.1e} m g l, "
+        f"|Phi| <= {s['constraint_violation_max']['position']:.1e} m, "
+        f"{s['rhs_evals']} RHS evaluations in {s['wall_time_s']:.2f} s"
+    )
+
+
+@app.command("run")
+@user_errors
+def run_command(
+    config_path: ConfigArgument,
+    set_: SetOption = None,
+    out: Annotated[
+        Path | None, typer.Option("--out", help="Run directory (default: output.dir or results/runs/<stem>).")
+    ] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar and no step table.")] = False,
+) -> None:
+    """Simulate one walker and write trajectory.h5, summary.json and steps.csv."""
+    from biped_sim.io.results import write_run
+
+    config = load(config_path, set_)
+    out_dir = out or default_output_dir(config, config_path)
+    model = build_model(config)  # validates geometry and the initial state before anything is written
+    console = Console(stderr=False)
+    show_progress = not quiet and sys.stdout.isatty()
+    if show_progress:
+        with Progress(
+            TextColumn("[bold]simulating"),
+            BarColumn(),
+            TextColumn("t = {task.completed:.2f} / {task.total:.2f} s"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console,
+            transient=True,
+        ) as bar:
+            task = bar.add_task("run", total=config.simulation.t_end)
+            result = simulate(config, model=model, progress=lambda t: bar.update(task, completed=t))
+    else:
+        result = simulate(config, model=model)
+    write_run(result, out_dir)
+    if not quiet:
+        console.print(step_table_rich(result))
+    console.print(summary_line(result), highlight=False, soft_wrap=True)
+    console.print(f"files: {out_dir}/ (trajectory.h5, summary.json, steps.csv, config.yaml)", highlight=False)
+
+
+@app.command("drop-test")
+@user_errors
+def drop_test_command(
+    model: Annotated[list[str] | None, typer.Option("--model", help="Normal law (repeatable; default: all).")] = None,
+    restitution: Annotated[
+        list[float] | None, typer.Option("--restitution", help="Nominal e (repeatable; default 0.3 0.5 0.7 0.9).")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+) -> None:
+    """Drop a disc on the ground without friction: effective restitution of each normal law."""
+    from biped_sim.analysis.drop_test import DROP_TEST_RESTITUTIONS, drop_test_table
+    from biped_sim.contact.normal import NORMAL_LAWS
+
+    models = model or list(NORMAL_LAWS)
+    for name in models:
+        if name not in NORMAL_LAWS:
+            raise ConfigError("--model", f"unknown normal law {name!r}; expected one of {', '.join(NORMAL_LAWS)}")
+    values = restitution or list(DROP_TEST_RESTITUTIONS)
+    for e in values:
+        if not 0.0 < e <= 1.0:
+            raise ConfigError("--restitution", f"{e} is not in (0, 1]")
+    rows = drop_test_table(models, values)
+    if as_json:
+        typer.echo(json.dumps(rows, indent=2))
+        return
+    table = Table(title="Drop test: effective restitution (separation / approach speed)")
+    table.add_column("model")
+    for e in values:
+        table.add_column(f"e = {e:g}", justify="right")
+    for name in models:
+        cells = [f"{r['effective_restitution']:.4f}" for r in rows if r["model"] == name]
+        table.add_row(name, *cells)
+    Console().print(table)

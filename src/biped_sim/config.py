@@ -1,0 +1,353 @@
+"""Configuration schema: the one place where defaults, units and validation rules live.
+
+All quantities are SI (m, kg, s, N, Pa) and angles are radians. The schema maps one-to-one
+onto the YAML files in ``configs/``; unknown keys are errors so that a typo is never silently
+ignored. ``load_config`` reads YAML (with a YAML-1.2-style float resolver so that ``1e7`` is a
+number), applies ``--set key=value`` overrides and validates; every failure becomes a
+:class:`~biped_sim.errors.ConfigError` naming the dotted field and the reason.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from biped_sim.errors import ConfigError
+
+
+class _Strict(BaseModel):
+    """Base for every section: unknown keys are rejected."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+class WalkerConfig(_Strict):
+    """Geometry and inertia of the walker (MODEL.md 1)."""
+
+    kind: Literal["compass", "simplest", "rimless_wheel"] = Field(
+        "compass",
+        description=(
+            "Walker builder: 'compass' = two straight legs, round feet, hip joint; 'simplest' = Garcia's "
+            "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only)."
+        ),
+    )
+    spokes: int = Field(8, ge=3, description="Number of spokes (rimless_wheel).")
+    leg_length: float = Field(0.5, gt=0, description="Hip to foot bottom, l [m].")
+    foot_radius: float = Field(
+        0.15,
+        ge=0,
+        description="Foot arc radius R [m]; arc centre on the leg axis at l - R from the hip; 0 = point foot.",
+    )
+    leg_mass: float = Field(1.0, gt=0, description="Mass of one leg, m [kg].")
+    leg_com_from_hip: float = Field(0.15, ge=0, description="Leg centre of mass distance from the hip, c [m].")
+    leg_inertia: float = Field(0.005, ge=0, description="Leg moment of inertia about its centre of mass, I [kg m^2].")
+    hip_mass: float = Field(2.0, ge=0, description="Hip point mass M_H [kg], split half to each leg at the hip.")
+
+    @model_validator(mode="after")
+    def _geometry_is_possible(self) -> WalkerConfig:
+        if self.foot_radius >= self.leg_length:
+            raise ValueError("foot_radius: must be smaller than walker.leg_length")
+        if self.leg_com_from_hip > self.leg_length:
+            raise ValueError("leg_com_from_hip: must not exceed walker.leg_length")
+        return self
+
+
+class GroundConfig(_Strict):
+    """The slope: a plane through the origin inclined downhill by ``slope``."""
+
+    slope: float = Field(0.02, gt=-math.pi / 2, lt=math.pi / 2, description="Downhill slope angle gamma [rad].")
+
+
+class MaterialConfig(_Strict):
+    """Elastic constants of one contacting body."""
+
+    youngs_modulus: float = Field(..., gt=0, description="Young's modulus E [Pa].")
+    poisson_ratio: float = Field(..., ge=0, lt=0.5, description="Poisson ratio nu [-].")
+
+
+class MaterialsConfig(_Strict):
+    """Foot and ground materials; the contact stiffness then follows from Hertz theory."""
+
+    foot: MaterialConfig = Field(
+        default_factory=lambda: MaterialConfig(youngs_modulus=50e6, poisson_ratio=0.45),
+        description="Default: a polyurethane-like polymer foot.",
+    )
+    ground: MaterialConfig = Field(
+        default_factory=lambda: MaterialConfig(youngs_modulus=10e9, poisson_ratio=0.3),
+        description="Default: a hard (wood/laminate) floor.",
+    )
+
+
+NormalModelName = Literal["hertz", "kelvin_voigt", "hunt_crossley", "lankarani_nikravesh", "flores"]
+FrictionModelName = Literal["none", "coulomb", "threlfall", "ambrosio", "bengisu_akay", "brown_mcphee", "lugre"]
+IntegratorName = Literal["euler", "rk2", "rk4", "dopri5", "dop853", "radau", "bdf"]
+
+
+class ContactConfig(_Strict):
+    """Normal contact force law (MODEL.md 3-4)."""
+
+    model: NormalModelName = Field("flores", description="Normal force law.")
+    stiffness: float | None = Field(
+        None, gt=0, description="K [N/m^n]; if omitted, computed from `materials` and the foot radius (Hertz)."
+    )
+    materials: MaterialsConfig | None = Field(
+        None,
+        description="Young's moduli and Poisson ratios; default materials when neither this nor stiffness is given.",
+    )
+    exponent: float = Field(1.5, gt=0, description="Force exponent n (Hertz: 3/2). Kelvin-Voigt always uses 1.")
+    restitution: float = Field(0.3, gt=0, le=1, description="Coefficient of restitution e.")
+    damping: float | None = Field(
+        None, ge=0, description="Kelvin-Voigt damping D [N s/m]; if omitted, from e and the walker's effective mass."
+    )
+    scuffing_guard: bool = Field(True, description="Ignore swing-foot scuffing at mid-stance (MODEL.md 3).")
+    impact_velocity_floor: float = Field(
+        1e-3,
+        gt=0,
+        description="Lower bound [m/s] on the remembered impact velocity (avoids division by ~0 on grazing contact).",
+    )
+
+    @model_validator(mode="after")
+    def _one_stiffness_source(self) -> ContactConfig:
+        if self.stiffness is not None and self.materials is not None:
+            raise ValueError("stiffness: give either contact.stiffness or contact.materials, not both")
+        return self
+
+
+class FrictionConfig(_Strict):
+    """Tangential friction law (MODEL.md 5); each law reads the parameters it names."""
+
+    model: FrictionModelName = Field("ambrosio", description="Friction law.")
+    mu_kinetic: float = Field(0.6, ge=0, description="Kinetic coefficient mu_k.")
+    mu_static: float = Field(0.8, ge=0, description="Static coefficient mu_s (Bengisu-Akay, Brown-McPhee, LuGre).")
+    v0: float = Field(
+        1e-3,
+        gt=0,
+        description="Stick threshold [m/s]: Threlfall v0, Ambrosio v0, Brown-McPhee v_t0, Coulomb regularisation width.",
+    )
+    v1: float = Field(1e-2, gt=0, description="Ambrosio full-slip velocity v1 [m/s] (> v0).")
+    v_stribeck: float = Field(1e-3, gt=0, description="Stribeck velocity v_s [m/s] (Bengisu-Akay, LuGre).")
+    stribeck_decay: float = Field(100.0, ge=0, description="Bengisu-Akay decay rate xi [s/m].")
+    viscous: float = Field(0.0, ge=0, description="Viscous coefficient [N s/m] (Brown-McPhee mu_v).")
+    sigma0: float = Field(1e5, gt=0, description="LuGre bristle stiffness sigma0 [N/m].")
+    sigma1: float = Field(300.0, ge=0, description="LuGre bristle damping sigma1 [N s/m].")
+    sigma2: float = Field(0.0, ge=0, description="LuGre viscous coefficient sigma2 [N s/m].")
+
+    @model_validator(mode="after")
+    def _thresholds_ordered(self) -> FrictionConfig:
+        if self.model == "ambrosio" and self.v1 <= self.v0:
+            raise ValueError("v1: must be greater than friction.v0")
+        return self
+
+
+class BaumgarteConfig(_Strict):
+    """Baumgarte stabilisation gains; alpha = beta = 0 is the standard method (MODEL.md 2)."""
+
+    alpha: float = Field(10.0, ge=0, description="Velocity gain alpha [1/s].")
+    beta: float = Field(10.0, ge=0, description="Position gain beta [1/s].")
+
+
+class FormulationConfig(_Strict):
+    """Multibody formulation."""
+
+    kind: Literal["planar"] = Field("planar", description="Planar absolute coordinates (x, y, phi) per body.")
+    baumgarte: BaumgarteConfig = Field(default_factory=BaumgarteConfig)
+
+
+class IntegratorConfig(_Strict):
+    """Time integrator (MODEL.md 6)."""
+
+    method: IntegratorName = Field("dopri5", description="Integration method.")
+    dt: float = Field(1e-4, gt=0, description="Fixed step [s] (euler, rk2, rk4).")
+    rtol: float = Field(1e-8, gt=0, description="Relative tolerance (adaptive methods).")
+    atol: float = Field(1e-10, gt=0, description="Absolute tolerance (adaptive methods).")
+    max_step: float = Field(1e-2, gt=0, description="Largest step [s] (adaptive methods).")
+    adaptive: bool = Field(True, description="Step-size control; false runs dopri5/dop853 at fixed dt (order tests).")
+
+
+class InitialState(_Strict):
+    """Leg angles from the slope normal, positive when the foot is downhill of the hip (README)."""
+
+    stance_angle: float = Field(0.25, description="Stance leg angle theta_st [rad].")
+    stance_rate: float = Field(-1.6, description="Stance leg angular rate [rad/s].")
+    swing_angle: float = Field(-0.25, description="Swing leg angle theta_sw [rad].")
+    swing_rate: float = Field(-0.5, description="Swing leg angular rate [rad/s].")
+
+
+class SimulationConfig(_Strict):
+    """What to simulate and when to stop."""
+
+    t_end: float = Field(15.0, gt=0, description="Simulated time [s].")
+    max_steps: int | None = Field(None, gt=0, description="Stop after this many heel strikes (none = run to t_end).")
+    initial: InitialState | Literal["rigid_limit_cycle"] = Field(
+        default_factory=InitialState,
+        description="Initial leg angles and rates, or 'rigid_limit_cycle' to start on the rigid model's fixed point.",
+    )
+    fall_hip_height: float = Field(
+        0.5, gt=0, lt=1, description="Fall when the hip height above the slope drops below this fraction of leg_length."
+    )
+    fall_leg_angle: float = Field(
+        1.4, gt=0, description="Fall when a leg is further than this from the slope normal [rad]."
+    )
+
+
+class OutputConfig(_Strict):
+    """Where and how densely results are written."""
+
+    dir: str | None = Field(None, description="Run directory; default results/runs/<config stem>.")
+    sample_rate: float = Field(1000.0, gt=0, description="Trajectory samples per simulated second [Hz].")
+
+
+class Config(_Strict):
+    """A complete, validated simulation description."""
+
+    dynamics: Literal["compliant", "rigid"] = Field(
+        "compliant", description="'compliant' = penalty contact (the paper); 'rigid' = hybrid impulsive model."
+    )
+    walker: WalkerConfig = Field(default_factory=WalkerConfig)
+    gravity: float = Field(9.81, gt=0, description="Gravitational acceleration g [m/s^2].")
+    ground: GroundConfig = Field(default_factory=GroundConfig)
+    contact: ContactConfig = Field(default_factory=ContactConfig)
+    friction: FrictionConfig = Field(default_factory=FrictionConfig)
+    formulation: FormulationConfig = Field(default_factory=FormulationConfig)
+    integrator: IntegratorConfig = Field(default_factory=IntegratorConfig)
+    simulation: SimulationConfig = Field(default_factory=SimulationConfig)
+    output: OutputConfig = Field(default_factory=OutputConfig)
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> Config:
+        if self.dynamics == "compliant" and self.walker.kind in ("simplest", "rimless_wheel"):
+            raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
+        if self.contact.stiffness is None and self.walker.foot_radius == 0:
+            raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
+        if self.friction.model != "none" and math.tan(abs(self.ground.slope)) >= max(
+            self.friction.mu_static, self.friction.mu_kinetic
+        ):
+            raise ValueError(
+                "ground.slope: steeper than the friction cone (tan(slope) >= friction coefficient), "
+                "the stance foot cannot hold"
+            )
+        return self
+
+    def hash(self) -> str:
+        """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""
+        data = self.model_dump(mode="json")
+        data["output"].pop("dir", None)
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def to_yaml(self) -> str:
+        """The fully resolved config as YAML text (every default written out)."""
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that reads ``1e7`` as a float (YAML 1.2) and ``on``/``off`` as strings."""
+
+
+_FLOAT_RE = re.compile(
+    r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+    |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+    |\.[0-9_]+(?:[eE][-+][0-9]+)?
+    |[-+]?\.(?:inf|Inf|INF)
+    |\.(?:nan|NaN|NAN))$""",
+    re.X,
+)
+_Loader.yaml_implicit_resolvers = {
+    key: [(tag, rx) for tag, rx in resolvers if tag not in ("tag:yaml.org,2002:float", "tag:yaml.org,2002:bool")]
+    for key, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_RE, list("-+0123456789."))
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
+
+
+def parse_yaml(text: str, source: str = "<string>") -> Any:
+    """Parse YAML text with the project's loader; a syntax error becomes a one-line ConfigError."""
+    try:
+        return yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(source, f"malformed YAML{where}: {problem}") from None
+
+
+def apply_override(data: dict[str, Any], assignment: str) -> None:
+    """Apply one ``dotted.key=value`` override (value parsed as YAML) to a raw config dict in place."""
+    if "=" not in assignment:
+        raise ConfigError("--set", f"expected KEY=VALUE, got {assignment!r}")
+    key, _, raw_value = assignment.partition("=")
+    key = key.strip()
+    if not key or any(not part for part in key.split(".")):
+        raise ConfigError("--set", f"invalid key {key!r}")
+    value = parse_yaml(raw_value, source=f"--set {key}")
+    node = data
+    parts = key.split(".")
+    for part in parts[:-1]:
+        child = node.get(part)
+        if not isinstance(child, dict):
+            child = {}
+            node[part] = child
+        node = child
+    node[parts[-1]] = value
+
+
+def _format_validation_error(exc: ValidationError) -> ConfigError:
+    """Turn pydantic's first error into one line: dotted field and reason."""
+    err = exc.errors()[0]
+    loc = ".".join(str(part) for part in err["loc"])
+    message = err["msg"]
+    if message.startswith("Value error, "):
+        message = message[len("Value error, ") :]
+        # validators name their own field as "field: reason"
+        field, sep, reason = message.partition(": ")
+        if sep and "." not in field and loc:
+            return ConfigError(f"{loc}.{field}", reason)
+        if sep:
+            return ConfigError(field, reason)
+    if err["type"] == "extra_forbidden":
+        message = "unknown key (not in the schema)"
+    elif err["type"] == "literal_error":
+        message = f"unknown name {err.get('input')!r}; {message[0].lower()}{message[1:]}"
+    return ConfigError(loc or "config", message)
+
+
+def config_from_dict(data: Any, overrides: list[str] | tuple[str, ...] = ()) -> Config:
+    """Validate a raw dict (plus ``KEY=VALUE`` overrides) into a :class:`Config`."""
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError("config", "top level must be a mapping of sections")
+    data = copy.deepcopy(data)
+    for assignment in overrides:
+        apply_override(data, assignment)
+    try:
+        return Config.model_validate(data)
+    except ValidationError as exc:
+        raise _format_validation_error(exc) from None
+
+
+def load_config(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Config:
+    """Read and validate a YAML config file; raises ConfigError with a one-line reason."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(str(path), "no such config file")
+    text = path.read_text()
+    return config_from_dict(parse_yaml(text, source=str(path)), overrides)
+
+
+def default_output_dir(config: Config, config_path: str | Path | None) -> Path:
+    """Run directory: ``output.dir`` if set, else results/runs/<config stem>."""
+    if config.output.dir:
+        return Path(config.output.dir)
+    stem = Path(config_path).stem if config_path else "run"
+    return Path("results") / "runs" / stem

@@ -1,0 +1,1 @@
+"""Foot-ground contact: geometry (detection, scuffing guard), normal force laws and friction laws."""

@@ -1,0 +1,167 @@
+"""Tangential friction laws (MODEL.md 5), compiled with numba.
+
+Every stateless law has the signature ``law(v, f_n, p) -> F_T``: ``v`` is the slip velocity of
+the contact point along the ground tangent [m/s], ``f_n >= 0`` the normal force [N], ``p`` the
+parameter vector of :func:`friction_parameters`, and the returned force (along the same tangent)
+opposes the slip. LuGre carries a bristle deflection ``z`` per contact in the ODE state and has
+its own pair of functions.
+
+To add a law: one ``@njit`` function, one line in ``FRICTION_LAWS``, one branch in
+:func:`friction_force`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2 = range(10)
+N_FRICTION_PARAMS = 10
+
+
+@njit(cache=True)
+def _sign(v: float) -> float:
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@njit(cache=True)
+def no_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Frictionless contact: F_T = 0."""
+    return 0.0
+
+
+@njit(cache=True)
+def coulomb_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Coulomb, regularised for an ODE: F_T = -mu_k F_N v / sqrt(v^2 + v0^2).
+
+    The square-root regularisation replaces sgn(v) within |v| ~ v0 (stick is a slow creep);
+    it is smooth, so adaptive integrators need no switching logic.
+    """
+    return -p[MU_K] * f_n * v / math.sqrt(v * v + p[V0] * p[V0])
+
+
+@njit(cache=True)
+def threlfall_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Threlfall (1978): F_T = -mu_k F_N (1 - exp(-3|v|/v0)) sgn(v)."""
+    return -p[MU_K] * f_n * (1.0 - math.exp(-3.0 * abs(v) / p[V0])) * _sign(v)
+
+
+@njit(cache=True)
+def ambrosio_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Ambrosio (2003): F_T = -mu_k c_d F_N sgn(v), c_d = 0 below v0, linear to 1 at v1, 1 above.
+
+    J. Ambrosio, "Impact of rigid and flexible multibody systems", Virtual Nonlinear Multibody
+    Systems, Kluwer (2003) 57-81.
+    """
+    speed = abs(v)
+    if speed <= p[V0]:
+        return 0.0
+    c_d = 1.0 if speed >= p[V1] else (speed - p[V0]) / (p[V1] - p[V0])
+    return -p[MU_K] * c_d * f_n * _sign(v)
+
+
+@njit(cache=True)
+def bengisu_akay_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Bengisu and Akay (1994) Stribeck law.
+
+    mu = -(mu_s / v_s^2)(|v| - v_s)^2 + mu_s for |v| < v_s;
+    mu = mu_k + (mu_s - mu_k) exp(-xi (|v| - v_s)) for |v| >= v_s; F_T = -mu F_N sgn(v).
+    M. T. Bengisu, A. Akay, J. Sound Vib. 171 (1994) 557-570.
+    """
+    speed = abs(v)
+    if speed < p[VS]:
+        mu = -(p[MU_S] / (p[VS] * p[VS])) * (speed - p[VS]) ** 2 + p[MU_S]
+    else:
+        mu = p[MU_K] + (p[MU_S] - p[MU_K]) * math.exp(-p[XI] * (speed - p[VS]))
+    return -mu * f_n * _sign(v)
+
+
+@njit(cache=True)
+def brown_mcphee_friction(v: float, f_n: float, p: np.ndarray) -> float:
+    """Brown and McPhee (2016): F_T = -(F_N [mu_k tanh(4 v_r) + (mu_s - mu_k) v_r / (0.25 v_r^2 + 0.75)^2] + mu_v v).
+
+    v_r = v / v_t0 (v_t0 = ``v0``). P. Brown, J. McPhee, J. Comput. Nonlinear Dyn. 11 (2016) 054502.
+    """
+    v_r = v / p[V0]
+    mu = p[MU_K] * math.tanh(4.0 * v_r) + (p[MU_S] - p[MU_K]) * v_r / (0.25 * v_r * v_r + 0.75) ** 2
+    return -(f_n * mu + p[VISC] * v)
+
+
+@njit(cache=True)
+def lugre_bristle_rate(v: float, z: float, f_n: float, p: np.ndarray) -> float:
+    """LuGre bristle dynamics: zdot = v - sigma0 |v| z / g(v), g = F_N [mu_k + (mu_s - mu_k) exp(-(v/v_s)^2)].
+
+    C. Canudas de Wit, H. Olsson, K. J. Astrom, P. Lischinsky, IEEE TAC 40 (1995) 419-425.
+    With no normal load (g = 0) the bristles are unloaded and hold their state.
+    """
+    g = f_n * (p[MU_K] + (p[MU_S] - p[MU_K]) * math.exp(-((v / p[VS]) ** 2)))
+    if g <= 0.0:
+        return 0.0
+    return v - p[SIGMA0] * abs(v) * z / g
+
+
+@njit(cache=True)
+def lugre_friction(v: float, z: float, z_dot: float, f_n: float, p: np.ndarray) -> float:
+    """LuGre friction force F_T = -(sigma0 z + sigma1 zdot + sigma2 v); zero when unloaded."""
+    if f_n <= 0.0:
+        return 0.0
+    return -(p[SIGMA0] * z + p[SIGMA1] * z_dot + p[SIGMA2] * v)
+
+
+@njit(cache=True)
+def friction_force(model: int, v: float, f_n: float, p: np.ndarray) -> float:
+    """Dispatch to the stateless law numbered ``model`` (see FRICTION_LAWS)."""
+    if model == 1:
+        return coulomb_friction(v, f_n, p)
+    if model == 2:
+        return threlfall_friction(v, f_n, p)
+    if model == 3:
+        return ambrosio_friction(v, f_n, p)
+    if model == 4:
+        return bengisu_akay_friction(v, f_n, p)
+    if model == 5:
+        return brown_mcphee_friction(v, f_n, p)
+    return no_friction(v, f_n, p)
+
+
+@dataclass(frozen=True)
+class FrictionLaw:
+    """A registered friction law: dispatch number, compiled function, and whether it carries state."""
+
+    index: int
+    function: Callable[..., float]
+    stateful: bool = False
+
+
+LUGRE = 6
+FRICTION_LAWS: dict[str, FrictionLaw] = {
+    "none": FrictionLaw(0, no_friction),
+    "coulomb": FrictionLaw(1, coulomb_friction),
+    "threlfall": FrictionLaw(2, threlfall_friction),
+    "ambrosio": FrictionLaw(3, ambrosio_friction),
+    "bengisu_akay": FrictionLaw(4, bengisu_akay_friction),
+    "brown_mcphee": FrictionLaw(5, brown_mcphee_friction),
+    "lugre": FrictionLaw(LUGRE, lugre_friction, stateful=True),
+}
+
+
+def friction_parameters(
+    mu_kinetic: float,
+    mu_static: float,
+    v0: float,
+    v1: float,
+    v_stribeck: float,
+    stribeck_decay: float,
+    viscous: float,
+    sigma0: float,
+    sigma1: float,
+    sigma2: float,
+) -> np.ndarray:
+    """Parameter vector for the compiled laws (index constants at the top of this module)."""
+    return np.array(
+        [mu_kinetic, mu_static, v0, v1, v_stribeck, stribeck_decay, viscous, sigma0, sigma1, sigma2], dtype=np.float64
+    )

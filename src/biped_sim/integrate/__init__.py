@@ -1,0 +1,1 @@
+"""Time integrators: compiled explicit Runge-Kutta loops and scipy's implicit stiff methods."""

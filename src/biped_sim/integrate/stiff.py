@@ -1,0 +1,141 @@
+"""Implicit stiff methods (``radau``, ``bdf``) from scipy over the compiled right-hand side.
+
+Pick these when the contact is very stiff (hard materials, small friction regularisation
+velocities): explicit methods are then limited by stability, not accuracy, and take steps far
+smaller than the accuracy needs. The Jacobian is a compiled forward-difference Jacobian. Contact
+events are scipy terminal events on the same event functions as the explicit loop; at each event
+the integration restarts after the discrete update, and the same compiled bookkeeping
+(:func:`~biped_sim.integrate.explicit._apply_events`) logs touchdowns and heel strikes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numba import njit
+from scipy.integrate import solve_ivp
+
+from biped_sim.config import IntegratorConfig
+from biped_sim.integrate.explicit import (
+    ACCEPTED,
+    COMPLETED,
+    DIVERGED,
+    FALL_TIME,
+    FELL,
+    N_EVENTS,
+    N_SAMPLES,
+    RHS_EVALS,
+    RUNNING,
+    STATUS,
+    TIME,
+    Recorder,
+    _apply_events,
+    _record_sample,
+    make_scratch,
+)
+from biped_sim.multibody.planar import PlanarSystem, Workspace, event_functions, has_fallen, make_workspace, rhs
+
+EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
+
+
+@njit(cache=True)
+def finite_difference_jacobian(
+    t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace, f0: np.ndarray, jac: np.ndarray
+) -> None:
+    """Forward-difference Jacobian df/dy with steps sqrt(eps) max(|y_j|, 1e-3)."""
+    ny = y.shape[0]
+    y_pert = y.copy()
+    f_pert = np.empty(ny)
+    for j in range(ny):
+        step = 1.4901161193847656e-08 * max(abs(y[j]), 1e-3)
+        y_pert[j] = y[j] + step
+        rhs(t, y_pert, system, modes, work, f_pert)
+        for i in range(ny):
+            jac[i, j] = (f_pert[i] - f0[i]) / step
+        y_pert[j] = y[j]
+
+
+def integrate_stiff(
+    system: PlanarSystem,
+    rec: Recorder,
+    y: np.ndarray,
+    modes: np.ndarray,
+    integrator: IntegratorConfig,
+    t_end: float,
+    interval: float,
+    max_strikes: int,
+    progress: Callable[[float], None] | None,
+) -> None:
+    """Integrate with scipy's Radau or BDF, restarting at every contact event."""
+    ny, nf = y.shape[0], modes.shape[0]
+    work = make_workspace(system)
+    scratch = make_scratch(ny, nf)
+    counts = {"jac": 0}
+
+    def fun(t: float, state: np.ndarray) -> np.ndarray:
+        out = np.empty(ny)
+        rhs(t, state, system, modes, work, out)
+        return out
+
+    def jac(t: float, state: np.ndarray) -> np.ndarray:
+        f0 = fun(t, state)
+        out = np.empty((ny, ny))
+        finite_difference_jacobian(t, state, system, modes, work, f0, out)
+        counts["jac"] += 1
+        return out
+
+    g = np.empty(2 * nf)
+
+    def make_event(j: int) -> Callable[[float, np.ndarray], float]:
+        def event(t: float, state: np.ndarray) -> float:
+            event_functions(state, system, g)
+            return g[j]
+
+        event.terminal = True  # type: ignore[attr-defined]
+        return event
+
+    events = [make_event(j) for j in range(2 * nf)]
+    method = "Radau" if integrator.method == "radau" else "BDF"
+    t = 0.0
+    _record_sample(rec, t, y, modes)
+    nfev = 0
+    while rec.istate[STATUS] == RUNNING:
+        if t >= t_end:
+            rec.istate[STATUS] = COMPLETED
+            break
+        sol = solve_ivp(
+            fun, (t, t_end), y, method=method, rtol=integrator.rtol, atol=integrator.atol,
+            max_step=integrator.max_step, jac=jac, events=events, dense_output=True,
+        )  # fmt: skip
+        nfev += sol.nfev
+        rec.istate[ACCEPTED] += len(sol.t) - 1
+        t_stop = float(sol.t[-1])
+        if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
+            rec.istate[STATUS] = DIVERGED
+            rec.fstate[FALL_TIME] = t_stop
+            t = t_stop
+            break
+        hit_event = sol.status == 1
+        if hit_event:
+            t_stop = min(t_stop + EVENT_NUDGE, t_end)
+        while rec.istate[N_SAMPLES] < rec.sample_t.shape[0] and rec.istate[N_SAMPLES] * interval <= t_stop:
+            ts = rec.istate[N_SAMPLES] * interval
+            if ts > t:
+                _record_sample(rec, ts, sol.sol(ts), modes)
+            else:
+                _record_sample(rec, ts, y, modes)
+        y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1]
+        t = t_stop
+        if hit_event and _apply_events(t, y, system, modes, work, rec, scratch, max_strikes):
+            rec.istate[N_EVENTS] += 1
+        if has_fallen(y, system):
+            rec.istate[STATUS] = FELL
+            rec.fstate[FALL_TIME] = t
+        if progress is not None:
+            progress(t)
+        if not math.isfinite(t):
+            rec.istate[STATUS] = DIVERGED
+    rec.istate[RHS_EVALS] = nfev + counts["jac"] * (ny + 1)
+    rec.fstate[TIME] = t

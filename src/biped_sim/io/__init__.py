@@ -1,0 +1,1 @@
+"""Storage: atomic writes, HDF5 trajectories, run summaries and per-step tables, provenance."""

@@ -1,0 +1,1 @@
+"""Multibody assembly: mass matrix, joint constraints, Baumgarte-stabilised forward dynamics."""

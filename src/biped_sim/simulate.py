@@ -1,0 +1,156 @@
+"""The Python API: build a walker from a config, simulate it, measure it, write its files.
+
+    from biped_sim import load_config, simulate
+    result = simulate(load_config("configs/round_foot_walker.yaml"))
+    print(result.status, result.step_periods)
+
+:func:`run` does the same and writes ``trajectory.h5``, ``summary.json`` and ``steps.csv``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from biped_sim.analysis.gait import EnergyAudit, StepTable, constraint_drift, energy_audit, step_table
+from biped_sim.config import Config
+from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.walkers import BuiltModel, build_model
+
+
+@dataclass
+class RunResult:
+    """A simulation and what it measured."""
+
+    config: Config
+    model: BuiltModel
+    run: Integration
+    steps: StepTable
+    energy: EnergyAudit
+    violation: np.ndarray  # (ns, 2) ||Phi||, ||Phidot||
+    wall_time_s: float
+    summary: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def status(self) -> str:
+        return self.run.status
+
+    @property
+    def heel_strike_times(self) -> np.ndarray:
+        return self.steps.strike_time
+
+    @property
+    def step_periods(self) -> np.ndarray:
+        """Periods of the completed steps (between consecutive heel strikes)."""
+        return self.steps.period[:-1] if len(self.steps.period) else self.steps.period
+
+    @property
+    def step_lengths(self) -> np.ndarray:
+        return self.steps.length[:-1] if len(self.steps.length) else self.steps.length
+
+    @property
+    def heel_strike_states(self) -> list[dict[str, float]]:
+        """Leg angles and rates at each heel strike; 'stance' is the leg that just touched down."""
+        s = self.steps
+        return [
+            {
+                "stance_angle": float(s.stance_angle[k]),
+                "stance_rate": float(s.stance_rate[k]),
+                "swing_angle": float(s.swing_angle[k]),
+                "swing_rate": float(s.swing_rate[k]),
+            }
+            for k in range(len(s.strike_time))
+        ]
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def summarize(result: RunResult) -> dict[str, Any]:
+    """The summary.json content."""
+    from biped_sim.io.provenance import package_version
+
+    run, steps, config = result.run, result.steps, result.config
+    periods = result.step_periods
+    lengths = result.step_lengths
+    travelled = float(np.nansum(lengths))
+    span = float(steps.strike_time[-1] - steps.strike_time[0]) if len(steps.strike_time) > 1 else 0.0
+    scale = result.model.total_mass * config.gravity * result.model.leg_length
+    return {
+        "status": run.status,
+        "stop_time": run.stop_time,
+        "t_end": run.t_final,
+        "n_steps": len(steps.strike_time),
+        "step_times": steps.strike_time.tolist(),
+        "step_feet": steps.foot.tolist(),
+        "step_periods": periods.tolist(),
+        "step_lengths": lengths.tolist(),
+        "mean_step_period": _finite_or_none(float(np.mean(periods))) if len(periods) else None,
+        "last_step_period": _finite_or_none(float(periods[-1])) if len(periods) else None,
+        "mean_speed": travelled / span if span > 0 else 0.0,
+        "slip_per_step": steps.slip[:-1].tolist() if len(steps.slip) else [],
+        "energy_dissipated": {
+            "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
+            "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),
+        },
+        "energy_residual_max": float(np.max(np.abs(result.energy.residual))),
+        "energy_residual_max_relative": float(np.max(np.abs(result.energy.residual)) / scale),
+        "constraint_violation_max": {
+            "position": float(np.max(result.violation[:, 0])),
+            "velocity": float(np.max(result.violation[:, 1])),
+        },
+        "rhs_evals": run.rhs_evals,
+        "accepted_steps": run.accepted_steps,
+        "rejected_steps": run.rejected_steps,
+        "events": run.events,
+        "wall_time_s": result.wall_time_s,
+        "integrator": config.integrator.method,
+        "config_hash": config.hash(),
+        "version": package_version(),
+    }
+
+
+def simulate(
+    config: Config, *, model: BuiltModel | None = None, progress: Callable[[float], None] | None = None
+) -> RunResult:
+    """Simulate ``config`` (the compliant model) and measure the gait; writes nothing."""
+    model = model or build_model(config)
+    start = time.perf_counter()
+    run = integrate_model(
+        model.system,
+        model.y0,
+        model.modes0,
+        config.integrator,
+        config.simulation.t_end,
+        config.output.sample_rate,
+        max_strikes=config.simulation.max_steps,
+        progress=progress,
+    )
+    wall = time.perf_counter() - start
+    result = RunResult(
+        config=config,
+        model=model,
+        run=run,
+        steps=step_table(model, run),
+        energy=energy_audit(model, run),
+        violation=constraint_drift(model, run),
+        wall_time_s=wall,
+    )
+    result.summary = summarize(result)
+    return result
+
+
+def run(config: Config, out_dir: str | Path, *, progress: Callable[[float], None] | None = None) -> RunResult:
+    """Simulate and write ``trajectory.h5``, ``summary.json`` and ``steps.csv`` into ``out_dir`` (atomically)."""
+    from biped_sim.io.results import write_run
+
+    result = simulate(config, progress=progress)
+    write_run(result, Path(out_dir))
+    return result

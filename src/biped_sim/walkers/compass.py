@@ -1,0 +1,129 @@
+"""Compass walker with round feet: two straight legs joined at the hip by a revolute joint.
+
+Each leg is one body. The hip point mass M_H is split half to each leg at the hip point (exact
+for a point mass), so leg body i has mass m + M_H/2, its centre of mass at
+d = m c / (m + M_H/2) from the hip, and inertia J = I + m (c - d)^2 + (M_H/2) d^2.
+In the body frame the leg points along -y: the hip is at (0, d) and the foot arc centre at
+(0, -(l - R - d)). The body angle phi is the README's leg angle theta (from the slope normal,
+positive with the foot downhill of the hip).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from biped_sim.config import Config, InitialState
+from biped_sim.errors import ConfigError
+from biped_sim.multibody.planar import ARMED, IMPACT_SPEED, TOUCHING, PlanarSystem, make_workspace, update_modes
+from biped_sim.walkers.model import BuiltModel, contact_arrays, contact_stiffness
+
+
+def _leg_direction(theta: float) -> np.ndarray:
+    """Unit vector from hip to foot for leg angle theta."""
+    return np.array([math.sin(theta), -math.cos(theta)])
+
+
+def _rolling_velocity(omega: float, point: np.ndarray, pivot: np.ndarray) -> np.ndarray:
+    """Velocity of ``point`` on a body rotating at ``omega`` about the instantaneous centre ``pivot``."""
+    rel = point - pivot
+    return omega * np.array([-rel[1], rel[0]])
+
+
+def resolve_initial(config: Config) -> InitialState:
+    """The initial leg state: as configured, or the rigid model's limit cycle."""
+    initial = config.simulation.initial
+    if initial == "rigid_limit_cycle":
+        from biped_sim.rigid import rigid_limit_cycle_initial
+
+        return InitialState(**rigid_limit_cycle_initial(config))
+    return initial
+
+
+def build_compass(config: Config) -> BuiltModel:
+    """Bodies, joint and feet of the compass walker, and its initial state rolling on its stance foot."""
+    w = config.walker
+    l, R, m, c, I, M_H = w.leg_length, w.foot_radius, w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.hip_mass
+    g, gamma = config.gravity, config.ground.slope
+    body_mass = m + 0.5 * M_H
+    d = m * c / body_mass
+    inertia = I + m * (c - d) ** 2 + 0.5 * M_H * d**2
+    if inertia <= 0.0:
+        raise ConfigError("walker.leg_inertia", "each leg needs a rotational inertia > 0 about its centre of mass")
+    total_mass = 2.0 * m + M_H
+    stiffness = contact_stiffness(config)
+    normal, friction, switches = contact_arrays(config, stiffness, total_mass)
+
+    foot_centre = np.array([0.0, -(l - R - d)])
+    system = PlanarSystem(
+        body_mass=np.array([body_mass, body_mass]),
+        body_inertia=np.array([inertia, inertia]),
+        joint_bodies=np.array([[0, 1]], dtype=np.int64),
+        joint_points=np.array([[0.0, d, 0.0, d]]),
+        foot_body=np.array([0, 1], dtype=np.int64),
+        foot_center=np.array([foot_centre, foot_centre]),
+        foot_radius=np.array([R, R]),
+        foot_partner=np.array([1, 0], dtype=np.int64),
+        gravity=np.array([g * math.sin(gamma), -g * math.cos(gamma)]),
+        baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),
+        normal_params=normal,
+        friction_params=friction,
+        switches=switches,
+        limits=np.array(
+            [
+                config.contact.impact_velocity_floor,
+                config.simulation.fall_hip_height * l,
+                config.simulation.fall_leg_angle,
+            ]
+        ),
+    )
+
+    init = resolve_initial(config)
+    for name in ("stance_angle", "swing_angle"):
+        if abs(getattr(init, name)) >= config.simulation.fall_leg_angle:
+            raise ConfigError(
+                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
+            )
+    exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
+    static_penetration = (total_mass * g * math.cos(gamma) / stiffness) ** (1.0 / exponent)
+    contact_point = np.array([0.0, -static_penetration])
+    arc_centre = contact_point + np.array([0.0, R])
+    hip = arc_centre - (l - R) * _leg_direction(init.stance_angle)
+    if hip[1] <= config.simulation.fall_hip_height * l:
+        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
+    com_stance = hip + d * _leg_direction(init.stance_angle)
+    com_swing = hip + d * _leg_direction(init.swing_angle)
+    v_hip = _rolling_velocity(init.stance_rate, hip, contact_point)
+    v_stance = _rolling_velocity(init.stance_rate, com_stance, contact_point)
+    v_swing = v_hip + _rolling_velocity(init.swing_rate, com_swing, hip)
+    swing_foot_bottom = hip[1] + (l - R) * _leg_direction(init.swing_angle)[1] - R
+    if not config.contact.scuffing_guard and swing_foot_bottom < 0.0:
+        raise ConfigError(
+            "simulation.initial.swing_angle",
+            "the swing foot starts below the ground (and contact.scuffing_guard is off)",
+        )
+
+    nf = 2
+    y0 = np.zeros(12 + nf + 2)
+    y0[0:3] = [com_stance[0], com_stance[1], init.stance_angle]
+    y0[3:6] = [com_swing[0], com_swing[1], init.swing_angle]
+    y0[6:9] = [v_stance[0], v_stance[1], init.stance_rate]
+    y0[9:12] = [v_swing[0], v_swing[1], init.swing_rate]
+    modes0 = np.zeros((nf, 3))
+    modes0[0, ARMED] = 1.0
+    modes0[0, TOUCHING] = 1.0
+    # the stance foot "just struck": remember an approach velocity of the scale of the hip speed
+    modes0[0, IMPACT_SPEED] = max(float(np.hypot(*v_hip)), config.contact.impact_velocity_floor)
+    update_modes(y0, system, modes0, make_workspace(system))  # arms the swing foot if ahead and airborne
+    return BuiltModel(
+        system=system,
+        y0=y0,
+        modes0=modes0,
+        body_names=["leg0", "leg1"],
+        foot_names=["foot0", "foot1"],
+        leg_length=l,
+        total_mass=total_mass,
+        stiffness=stiffness,
+        meta={"static_penetration": static_penetration, "leg_body_mass": body_mass, "leg_body_inertia": inertia},
+    )

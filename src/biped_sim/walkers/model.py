@@ -1,0 +1,71 @@
+"""The product of a walker builder: compiled-system arrays plus names and metadata."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from biped_sim.config import Config, MaterialsConfig
+from biped_sim.contact.friction import FRICTION_LAWS, friction_parameters
+from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
+from biped_sim.multibody.planar import PlanarSystem
+
+
+@dataclass
+class BuiltModel:
+    """A walker ready to integrate: the system, its initial state and what the numbers mean."""
+
+    system: PlanarSystem
+    y0: np.ndarray
+    modes0: np.ndarray
+    body_names: list[str]
+    foot_names: list[str]
+    leg_length: float
+    total_mass: float
+    stiffness: float
+    meta: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def n_bodies(self) -> int:
+        return int(self.system.body_mass.shape[0])
+
+    @property
+    def n_feet(self) -> int:
+        return int(self.system.foot_body.shape[0])
+
+    def state_names(self) -> list[str]:
+        """Names of the ODE state entries, in order."""
+        coords = [f"{axis}_{body}" for body in self.body_names for axis in ("x", "y", "phi")]
+        rates = [f"{axis}_{body}" for body in self.body_names for axis in ("vx", "vy", "omega")]
+        bristles = [f"z_{foot}" for foot in self.foot_names]
+        return coords + rates + bristles + ["W_normal", "W_friction"]
+
+
+def contact_stiffness(config: Config) -> float:
+    """K from ``contact.stiffness`` or from Hertz theory with the materials and the foot radius."""
+    if config.contact.stiffness is not None:
+        return config.contact.stiffness
+    materials = config.contact.materials or MaterialsConfig()
+    return hertz_stiffness(
+        materials.foot.youngs_modulus,
+        materials.foot.poisson_ratio,
+        materials.ground.youngs_modulus,
+        materials.ground.poisson_ratio,
+        config.walker.foot_radius,
+    )
+
+
+def contact_arrays(
+    config: Config, stiffness: float, effective_mass: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(normal_params, friction_params, switches) for the compiled kernels."""
+    c, f = config.contact, config.friction
+    normal = normal_parameters(c.model, stiffness, c.exponent, c.restitution, c.damping, effective_mass)
+    friction = friction_parameters(
+        f.mu_kinetic, f.mu_static, f.v0, f.v1, f.v_stribeck, f.stribeck_decay, f.viscous, f.sigma0, f.sigma1, f.sigma2
+    )
+    switches = np.array(
+        [NORMAL_LAWS[c.model].index, FRICTION_LAWS[f.model].index, 1 if c.scuffing_guard else 0], dtype=np.int64
+    )
+    return normal, friction, switches
