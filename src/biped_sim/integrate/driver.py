@@ -35,7 +35,7 @@ from biped_sim.integrate.explicit import (
     make_scratch,
 )
 from biped_sim.integrate.tableaus import TABLEAUS
-from biped_sim.multibody.planar import PlanarSystem, make_workspace
+from biped_sim.multibody.dispatch import event_count, make_workspace
 
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged"}
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
@@ -91,7 +91,7 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
 
 
 def integrate_model(
-    system: PlanarSystem,
+    system: tuple,
     y0: np.ndarray,
     modes0: np.ndarray,
     integrator: IntegratorConfig,
@@ -116,7 +116,7 @@ def integrate_model(
     else:
         tab = TABLEAUS[integrator.method]
         work = make_workspace(system)
-        scratch = make_scratch(ny, nf)
+        scratch = make_scratch(ny, nf, event_count(system))
         while rec.istate[STATUS] == 0:
             advance(
                 system, work, tab, rec, scratch, y, modes, t_end, integrator.dt, integrator.adaptive,

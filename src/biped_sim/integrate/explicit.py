@@ -22,16 +22,16 @@ import numpy as np
 from numba import njit
 
 from biped_sim.integrate.tableaus import DOP853_KIND, DOPRI5, FIXED, Tableau
-from biped_sim.multibody.planar import (
-    TOUCHING,
-    PlanarSystem,
-    Workspace,
-    event_functions,
-    foot_kinematics,
-    has_fallen,
-    rhs,
-    update_modes,
+from biped_sim.multibody.dispatch import (
+    system_approach_velocity,
+    system_event_functions,
+    system_has_fallen,
+    system_is_leading,
+    system_rhs,
+    system_update_modes,
 )
+
+TOUCHING = 1  # column of the per-foot mode table (shared by every formulation)
 
 # Recorder.istate entries
 N_SAMPLES, N_STRIKES, N_LOG, RHS_EVALS, ACCEPTED, REJECTED, STATUS, LAST_STRIKE_FOOT, FSAL_VALID, N_EVENTS, FORCED = (
@@ -71,13 +71,13 @@ class Scratch(NamedTuple):
     y_new: np.ndarray  # (ny,)
     y_dense: np.ndarray  # (ny,)
     dense: np.ndarray  # (7, ny) dense-output coefficients
-    g_old: np.ndarray  # (2 nf,) event functions at the start of the step
-    g_new: np.ndarray  # (2 nf,)
-    g_mid: np.ndarray  # (2 nf,)
+    g_old: np.ndarray  # (n_events,) event functions at the start of the step
+    g_new: np.ndarray  # (n_events,)
+    g_mid: np.ndarray  # (n_events,)
     touching_before: np.ndarray  # (nf,)
 
 
-def make_scratch(ny: int, nf: int) -> Scratch:
+def make_scratch(ny: int, nf: int, n_events: int) -> Scratch:
     """Allocate the loop buffers."""
     return Scratch(
         np.zeros((16, ny)),
@@ -85,9 +85,9 @@ def make_scratch(ny: int, nf: int) -> Scratch:
         np.zeros(ny),
         np.zeros(ny),
         np.zeros((7, ny)),
-        np.zeros(2 * nf),
-        np.zeros(2 * nf),
-        np.zeros(2 * nf),
+        np.zeros(n_events),
+        np.zeros(n_events),
+        np.zeros(n_events),
         np.zeros(nf),
     )
 
@@ -106,9 +106,9 @@ def _record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) ->
 def _apply_events(
     t: float,
     y: np.ndarray,
-    system: PlanarSystem,
+    system: object,
     modes: np.ndarray,
-    work: Workspace,
+    work: tuple,
     rec: Recorder,
     sc: Scratch,
     max_strikes: int,
@@ -118,10 +118,10 @@ def _apply_events(
     A heel strike is the touchdown of a foot that is ahead of its partner and is not the foot
     of the previous strike: bounces of the same foot after touchdown belong to that strike.
     """
-    nf = system.foot_body.shape[0]
+    nf = modes.shape[0]
     for i in range(nf):
         sc.touching_before[i] = modes[i, TOUCHING]
-    changed = update_modes(y, system, modes, work)
+    changed = system_update_modes(y, system, modes, work)
     if not changed:
         return False
     for i in range(nf):
@@ -132,12 +132,10 @@ def _apply_events(
                 rec.log[n, 0] = t
                 rec.log[n, 1] = i
                 rec.log[n, 2] = 1.0 if now > 0.5 else -1.0
-                rec.log[n, 3] = foot_kinematics(y, system, i)[1]
+                rec.log[n, 3] = system_approach_velocity(y, system, i)
                 rec.istate[N_LOG] = n + 1
         if work.onset[i] == 1 and i != rec.istate[LAST_STRIKE_FOOT]:
-            partner = system.foot_partner[i]
-            ahead = partner < 0 or foot_kinematics(y, system, i)[3] > foot_kinematics(y, system, partner)[3]
-            if ahead:
+            if system_is_leading(y, system, i):
                 k = rec.istate[N_STRIKES]
                 if k < rec.strike_t.shape[0]:
                     rec.strike_t[k] = t
@@ -157,9 +155,9 @@ def _prepare_dense(
     t: float,
     h: float,
     y: np.ndarray,
-    system: PlanarSystem,
+    system: object,
     modes: np.ndarray,
-    work: Workspace,
+    work: tuple,
     sc: Scratch,
     rec: Recorder,
 ) -> None:
@@ -182,7 +180,7 @@ def _prepare_dense(
                 for s in range(s_idx):
                     v += k[s, i] * tab.a_extra[e, s]
                 sc.y_stage[i] = y[i] + h * v
-            rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[s_idx])
+            system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[s_idx])
             rec.istate[RHS_EVALS] += 1
         for i in range(ny):
             dy = sc.y_new[i] - y[i]
@@ -218,7 +216,7 @@ def _dense_eval(tab: Tableau, theta: float, h: float, y: np.ndarray, sc: Scratch
 
 
 @njit(cache=True)
-def _locate_event(tab: Tableau, h: float, y: np.ndarray, system: PlanarSystem, sc: Scratch) -> float:
+def _locate_event(tab: Tableau, h: float, y: np.ndarray, system: object, sc: Scratch) -> float:
     """Earliest sign change of the event functions inside the step, as theta in (0, 1].
 
     Returns the right end of the final bracket (the side where the function has its new sign),
@@ -240,7 +238,7 @@ def _locate_event(tab: Tableau, h: float, y: np.ndarray, system: PlanarSystem, s
             if not (lo < mid < hi):
                 mid = 0.5 * (lo + hi)
             _dense_eval(tab, mid, h, y, sc, sc.y_dense)
-            event_functions(sc.y_dense, system, sc.g_mid)
+            system_event_functions(sc.y_dense, system, sc.g_mid)
             g = sc.g_mid[j]
             if (g > 0.0) == (g_lo > 0.0):
                 lo, g_lo = mid, g
@@ -292,9 +290,9 @@ def initial_step(
     tab: Tableau,
     t: float,
     y: np.ndarray,
-    system: PlanarSystem,
+    system: object,
     modes: np.ndarray,
-    work: Workspace,
+    work: tuple,
     sc: Scratch,
     rtol: float,
     atol: float,
@@ -311,7 +309,7 @@ def initial_step(
     h0 = min(h0, max_step)
     for i in range(ny):
         sc.y_stage[i] = y[i] + h0 * sc.k[0, i]
-    rhs(t + h0, sc.y_stage, system, modes, work, sc.k[1])
+    system_rhs(t + h0, sc.y_stage, system, modes, work, sc.k[1])
     rec.istate[RHS_EVALS] += 1
     for i in range(ny):
         sc.y_stage[i] = sc.k[1, i] - sc.k[0, i]
@@ -326,8 +324,8 @@ def initial_step(
 
 @njit(cache=True)
 def advance(
-    system: PlanarSystem,
-    work: Workspace,
+    system: object,
+    work: tuple,
     tab: Tableau,
     rec: Recorder,
     sc: Scratch,
@@ -360,13 +358,13 @@ def advance(
     steps = 0
     if rec.istate[N_SAMPLES] == 0:
         _record_sample(rec, t, y, modes)
-    event_functions(y, system, sc.g_old)
+    system_event_functions(y, system, sc.g_old)
     while rec.istate[STATUS] == RUNNING and steps < step_budget:
         if t >= t_end:
             rec.istate[STATUS] = COMPLETED
             break
         if rec.istate[FSAL_VALID] == 0 or not fsal:
-            rhs(t, y, system, modes, work, k[0])
+            system_rhs(t, y, system, modes, work, k[0])
             rec.istate[RHS_EVALS] += 1
             rec.istate[FSAL_VALID] = 1
         if use_control:
@@ -384,7 +382,7 @@ def advance(
                 for j in range(s):
                     v += tab.a[s, j] * k[j, i]
                 sc.y_stage[i] = y[i] + h * v
-            rhs(t + tab.c[s] * h, sc.y_stage, system, modes, work, k[s])
+            system_rhs(t + tab.c[s] * h, sc.y_stage, system, modes, work, k[s])
             rec.istate[RHS_EVALS] += 1
         finite = True
         for i in range(ny):
@@ -395,7 +393,7 @@ def advance(
             if not math.isfinite(sc.y_new[i]):
                 finite = False
         if fsal and finite:
-            rhs(t + h, sc.y_new, system, modes, work, k[n_k])
+            system_rhs(t + h, sc.y_new, system, modes, work, k[n_k])
             rec.istate[RHS_EVALS] += 1
         steps += 1
         if use_control:
@@ -426,7 +424,7 @@ def advance(
                 break
             h_next = h
         rec.istate[ACCEPTED] += 1
-        event_functions(sc.y_new, system, sc.g_new)
+        system_event_functions(sc.y_new, system, sc.g_new)
         crossed = False
         for j in range(sc.g_new.shape[0]):
             if (sc.g_old[j] > 0.0) != (sc.g_new[j] > 0.0):
@@ -463,7 +461,7 @@ def advance(
             if _apply_events(t, y, system, modes, work, rec, sc, max_strikes):
                 rec.istate[N_EVENTS] += 1
                 rec.istate[FSAL_VALID] = 0
-            event_functions(y, system, sc.g_old)
+            system_event_functions(y, system, sc.g_old)
         else:
             for j in range(sc.g_new.shape[0]):
                 sc.g_old[j] = sc.g_new[j]
@@ -471,7 +469,7 @@ def advance(
             k[0, :] = k[n_k]
         if use_control:
             h = h_next
-        if has_fallen(y, system):
+        if system_has_fallen(y, system):
             rec.istate[STATUS] = FELL
             rec.fstate[FALL_TIME] = t
     rec.fstate[TIME] = t

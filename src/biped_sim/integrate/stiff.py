@@ -35,14 +35,20 @@ from biped_sim.integrate.explicit import (
     _record_sample,
     make_scratch,
 )
-from biped_sim.multibody.planar import PlanarSystem, Workspace, event_functions, has_fallen, make_workspace, rhs
+from biped_sim.multibody.dispatch import (
+    event_count,
+    make_workspace,
+    system_event_functions,
+    system_has_fallen,
+    system_rhs,
+)
 
 EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
 
 
 @njit(cache=True)
 def finite_difference_jacobian(
-    t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace, f0: np.ndarray, jac: np.ndarray
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, f0: np.ndarray, jac: np.ndarray
 ) -> None:
     """Forward-difference Jacobian df/dy with steps sqrt(eps) max(|y_j|, 1e-3)."""
     ny = y.shape[0]
@@ -51,14 +57,14 @@ def finite_difference_jacobian(
     for j in range(ny):
         step = 1.4901161193847656e-08 * max(abs(y[j]), 1e-3)
         y_pert[j] = y[j] + step
-        rhs(t, y_pert, system, modes, work, f_pert)
+        system_rhs(t, y_pert, system, modes, work, f_pert)
         for i in range(ny):
             jac[i, j] = (f_pert[i] - f0[i]) / step
         y_pert[j] = y[j]
 
 
 def integrate_stiff(
-    system: PlanarSystem,
+    system: tuple,
     rec: Recorder,
     y: np.ndarray,
     modes: np.ndarray,
@@ -71,12 +77,12 @@ def integrate_stiff(
     """Integrate with scipy's Radau or BDF, restarting at every contact event."""
     ny, nf = y.shape[0], modes.shape[0]
     work = make_workspace(system)
-    scratch = make_scratch(ny, nf)
+    scratch = make_scratch(ny, nf, event_count(system))
     counts = {"jac": 0}
 
     def fun(t: float, state: np.ndarray) -> np.ndarray:
         out = np.empty(ny)
-        rhs(t, state, system, modes, work, out)
+        system_rhs(t, state, system, modes, work, out)
         return out
 
     def jac(t: float, state: np.ndarray) -> np.ndarray:
@@ -86,17 +92,17 @@ def integrate_stiff(
         counts["jac"] += 1
         return out
 
-    g = np.empty(2 * nf)
+    g = np.empty(event_count(system))
 
     def make_event(j: int) -> Callable[[float, np.ndarray], float]:
         def event(t: float, state: np.ndarray) -> float:
-            event_functions(state, system, g)
+            system_event_functions(state, system, g)
             return g[j]
 
         event.terminal = True  # type: ignore[attr-defined]
         return event
 
-    events = [make_event(j) for j in range(2 * nf)]
+    events = [make_event(j) for j in range(event_count(system))]
     method = "Radau" if integrator.method == "radau" else "BDF"
     t = 0.0
     _record_sample(rec, t, y, modes)
@@ -130,7 +136,7 @@ def integrate_stiff(
         t = t_stop
         if hit_event and _apply_events(t, y, system, modes, work, rec, scratch, max_strikes):
             rec.istate[N_EVENTS] += 1
-        if has_fallen(y, system):
+        if system_has_fallen(y, system):
             rec.istate[STATUS] = FELL
             rec.fstate[FALL_TIME] = t
         if progress is not None:
