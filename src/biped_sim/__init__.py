@@ -8,9 +8,13 @@ The public API::
 
 from __future__ import annotations
 
-from biped_sim.config import Config, config_from_dict, load_config
-from biped_sim.errors import ConfigError
-from biped_sim.simulate import RunResult, run, simulate
+from biped_sim._compiled_cache import configure_cache_dir
+
+configure_cache_dir()
+
+from biped_sim.config import Config, config_from_dict, load_config  # noqa: E402
+from biped_sim.errors import ConfigError  # noqa: E402
+from biped_sim.simulate import RunResult, run, simulate  # noqa: E402
 
 __version__ = "0.1.0"
 __all__ = ["Config", "ConfigError", "RunResult", "config_from_dict", "load_config", "run", "simulate"]

@@ -130,14 +130,14 @@ class FrictionConfig(_Strict):
     v0: float = Field(
         1e-3,
         gt=0,
-        description="Stick threshold [m/s]: Threlfall v0, Ambrosio v0, Brown-McPhee v_t0, Coulomb regularisation width.",
+        description="Stick threshold [m/s]: Threlfall/Ambrosio v0, Brown-McPhee v_t0, Coulomb regularisation width.",
     )
     v1: float = Field(1e-2, gt=0, description="Ambrosio full-slip velocity v1 [m/s] (> v0).")
     v_stribeck: float = Field(1e-3, gt=0, description="Stribeck velocity v_s [m/s] (Bengisu-Akay, LuGre).")
     stribeck_decay: float = Field(100.0, ge=0, description="Bengisu-Akay decay rate xi [s/m].")
     viscous: float = Field(0.0, ge=0, description="Viscous coefficient [N s/m] (Brown-McPhee mu_v).")
-    sigma0: float = Field(1e5, gt=0, description="LuGre bristle stiffness sigma0 [N/m].")
-    sigma1: float = Field(300.0, ge=0, description="LuGre bristle damping sigma1 [N s/m].")
+    sigma0: float = Field(1e4, gt=0, description="LuGre bristle stiffness per unit normal load sigma0 [1/m].")
+    sigma1: float = Field(20.0, ge=0, description="LuGre bristle damping per unit normal load sigma1 [s/m].")
     sigma2: float = Field(0.0, ge=0, description="LuGre viscous coefficient sigma2 [N s/m].")
 
     @model_validator(mode="after")

@@ -92,24 +92,24 @@ def brown_mcphee_friction(v: float, f_n: float, p: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def lugre_bristle_rate(v: float, z: float, f_n: float, p: np.ndarray) -> float:
-    """LuGre bristle dynamics: zdot = v - sigma0 |v| z / g(v), g = F_N [mu_k + (mu_s - mu_k) exp(-(v/v_s)^2)].
+def lugre_bristle_rate(v: float, z: float, p: np.ndarray) -> float:
+    """LuGre bristle dynamics per unit normal load: zdot = v - sigma0 |v| z / g(v).
 
-    C. Canudas de Wit, H. Olsson, K. J. Astrom, P. Lischinsky, IEEE TAC 40 (1995) 419-425.
-    With no normal load (g = 0) the bristles are unloaded and hold their state.
+    g(v) = mu_k + (mu_s - mu_k) exp(-(v/v_s)^2). C. Canudas de Wit, H. Olsson, K. J. Astrom,
+    P. Lischinsky, IEEE TAC 40 (1995) 419-425, in the load-proportional form used for contact
+    (sigma0 [1/m], sigma1 [s/m] per newton of normal force): MODEL.md's form divides by
+    g = F_N (...) and lets sigma1 zdot act with no normal load, which at touchdown (F_N -> 0,
+    zdot = v) throws a finite friction force without any normal force. Steady sliding gives the
+    same Stribeck curve F_T = -F_N g(v) sgn(v) - sigma2 v in both forms.
     """
-    g = f_n * (p[MU_K] + (p[MU_S] - p[MU_K]) * math.exp(-((v / p[VS]) ** 2)))
-    if g <= 0.0:
-        return 0.0
+    g = p[MU_K] + (p[MU_S] - p[MU_K]) * math.exp(-((v / p[VS]) ** 2))
     return v - p[SIGMA0] * abs(v) * z / g
 
 
 @njit(cache=True)
 def lugre_friction(v: float, z: float, z_dot: float, f_n: float, p: np.ndarray) -> float:
-    """LuGre friction force F_T = -(sigma0 z + sigma1 zdot + sigma2 v); zero when unloaded."""
-    if f_n <= 0.0:
-        return 0.0
-    return -(p[SIGMA0] * z + p[SIGMA1] * z_dot + p[SIGMA2] * v)
+    """LuGre friction force F_T = -(F_N (sigma0 z + sigma1 zdot) + sigma2 v)."""
+    return -(f_n * (p[SIGMA0] * z + p[SIGMA1] * z_dot) + p[SIGMA2] * v)
 
 
 @njit(cache=True)

@@ -106,7 +106,7 @@ def integrate_model(
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
     interval = sample_interval(integrator, sample_rate)
-    n_samples = int(math.floor(t_end / interval + 1e-9)) + 2
+    n_samples = math.floor(t_end / interval + 1e-9) + 2
     n_strikes = max_strikes if max_strikes else int(t_end * 50) + 16
     rec = make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot)
     if integrator.method in ("radau", "bdf"):

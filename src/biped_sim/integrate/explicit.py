@@ -134,18 +134,17 @@ def _apply_events(
                 rec.log[n, 2] = 1.0 if now > 0.5 else -1.0
                 rec.log[n, 3] = system_approach_velocity(y, system, i)
                 rec.istate[N_LOG] = n + 1
-        if work.onset[i] == 1 and i != rec.istate[LAST_STRIKE_FOOT]:
-            if system_is_leading(y, system, i):
-                k = rec.istate[N_STRIKES]
-                if k < rec.strike_t.shape[0]:
-                    rec.strike_t[k] = t
-                    rec.strike_foot[k] = i
-                    rec.strike_y[k, :] = y
-                    rec.strike_modes[k, :, :] = modes
-                rec.istate[N_STRIKES] = k + 1
-                rec.istate[LAST_STRIKE_FOOT] = i
-                if max_strikes > 0 and k + 1 >= max_strikes:
-                    rec.istate[STATUS] = COMPLETED
+        if work.onset[i] == 1 and i != rec.istate[LAST_STRIKE_FOOT] and system_is_leading(y, system, i):
+            k = rec.istate[N_STRIKES]
+            if k < rec.strike_t.shape[0]:
+                rec.strike_t[k] = t
+                rec.strike_foot[k] = i
+                rec.strike_y[k, :] = y
+                rec.strike_modes[k, :, :] = modes
+            rec.istate[N_STRIKES] = k + 1
+            rec.istate[LAST_STRIKE_FOOT] = i
+            if max_strikes > 0 and k + 1 >= max_strikes:
+                rec.istate[STATUS] = COMPLETED
     return True
 
 

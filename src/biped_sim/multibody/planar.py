@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.friction import LUGRE, SIGMA0, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
 from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
 
 # columns of the per-foot discrete mode table
@@ -112,9 +112,9 @@ def foot_forces(
     """Contact forces on foot i and their dissipation rates.
 
     Returns (F_N, F_T, zdot, P_normal, P_friction, delta, delta_dot, slip, dx, dy) with
-    P_normal = (F_N - K delta^n) deltadot the power lost in the normal damping and P_friction the
-    power lost by friction (-F_T v_t, minus the rate of bristle energy for LuGre). The force acts
-    when the foot is armed and penetrates.
+    P_normal = (F_N - K delta^n) deltadot the power lost in the normal damping and P_friction =
+    -F_T v_t the power taken by friction (for LuGre this includes the small, load-dependent
+    bristle energy, which is not a potential). The force acts when the foot is armed and penetrates.
     """
     delta, delta_dot, slip, _, dx, dy = foot_kinematics(y, system, i)
     f_n = 0.0
@@ -133,9 +133,9 @@ def foot_forces(
         fpar = system.friction_params
         if system.switches[FRICTION_MODEL] == LUGRE:
             z = y[6 * system.body_mass.shape[0] + i]
-            z_dot = lugre_bristle_rate(slip, z, f_n, fpar)
+            z_dot = lugre_bristle_rate(slip, z, fpar)
             f_t = lugre_friction(slip, z, z_dot, f_n, fpar)
-            p_friction = -f_t * slip - fpar[SIGMA0] * z * z_dot
+            p_friction = -f_t * slip
         else:
             f_t = friction_force(system.switches[FRICTION_MODEL], slip, f_n, fpar)
             p_friction = -f_t * slip
@@ -288,7 +288,7 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
 
 @njit(cache=True)
 def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) -> tuple[float, float, float]:
-    """(kinetic, potential, elastic) energy; elastic = contact springs of touching feet + LuGre bristles."""
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
     nb = system.body_mass.shape[0]
     n = 3 * nb
     kinetic = 0.0
@@ -303,9 +303,6 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         delta = foot_kinematics(y, system, i)[0]
         if modes[i, ARMED] > 0.5 and delta > 0.0:
             elastic += elastic_energy(delta, system.normal_params)
-        if system.switches[FRICTION_MODEL] == LUGRE:
-            z = y[2 * n + i]
-            elastic += 0.5 * system.friction_params[SIGMA0] * z * z
     return kinetic, potential, elastic
 
 
@@ -338,8 +335,8 @@ def update_modes(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: W
 
     A foot is armed once it is ahead of its partner and above the ground, and disarmed when it is
     in the air behind its partner (with the guard off every foot is always armed). A touchdown
-    remembers the approach velocity deltadot^-; LuGre bristles are reset at touchdown and
-    lift-off, their stored energy booked as friction loss. Sets work.onset[i] for touchdowns.
+    remembers the approach velocity deltadot^-; LuGre bristles start relaxed at each touchdown.
+    Sets work.onset[i] for touchdowns.
     Returns True when any mode changed (the right-hand side then changes too).
     """
     nb = system.body_mass.shape[0]
@@ -365,11 +362,8 @@ def update_modes(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: W
             work.onset[i] = 1
         if touching != was_touching or new_armed != armed:
             changed = True
-            if lugre:
-                zi = 6 * nb + i
-                z = y[zi]
-                y[6 * nb + nf + 1] += 0.5 * system.friction_params[SIGMA0] * z * z
-                y[zi] = 0.0
+            if lugre and touching and not was_touching:
+                y[6 * nb + i] = 0.0
         modes[i, ARMED] = 1.0 if new_armed else 0.0
         modes[i, TOUCHING] = 1.0 if touching else 0.0
     return changed

@@ -10,6 +10,8 @@ plain Python (``.py_func``), so each equation still has one source.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from biped_sim.contact import friction as friction_laws
@@ -30,14 +32,14 @@ def _rotation(phi: float) -> np.ndarray:
     return np.array([[c, -s], [s, c]])
 
 
-def _normal_law(model: int):  # noqa: ANN202
+def _normal_law(model: int) -> Callable[..., float]:
     for law in normal_laws.NORMAL_LAWS.values():
         if law.index == model:
             return law.function.py_func
     raise KeyError(model)
 
 
-def _friction_law(model: int):  # noqa: ANN202
+def _friction_law(model: int) -> Callable[..., float]:
     for law in friction_laws.FRICTION_LAWS.values():
         if law.index == model:
             return law.function.py_func
@@ -80,10 +82,10 @@ def reference_rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarr
         fp = system.friction_params
         if friction_model == friction_laws.LUGRE:
             z = y[2 * n + i]
-            z_dot = friction_laws.lugre_bristle_rate.py_func(slip, z, f_n, fp)
+            z_dot = friction_laws.lugre_bristle_rate.py_func(slip, z, fp)
             f_t = friction_laws.lugre_friction.py_func(slip, z, z_dot, f_n, fp)
             ydot[2 * n + i] = z_dot
-            powers[1] += -f_t * slip - fp[friction_laws.SIGMA0] * z * z_dot
+            powers[1] += -f_t * slip
         else:
             f_t = _friction_law(friction_model)(slip, f_n, fp)
             powers[1] += -f_t * slip
