@@ -30,6 +30,10 @@ validate: $(STAMP)         ## long physics checks against analytic and published
 bench: $(STAMP)            ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench
 
+sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its report (results/sweeps/slopes_integrators/)
+	$(BIN)/biped-sim sweep configs/sweeps/slopes_integrators.yaml
+	$(BIN)/biped-sim report results/sweeps/slopes_integrators
+
 lint: $(STAMP)
 	$(BIN)/ruff check src tests
 	$(BIN)/ruff format --check src tests

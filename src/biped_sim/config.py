@@ -289,7 +289,11 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
     key = key.strip()
     if not key or any(not part for part in key.split(".")):
         raise ConfigError("--set", f"invalid key {key!r}")
-    value = parse_yaml(raw_value, source=f"--set {key}")
+    set_dotted(data, key, parse_yaml(raw_value, source=f"--set {key}"))
+
+
+def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
+    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed."""
     node = data
     parts = key.split(".")
     for part in parts[:-1]:

@@ -6,7 +6,10 @@ Each command module registers its commands on :data:`app`; every command turns b
 
 from __future__ import annotations
 
-from biped_sim.cli import run_commands  # noqa: F401  (registers commands)
+from biped_sim.cli import (
+    experiment_commands,  # noqa: F401
+    run_commands,  # noqa: F401  (registers commands)
+)
 from biped_sim.cli.common import app
 
 

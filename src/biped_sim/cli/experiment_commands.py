@@ -1,0 +1,264 @@
+"""``biped-sim sweep``, ``report``, ``plot``, ``animate`` and ``compare``: experiments on top of ``run``.
+
+Each command checks all of its input before it writes anything; bad input is one line on
+stderr and exit code 2 (see :func:`~biped_sim.cli.common.user_errors`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from biped_sim.cli.common import SetOption, app, load, user_errors
+from biped_sim.errors import ConfigError
+
+if TYPE_CHECKING:
+    from biped_sim.sweep import SweepProgress
+
+NO_REFERENCE = (
+    "not given: compare needs measured step periods; Liu's are not bundled (only the per-step "
+    "errors Corral et al. 2020 report, configs/references/corral2020_liu_errors.yaml): add yours as a "
+    "reference file, see docs/experiments.md"
+)
+
+
+class SweepReporter:
+    """Progress of a sweep: a rich bar on a terminal, else one line per finished run."""
+
+    def __init__(self, console: Console, quiet: bool) -> None:
+        self.console = console
+        self.quiet = quiet
+        self.bar: Progress | None = None
+        self.task: TaskID | None = None
+
+    def __enter__(self) -> SweepReporter:
+        if not self.quiet and self.console.is_terminal:
+            self.bar = Progress(
+                TextColumn("[bold]sweep"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("failed {task.fields[failed]}"),
+                TimeElapsedColumn(),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                console=self.console,
+                transient=True,
+            )
+            self.bar.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(None, None, None)
+
+    def __call__(self, progress: SweepProgress, name: str | None, row: dict[str, Any] | None) -> None:
+        if name is None:
+            pending = progress.total - progress.skipped
+            if not self.quiet:
+                self.console.print(
+                    f"{progress.total} runs: {progress.skipped} already finished, {pending} to run", highlight=False
+                )
+            if self.bar is not None:
+                self.task = self.bar.add_task("sweep", total=pending, failed=0)
+            return
+        if self.bar is not None and self.task is not None:
+            self.bar.update(self.task, completed=progress.done, failed=progress.failed)
+        elif not self.quiet and row is not None:
+            detail = row["error"] or f"{row['n_steps']} steps, {row['wall_time_s']:.2f} s"
+            self.console.print(
+                f"[{progress.done}/{progress.total - progress.skipped}] {name}: {row['status']}, {detail}",
+                highlight=False,
+                soft_wrap=True,
+            )
+
+
+@app.command("sweep")
+@user_errors
+def sweep_command(
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep file (YAML): base config, grid/zip axes.")],
+    set_: SetOption = None,
+    jobs: Annotated[int | None, typer.Option("--jobs", "-j", help="Parallel runs (default: all cores).")] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume/--no-resume", help="Skip runs already finished with the same config hash.")
+    ] = True,
+    executor: Annotated[str, typer.Option("--executor", help="local (processes) or dask.")] = "local",
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler address tcp://host:port (default: LocalCluster).")
+    ] = None,
+    out: Annotated[Path | None, typer.Option("--out", help="Sweep directory (default: the file's output).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress output.")] = False,
+) -> None:
+    """Run every combination of a sweep file in parallel; write run directories and sweep.csv."""
+    from biped_sim.sweep import check_buildable, default_jobs, load_sweep, make_executor, pending_runs, run_sweep
+
+    if executor not in ("local", "dask"):
+        raise ConfigError("--executor", f"unknown executor {executor!r}; expected local or dask")
+    if jobs is not None and jobs < 1:
+        raise ConfigError("--jobs", "must be at least 1")
+    sweep = load_sweep(sweep_file, set_ or [])
+    check_buildable(sweep)
+    sweep_dir = out or sweep.default_output_dir()
+    pending = pending_runs(sweep, sweep_dir, resume)
+    workers = max(1, min(jobs or default_jobs(), len(pending)))
+    console = Console()
+    with make_executor(executor, workers, scheduler) as pool, SweepReporter(console, quiet) as reporter:
+        outcome = run_sweep(sweep, sweep_dir, pool, resume=resume, on_progress=reporter)
+    counts = ", ".join(f"{n} {status}" for status, n in sorted(outcome.progress.statuses.items()))
+    console.print(
+        f"sweep {sweep.spec.name}: {len(sweep.runs)} runs, {outcome.progress.skipped} already finished"
+        + (f", ran {outcome.progress.done}: {counts}" if outcome.progress.done else ""),
+        highlight=False,
+        soft_wrap=True,
+    )
+    console.print(f"files: {sweep_dir}/ (sweep.csv, sweep.json, runs/)", highlight=False, soft_wrap=True)
+    if outcome.errors:
+        typer.echo(f"error: {outcome.errors} run(s) raised; see the error column of {sweep_dir}/sweep.csv", err=True)
+        raise typer.Exit(1)
+
+
+@app.command("report")
+@user_errors
+def report_command(
+    sweep_dir: Annotated[Path, typer.Argument(help="Sweep directory (holds sweep.json and sweep.csv).")],
+    out: Annotated[Path | None, typer.Option("--out", help="Report directory (default: SWEEP_DIR/report).")] = None,
+) -> None:
+    """Comparison tables (Markdown, CSV, LaTeX) and figures (PNG, SVG) of a sweep."""
+    from biped_sim.report import build_report
+
+    report = build_report(sweep_dir, out)
+    typer.echo(
+        f"report: {report.markdown_path} ({len(report.tables)} tables in tables/, "
+        f"{len(report.figures)} figures in figures/)"
+    )
+
+
+@app.command("plot")
+@user_errors
+def plot_command(
+    run_dir: Annotated[Path, typer.Argument(help="Run directory (holds trajectory.h5 and summary.json).")],
+    out: Annotated[Path | None, typer.Option("--out", help="Figure directory (default: RUN_DIR/figures).")] = None,
+) -> None:
+    """The single-run figures: step period, constraint violation, contact forces, energy, slip, phase portrait."""
+    from biped_sim.io.trajectory import load_run
+    from biped_sim.plots import plot_run
+
+    run = load_run(run_dir)
+    paths = plot_run(run, out or run_dir / "figures")
+    typer.echo(f"figures: {paths[0].parent}/ ({len(paths) // 2} figures, PNG and SVG)")
+
+
+@app.command("animate")
+@user_errors
+def animate_command(
+    run_dir: Annotated[Path, typer.Argument(help="Run directory (holds trajectory.h5).")],
+    out: Annotated[Path, typer.Option("--out", help="Output file: .gif, or .mp4 when ffmpeg is present.")],
+    fps: Annotated[float, typer.Option("--fps", help="Frames per second of playback.")] = 25.0,
+    speed: Annotated[float, typer.Option("--speed", help="Playback speed (1 = real time).")] = 1.0,
+    start: Annotated[float, typer.Option("--start", help="First simulated time shown [s].")] = 0.0,
+    end: Annotated[float | None, typer.Option("--end", help="Last simulated time shown [s].")] = None,
+) -> None:
+    """Draw the walker walking, with contact force arrows and a time stamp."""
+    from biped_sim.animate import animate_run, check_output
+    from biped_sim.io.trajectory import load_run
+
+    check_output(out)
+    run = load_run(run_dir)
+    frames = animate_run(run, out, fps=fps, speed=speed, t_start=start, t_end=end)
+    typer.echo(f"animation: {out} ({frames} frames at {fps:g} fps)")
+
+
+def _compare_targets(target: Path, set_: list[str] | None, skip: int) -> tuple[list[tuple[str, list[float]]], Path]:
+    """(label, model step periods) of each target run, and the default output directory.
+
+    A config file is simulated (nothing else is written); a run directory or a sweep directory
+    is read from disk.
+    """
+    from biped_sim.analysis.compare import model_step_periods
+    from biped_sim.io.trajectory import load_summary
+
+    if target.is_dir():
+        if set_:
+            raise ConfigError("--set", "only applies when comparing a config file, not a run or sweep directory")
+        if (target / "sweep.json").is_file():
+            from biped_sim.report import SweepView
+
+            view = SweepView.load(target)
+            series = [
+                (view.label(row), model_step_periods(load_summary(target / "runs" / row["run"])["step_times"], skip))
+                for row in view.finished
+            ]
+            if not series:
+                raise ConfigError(str(target), "no finished run in this sweep")
+            return series, target / "compare"
+        summary = load_summary(target)
+        return [(target.name, model_step_periods(summary["step_times"], skip))], target / "compare"
+    from biped_sim.simulate import simulate
+
+    config = load(target, set_)
+    result = simulate(config)
+    label = target.stem + (f" ({', '.join(set_)})" if set_ else "")
+    return [(label, model_step_periods(result.summary["step_times"], skip))], Path("results") / "compare" / target.stem
+
+
+@app.command("compare")
+@user_errors
+def compare_command(
+    target: Annotated[Path, typer.Argument(help="Config file (simulated), run directory or sweep directory.")],
+    reference: Annotated[
+        Path | None, typer.Option("--reference", help="Reference file of measured step periods (YAML).")
+    ] = None,
+    set_: SetOption = None,
+    skip: Annotated[
+        int, typer.Option("--skip-steps", help="Model steps to drop so that model step N+1 meets reference step 1.")
+    ] = 0,
+    out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
+) -> None:
+    """Per-step error table (Markdown, CSV, LaTeX) and figure of model step periods against a reference."""
+    from biped_sim.analysis.compare import compare_periods, stats_table, step_table
+    from biped_sim.io.references import load_reference
+    from biped_sim.plots import comparison_figure, save_figure
+
+    if reference is None:
+        raise ConfigError("--reference", NO_REFERENCE)
+    if skip < 0:
+        raise ConfigError("--skip-steps", "must be >= 0")
+    ref = load_reference(reference)
+    if not ref.is_periods:
+        raise ConfigError(
+            "--reference",
+            f"{reference} holds published relative errors, not measured step periods; "
+            "compare needs a step_period reference (see docs/experiments.md)",
+        )
+    if not target.exists():
+        raise ConfigError(str(target), "no such config file, run directory or sweep directory")
+    series, default_out = _compare_targets(target, set_, skip)
+    out_dir = out or default_out
+    comparisons = [compare_periods(ref, periods, label) for label, periods in series]
+    tables = [step_table(comparisons), stats_table(comparisons)]
+    for table in tables:
+        table.write(out_dir)
+    published = comparisons[0].published
+    figure = comparison_figure(
+        ref.steps,
+        ref.values,
+        ref.spec.std,
+        ref.short_name,
+        [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
+        published,
+    )
+    save_figure(figure, out_dir, "compare")
+    typer.echo(tables[0].markdown() if len(comparisons) == 1 else "")
+    typer.echo(tables[1].markdown())
+    typer.echo(f"files: {out_dir}/ (compare_steps, compare_stats as .md/.csv/.tex; compare.png, compare.svg)")

@@ -1,0 +1,89 @@
+"""Reading a finished run directory back: trajectory.h5 (layout in :mod:`biped_sim.io.results`) and summary.json.
+
+Figures, animations, reports and comparisons all read runs through :func:`load_run`, so a run
+directory is the one interface between simulating and presenting.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from biped_sim.config import Config, config_from_dict, parse_yaml
+from biped_sim.errors import ConfigError
+
+
+@dataclass
+class RunData:
+    """The arrays of one run, in the slope frame (x downhill along the slope, y along its normal)."""
+
+    run_dir: Path
+    config: Config
+    summary: dict[str, Any]
+    time: np.ndarray  # (ns,) s
+    state: np.ndarray  # (ns, ny)
+    state_names: list[str]
+    normal_force: np.ndarray  # (ns, nf) N
+    friction_force: np.ndarray  # (ns, nf) N
+    penetration: np.ndarray  # (ns, nf) m
+    energy: dict[str, np.ndarray]  # kinetic, potential, elastic, dissipated_normal, dissipated_friction, residual
+    violation_position: np.ndarray  # (ns,) m
+    violation_velocity: np.ndarray  # (ns,) m/s
+    hip: np.ndarray  # (ns, 2) m
+    steps: dict[str, np.ndarray]  # strike_time, foot, period, length, slip, ...
+
+    def column(self, name: str) -> np.ndarray:
+        """One state entry over time, by name (e.g. 'phi_leg0')."""
+        try:
+            return self.state[:, self.state_names.index(name)]
+        except ValueError:
+            raise ConfigError(str(self.run_dir), f"trajectory.h5 has no state {name!r}") from None
+
+    @property
+    def body_names(self) -> list[str]:
+        """Bodies in state order (from the 'x_<body>' entries)."""
+        return [name[2:] for name in self.state_names if name.startswith("x_")]
+
+    @property
+    def label(self) -> str:
+        return self.run_dir.name
+
+
+def load_summary(run_dir: Path) -> dict[str, Any]:
+    """summary.json of a finished run; ConfigError if the directory holds no finished run."""
+    path = run_dir / "summary.json"
+    if not path.is_file():
+        raise ConfigError(str(run_dir), "not a finished run directory (no summary.json)")
+    return json.loads(path.read_text())
+
+
+def load_run(run_dir: str | Path) -> RunData:
+    """Read a finished run directory (ConfigError if it is not one)."""
+    run_dir = Path(run_dir)
+    summary = load_summary(run_dir)
+    path = run_dir / "trajectory.h5"
+    if not path.is_file():
+        raise ConfigError(str(run_dir), "no trajectory.h5 in the run directory")
+    with h5py.File(path, "r") as f:
+        config = config_from_dict(parse_yaml(f.attrs["config"], source=f"{path}:config"))
+        return RunData(
+            run_dir=run_dir,
+            config=config,
+            summary=summary,
+            time=f["time"][:],
+            state=f["state"][:],
+            state_names=list(f["state_names"].asstr()[:]),
+            normal_force=f["contact/normal_force"][:],
+            friction_force=f["contact/friction_force"][:],
+            penetration=f["contact/penetration"][:],
+            energy={name: ds[:] for name, ds in f["energy"].items()},
+            violation_position=f["constraints/position"][:],
+            violation_velocity=f["constraints/velocity"][:],
+            hip=f["hip"][:],
+            steps={name: ds[:] for name, ds in f["steps"].items()},
+        )

@@ -1,0 +1,43 @@
+"""Parameter sweeps: a sweep file expands into runs that execute on local processes or a Dask cluster.
+
+from biped_sim.sweep import load_sweep, local_executor, run_sweep
+sweep = load_sweep("configs/sweeps/slopes_integrators.yaml")
+with local_executor(jobs=2) as executor:
+    outcome = run_sweep(sweep, sweep.default_output_dir(), executor)
+"""
+
+from __future__ import annotations
+
+from biped_sim.sweep.runner import (
+    SweepOutcome,
+    SweepProgress,
+    dask_executor,
+    default_jobs,
+    execute_run,
+    local_executor,
+    make_executor,
+    pending_runs,
+    read_sweep,
+    run_sweep,
+)
+from biped_sim.sweep.spec import RangeSpec, RunSpec, Sweep, SweepSpec, check_buildable, expand, load_sweep
+
+__all__ = [
+    "RangeSpec",
+    "RunSpec",
+    "Sweep",
+    "SweepOutcome",
+    "SweepProgress",
+    "SweepSpec",
+    "check_buildable",
+    "dask_executor",
+    "default_jobs",
+    "execute_run",
+    "expand",
+    "load_sweep",
+    "local_executor",
+    "make_executor",
+    "pending_runs",
+    "read_sweep",
+    "run_sweep",
+]

@@ -1,0 +1,136 @@
+"""One row of ``sweep.csv`` per run: its swept values, its settings and what it measured.
+
+The metrics come from the run's summary.json (and two maxima from its trajectory.h5), so a row
+built by a worker right after its run and a row rebuilt from disk when a sweep resumes are the
+same. Column names carry their units (``_s``, ``_m``, ``_J``...) so the table reads on its own.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from biped_sim.config import Config
+
+# Settings that the report's comparison tables group by; always present, swept or not.
+SETTING_COLUMNS = (
+    "ground.slope",
+    "contact.model",
+    "friction.model",
+    "integrator.method",
+    "integrator.dt",
+    "integrator.rtol",
+    "integrator.atol",
+    "formulation.baumgarte.alpha",
+    "formulation.baumgarte.beta",
+)
+
+METRIC_COLUMNS = (
+    "status",
+    "n_steps",
+    "mean_period_s",
+    "last_period_s",
+    "period_spread_s",
+    "speed_m_s",
+    "slip_mean_m",
+    "slip_max_m",
+    "energy_dissipated_normal_J",
+    "energy_dissipated_friction_J",
+    "energy_residual_max_J",
+    "energy_residual_rel",
+    "violation_position_max_m",
+    "violation_velocity_max_m_s",
+    "max_penetration_m",
+    "peak_normal_force_N",
+    "wall_time_s",
+    "rhs_evals",
+    "accepted_steps",
+    "rejected_steps",
+    "stop_time_s",
+    "error",
+)
+
+FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
+
+
+def step_control(config: Config) -> str:
+    """How the integrator's step is set: 'dt = 1e-04 s' (fixed step) or 'rtol = 1e-08, atol = 1e-10'."""
+    integ = config.integrator
+    if integ.method in FIXED_STEP_METHODS or not integ.adaptive:
+        return f"dt = {integ.dt:.0e} s"
+    return f"rtol = {integ.rtol:.0e}, atol = {integ.atol:.0e}"
+
+
+def settings_of(config: Config) -> dict[str, Any]:
+    """The setting columns of a run, read from its resolved config."""
+    data = config.model_dump(mode="json")
+    out: dict[str, Any] = {}
+    for key in SETTING_COLUMNS:
+        node: Any = data
+        for part in key.split("."):
+            node = node[part]
+        out[key] = node
+    out["step_control"] = step_control(config)
+    return out
+
+
+def period_spread(periods: list[float]) -> float:
+    """max - min of the step periods over the last half of the steps (0 on a period-1 gait)."""
+    tail = [p for p in periods[len(periods) // 2 :] if p is not None and math.isfinite(p)]
+    return max(tail) - min(tail) if len(tail) >= 2 else math.nan
+
+
+def _number(value: Any) -> float:
+    return math.nan if value is None else float(value)
+
+
+def contact_maxima(trajectory: Path) -> tuple[float, float]:
+    """(largest penetration [m], largest normal force [N]) over the run, from trajectory.h5."""
+    with h5py.File(trajectory, "r") as f:
+        penetration = f["contact/penetration"][:]
+        normal = f["contact/normal_force"][:]
+    if penetration.size == 0:
+        return math.nan, math.nan
+    return float(np.max(penetration)), float(np.max(normal))
+
+
+def metrics_from_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any]:
+    """The metric columns of a finished run (summary.json content plus trajectory.h5 maxima)."""
+    periods = [p for p in summary["step_periods"] if p is not None]
+    slips = [abs(s) for s in summary["slip_per_step"] if s is not None and math.isfinite(s)]
+    penetration, peak_force = contact_maxima(run_dir / "trajectory.h5")
+    return {
+        "status": summary["status"],
+        "n_steps": summary["n_steps"],
+        "mean_period_s": _number(summary["mean_step_period"]),
+        "last_period_s": _number(summary["last_step_period"]),
+        "period_spread_s": period_spread(periods),
+        "speed_m_s": _number(summary["mean_speed"]),
+        "slip_mean_m": float(np.mean(slips)) if slips else math.nan,
+        "slip_max_m": float(np.max(slips)) if slips else math.nan,
+        "energy_dissipated_normal_J": _number(summary["energy_dissipated"]["normal"]),
+        "energy_dissipated_friction_J": _number(summary["energy_dissipated"]["friction"]),
+        "energy_residual_max_J": _number(summary["energy_residual_max"]),
+        "energy_residual_rel": _number(summary["energy_residual_max_relative"]),
+        "violation_position_max_m": _number(summary["constraint_violation_max"]["position"]),
+        "violation_velocity_max_m_s": _number(summary["constraint_violation_max"]["velocity"]),
+        "max_penetration_m": penetration,
+        "peak_normal_force_N": peak_force,
+        "wall_time_s": _number(summary["wall_time_s"]),
+        "rhs_evals": summary["rhs_evals"],
+        "accepted_steps": summary["accepted_steps"],
+        "rejected_steps": summary["rejected_steps"],
+        "stop_time_s": _number(summary["stop_time"]),
+        "error": "",
+    }
+
+
+def unfinished_metrics(status: str, error: str) -> dict[str, Any]:
+    """Metric columns of a run without results: 'error' (it raised) or 'pending' (not run yet)."""
+    row: dict[str, Any] = dict.fromkeys(METRIC_COLUMNS, math.nan)
+    row.update(status=status, error=error)
+    return row

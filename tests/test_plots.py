@@ -1,0 +1,105 @@
+"""`biped-sim plot` and `biped-sim animate` on a run directory."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib import animation
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from PIL import Image
+
+from biped_sim import load_config, run
+from biped_sim.animate import WalkerDrawing, frame_indices
+from biped_sim.io.trajectory import load_run
+from biped_sim.plots import RUN_FIGURES
+
+from .conftest import DEFAULT_CONFIG
+
+CLI = [sys.executable, "-m", "biped_sim.cli"]
+
+
+def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*CLI, *args], cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("plots") / "run"
+    run(load_config(DEFAULT_CONFIG, ["simulation.t_end=2.5"]), out)
+    return out
+
+
+def test_plot_writes_every_single_run_figure(run_dir: Path) -> None:
+    result = run_cli("plot", str(run_dir), cwd=run_dir)
+    assert result.returncode == 0, result.stderr
+    assert f"{len(RUN_FIGURES)} figures" in result.stdout
+    for name in RUN_FIGURES:
+        with Image.open(run_dir / "figures" / f"{name}.png") as image:
+            assert round(image.info["dpi"][0]) == 200 and image.size[0] == 700
+        assert "<svg" in (run_dir / "figures" / f"{name}.svg").read_text()
+    assert sorted(p.suffix for p in (run_dir / "figures").iterdir()) == [".png"] * 6 + [".svg"] * 6
+
+
+def test_animate_writes_a_gif_with_one_frame_per_interval(run_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "walk.gif"
+    result = run_cli("animate", str(run_dir), "--out", str(out), "--fps", "10", "--end", "0.5", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "6 frames" in result.stdout
+    with Image.open(out) as image:
+        assert image.format == "GIF" and image.n_frames == 6 and image.size == (400, 320)
+    assert [p.name for p in tmp_path.iterdir()] == ["walk.gif"]  # no temporary file left
+
+
+def test_frame_indices_decimate_to_the_frame_rate() -> None:
+    time = np.arange(0, 1001) * 1e-3
+    assert list(frame_indices(time, fps=25, speed=1.0, t_start=0.0, t_end=None)) == list(range(0, 1001, 40))
+    assert list(frame_indices(time, fps=10, speed=2.0, t_start=0.5, t_end=None)) == [500, 700, 900]
+
+
+def test_walker_drawing_puts_the_stance_foot_on_the_ground(run_dir: Path) -> None:
+    data = load_run(run_dir)
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    drawing = WalkerDrawing(data, fig)
+    drawing.draw(0)
+    # back to the slope frame: the stance foot's lowest arc point is at the ground (to within the penetration)
+    to_slope = drawing.to_world.T
+    lowest = min(float((to_slope @ np.vstack(line.get_data()))[1].min()) for line in drawing.feet)
+    assert abs(lowest) < 2e-3
+    hip = to_slope @ np.array([drawing.hip.get_xdata()[0], drawing.hip.get_ydata()[0]])
+    np.testing.assert_allclose(hip, data.hip[0], atol=1e-12)
+    for line in drawing.legs:  # each leg reaches from the hip
+        leg = to_slope @ np.vstack(line.get_data())
+        np.testing.assert_allclose(leg[:, 0], data.hip[0], atol=1e-9)
+        assert np.hypot(*(leg[:, 1] - leg[:, 0])) == pytest.approx(data.config.walker.leg_length, rel=1e-9)
+    arrows = drawing.arrows.U, drawing.arrows.V
+    assert np.hypot(*arrows).max() > 0  # the stance foot carries a force
+
+
+@pytest.mark.parametrize(
+    ("out", "expected"),
+    [
+        ("walk.avi", "--out: unsupported animation type '.avi'; use .gif or .mp4"),
+        ("walk.mp4", "--out: .mp4 needs ffmpeg on the PATH"),
+    ],
+)
+def test_animate_bad_output_is_one_line_exit_2(run_dir: Path, tmp_path: Path, out: str, expected: str) -> None:
+    if out.endswith(".mp4") and animation.writers.is_available("ffmpeg"):
+        pytest.skip("ffmpeg is installed: .mp4 is supported here")
+    result = run_cli("animate", str(run_dir), "--out", str(tmp_path / out), cwd=tmp_path)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {expected}"), result.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_plot_on_a_directory_without_a_run(tmp_path: Path) -> None:
+    result = run_cli("plot", str(tmp_path), cwd=tmp_path)
+    assert result.returncode == 2
+    assert result.stderr.strip() == f"error: {tmp_path}: not a finished run directory (no summary.json)"
+    assert list(tmp_path.iterdir()) == []
