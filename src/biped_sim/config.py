@@ -32,11 +32,13 @@ class _Strict(BaseModel):
 class WalkerConfig(_Strict):
     """Geometry and inertia of the walker (MODEL.md 1)."""
 
-    kind: Literal["compass", "simplest", "rimless_wheel"] = Field(
+    kind: Literal["compass", "simplest", "rimless_wheel", "four_legged"] = Field(
         "compass",
         description=(
             "Walker builder: 'compass' = two straight legs, round feet, hip joint; 'simplest' = Garcia's "
-            "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only)."
+            "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only); "
+            "'four_legged' = Liu's machine: an outer and an inner pair of legs, each pair joined rigidly by a cross "
+            "bar, the pairs by a hip axle, four disc feet (compliant, formulation.kind: spatial only)."
         ),
     )
     spokes: int = Field(8, ge=3, description="Number of spokes (rimless_wheel).")
@@ -50,6 +52,17 @@ class WalkerConfig(_Strict):
     leg_com_from_hip: float = Field(0.15, ge=0, description="Leg centre of mass distance from the hip, c [m].")
     leg_inertia: float = Field(0.005, ge=0, description="Leg moment of inertia about its centre of mass, I [kg m^2].")
     hip_mass: float = Field(2.0, ge=0, description="Hip point mass M_H [kg], split half to each leg at the hip.")
+    foot_spacing_outer: float = Field(
+        0.2, gt=0, description="four_legged: lateral distance between the two outer legs (and feet) [m]."
+    )
+    foot_spacing_inner: float = Field(
+        0.1, gt=0, description="four_legged: lateral distance between the two inner legs (and feet) [m]."
+    )
+    crossbar_mass: float = Field(
+        0.1,
+        ge=0,
+        description="four_legged: mass of each cross bar [kg], a uniform rod along the hip axle joining one pair.",
+    )
 
     @model_validator(mode="after")
     def _geometry_is_possible(self) -> WalkerConfig:
@@ -157,7 +170,10 @@ class BaumgarteConfig(_Strict):
 class FormulationConfig(_Strict):
     """Multibody formulation."""
 
-    kind: Literal["planar"] = Field("planar", description="Planar absolute coordinates (x, y, phi) per body.")
+    kind: Literal["planar", "spatial"] = Field(
+        "planar",
+        description="'planar': (x, y, phi) per body; 'spatial': (r, Euler parameters) per body, 3D contact.",
+    )
     baumgarte: BaumgarteConfig = Field(default_factory=BaumgarteConfig)
 
 
@@ -225,6 +241,12 @@ class Config(_Strict):
     def _cross_checks(self) -> Config:
         if self.dynamics == "compliant" and self.walker.kind in ("simplest", "rimless_wheel"):
             raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
+        if self.walker.kind == "four_legged" and (self.dynamics != "compliant" or self.formulation.kind != "spatial"):
+            raise ValueError("walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial")
+        if self.formulation.kind == "spatial" and self.dynamics != "compliant":
+            raise ValueError("formulation.kind: 'spatial' is available with dynamics: compliant only")
+        if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
+            raise ValueError("walker.foot_spacing_inner: must be smaller than walker.foot_spacing_outer")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:
             raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
         if self.friction.model != "none" and math.tan(abs(self.ground.slope)) >= max(

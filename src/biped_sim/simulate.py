@@ -4,7 +4,10 @@
     result = simulate(load_config("configs/round_foot_walker.yaml"))
     print(result.status, result.step_periods)
 
-:func:`run` does the same and writes ``trajectory.h5``, ``summary.json`` and ``steps.csv``.
+:func:`run` does the same and writes ``trajectory.h5``, ``summary.json`` and ``steps.csv``. A config with
+``dynamics: rigid`` is simulated by the rigid model (:mod:`biped_sim.rigid.run`) and gives a
+:class:`~biped_sim.rigid.run.RigidRunResult` with the same ``status``, ``summary``, ``steps``,
+``step_periods`` and ``heel_strike_states``.
 """
 
 from __future__ import annotations
@@ -18,9 +21,18 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.analysis.gait import EnergyAudit, StepTable, constraint_drift, energy_audit, step_table
+from biped_sim.analysis.gait import (
+    EnergyAudit,
+    StepTable,
+    constraint_drift,
+    energy_audit,
+    lateral_summary,
+    step_table,
+    violation_names,
+)
 from biped_sim.config import Config
 from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.rigid.run import RigidRunResult, RigidStart, rigid_start, simulate_rigid
 from biped_sim.walkers import BuiltModel, build_model
 
 
@@ -33,13 +45,17 @@ class RunResult:
     run: Integration
     steps: StepTable
     energy: EnergyAudit
-    violation: np.ndarray  # (ns, 2) ||Phi||, ||Phidot||
+    violation: np.ndarray  # (ns, 2) ||Phi||, ||Phidot|| (spatial: (ns, 3), + ||p.p - 1||)
     wall_time_s: float
     summary: dict[str, Any] = field(default_factory=dict)
 
     @property
     def status(self) -> str:
         return self.run.status
+
+    def unit(self, si_unit: str) -> str:
+        """This run's unit for an SI unit: compliant runs are SI throughout."""
+        return si_unit
 
     @property
     def heel_strike_times(self) -> np.ndarray:
@@ -103,9 +119,9 @@ def summarize(result: RunResult) -> dict[str, Any]:
         "energy_residual_max": float(np.max(np.abs(result.energy.residual))),
         "energy_residual_max_relative": float(np.max(np.abs(result.energy.residual)) / scale),
         "constraint_violation_max": {
-            "position": float(np.max(result.violation[:, 0])),
-            "velocity": float(np.max(result.violation[:, 1])),
+            name: float(np.max(result.violation[:, k])) for k, name in enumerate(violation_names(result.model))
         },
+        **lateral_summary(result.model, run),
         "rhs_evals": run.rhs_evals,
         "accepted_steps": run.accepted_steps,
         "rejected_steps": run.rejected_steps,
@@ -117,10 +133,29 @@ def summarize(result: RunResult) -> dict[str, Any]:
     }
 
 
+def prepare_model(config: Config) -> BuiltModel | RigidStart:
+    """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
+    for ``dynamics: rigid`` the rigid walker and its resolved initial state."""
+    return rigid_start(config) if config.dynamics == "rigid" else build_model(config)
+
+
 def simulate(
-    config: Config, *, model: BuiltModel | None = None, progress: Callable[[float], None] | None = None
-) -> RunResult:
-    """Simulate ``config`` (the compliant model) and measure the gait; writes nothing."""
+    config: Config,
+    *,
+    model: BuiltModel | RigidStart | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> RunResult | RigidRunResult:
+    """Simulate ``config`` and measure the gait; writes nothing.
+
+    ``model`` is :func:`prepare_model`'s result when the caller has built it already; ``progress(t)`` reports
+    the simulated time.
+    """
+    if config.dynamics == "rigid":
+        if model is not None and not isinstance(model, RigidStart):
+            raise TypeError("simulate: a rigid config takes the RigidStart of prepare_model, not a compliant model")
+        return simulate_rigid(config, model, progress)
+    if isinstance(model, RigidStart):
+        raise TypeError("simulate: a compliant config takes the BuiltModel of prepare_model, not a RigidStart")
     model = model or build_model(config)
     start = time.perf_counter()
     run = integrate_model(
@@ -147,8 +182,11 @@ def simulate(
     return result
 
 
-def run(config: Config, out_dir: str | Path, *, progress: Callable[[float], None] | None = None) -> RunResult:
-    """Simulate and write ``trajectory.h5``, ``summary.json`` and ``steps.csv`` into ``out_dir`` (atomically)."""
+def run(
+    config: Config, out_dir: str | Path, *, progress: Callable[[float], None] | None = None
+) -> RunResult | RigidRunResult:
+    """Simulate and write ``trajectory.h5``, ``summary.json``, ``steps.csv`` and ``config.yaml`` into ``out_dir``
+    (atomically)."""
     from biped_sim.io.results import write_run
 
     result = simulate(config, progress=progress)

@@ -3,7 +3,8 @@
 Heel strikes come from the compiled loop (the first touchdown of a leading foot that is not the
 previous strike's foot: bounces are debounced there). Everything here is post-processing over
 the recorded samples and strike states, using the same compiled kinematics and force functions
-as the right-hand side (one source of truth per equation).
+as the right-hand side (one source of truth per equation), reached through the formulation's
+:class:`~biped_sim.multibody.dispatch.Measures` so that planar and spatial runs are measured alike.
 """
 
 from __future__ import annotations
@@ -13,13 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.integrate.driver import Integration
-from biped_sim.multibody.planar import (
-    PlanarSystem,
-    constraint_violation,
-    foot_forces,
-    foot_kinematics,
-    mechanical_energy,
-)
+from biped_sim.multibody.dispatch import measures
 from biped_sim.walkers.model import BuiltModel
 
 
@@ -38,17 +33,18 @@ class StepTable:
     swing_rate: np.ndarray
 
 
-def _rolling_coordinate(y: np.ndarray, system: PlanarSystem, foot: int) -> float:
-    """x_C + R phi of a foot: constant while the arc rolls without slipping, so its change is the slip."""
-    b = system.foot_body[foot]
-    x_contact = foot_kinematics(y, system, foot)[3]
-    return x_contact + system.foot_radius[foot] * y[3 * b + 2]
+def _rolling_coordinate(y: np.ndarray, model: BuiltModel, foot: int) -> float:
+    """x_C + R theta of a foot: constant while the arc rolls without slipping, so its change is the slip."""
+    system = model.system
+    m = measures(system)
+    theta = m.pitch(y, system, int(system.foot_body[foot]))[0]
+    return m.contact_x(y, system, foot) + system.foot_radius[foot] * theta
 
 
 def step_table(model: BuiltModel, run: Integration) -> StepTable:
     """Per-step quantities from the heel-strike states."""
     system = model.system
-    nb = model.n_bodies
+    m = measures(system)
     n = len(run.strike_t)
     period = np.full(n, np.nan)
     length = np.full(n, np.nan)
@@ -59,18 +55,13 @@ def step_table(model: BuiltModel, run: Integration) -> StepTable:
         foot = int(run.strike_foot[k])
         stance_body = int(system.foot_body[foot])
         swing_body = int(system.foot_body[system.foot_partner[foot]]) if system.foot_partner[foot] >= 0 else stance_body
-        angles[k] = [
-            y[3 * stance_body + 2],
-            y[3 * nb + 3 * stance_body + 2],
-            y[3 * swing_body + 2],
-            y[3 * nb + 3 * swing_body + 2],
-        ]
+        angles[k] = [*m.pitch(y, system, stance_body), *m.pitch(y, system, swing_body)]
         if k + 1 < n:
             y_next = run.strike_y[k + 1]
             period[k] = run.strike_t[k + 1] - run.strike_t[k]
             next_foot = int(run.strike_foot[k + 1])
-            length[k] = foot_kinematics(y_next, system, next_foot)[3] - foot_kinematics(y, system, foot)[3]
-            slip[k] = _rolling_coordinate(y_next, system, foot) - _rolling_coordinate(y, system, foot)
+            length[k] = m.contact_x(y_next, system, next_foot) - m.contact_x(y, system, foot)
+            slip[k] = _rolling_coordinate(y_next, model, foot) - _rolling_coordinate(y, model, foot)
     return StepTable(run.strike_t.copy(), run.strike_foot.copy(), period, length, slip, *angles.T)
 
 
@@ -89,7 +80,8 @@ class EnergyAudit:
 def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     """Energy balance over the samples (the dissipated work is integrated as ODE states)."""
     ns = len(run.t)
-    terms = np.array([mechanical_energy(run.y[i], model.system, run.modes[i]) for i in range(ns)]).reshape(ns, 3)
+    energy = measures(model.system).mechanical_energy
+    terms = np.array([energy(run.y[i], model.system, run.modes[i]) for i in range(ns)]).reshape(ns, 3)
     w_normal = run.y[:, -2]
     w_friction = run.y[:, -1]
     total = terms.sum(axis=1)
@@ -97,31 +89,67 @@ def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, residual)
 
 
+def violation_names(model: BuiltModel) -> tuple[str, ...]:
+    """Names of the columns of :func:`constraint_drift`: position, velocity (and normalization for spatial)."""
+    return measures(model.system).violation_names
+
+
 def constraint_drift(model: BuiltModel, run: Integration) -> np.ndarray:
-    """(ns, 2): ||Phi|| and ||Phidot|| at each sample."""
-    return np.array([constraint_violation(y, model.system) for y in run.y]).reshape(len(run.t), 2)
+    """(ns, k): ||Phi||, ||Phidot|| (and, spatial, ||p.p - 1|| over the bodies) at each sample."""
+    m = measures(model.system)
+    return np.array([m.violation(y, model.system) for y in run.y]).reshape(len(run.t), len(m.violation_names))
 
 
 def contact_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
-    """Per-foot penetration, normal force, friction force and slip velocity at the samples, (ns, nf) each."""
+    """Per-foot contact channels at the samples, (ns, nf) each.
+
+    Penetration, normal force, friction force and slip velocity along the slope (x); spatial
+    formulations add the lateral (z) friction force and slip velocity.
+    """
+    m = measures(model.system)
     ns, nf = len(run.t), model.n_feet
-    out = {name: np.zeros((ns, nf)) for name in ("penetration", "normal_force", "friction_force", "slip_velocity")}
+    out = {name: np.zeros((ns, nf)) for name in m.contact_names}
     for i in range(ns):
         for f in range(nf):
-            f_n, f_t, _, _, _, delta, _, slip, _, _ = foot_forces(run.y[i], model.system, run.modes[i], f)
-            out["penetration"][i, f] = delta
-            out["normal_force"][i, f] = f_n
-            out["friction_force"][i, f] = f_t
-            out["slip_velocity"][i, f] = slip
+            values = m.contact(run.y[i], model.system, run.modes[i], f)
+            for name, value in zip(m.contact_names, values, strict=True):
+                out[name][i, f] = value
     return out
 
 
 def hip_position(model: BuiltModel, run: Integration) -> np.ndarray:
-    """(ns, 2) position of joint 0 (the hip) in the slope frame."""
-    system = model.system
-    b = int(system.joint_bodies[0, 0])
-    sx, sy = system.joint_points[0, 0], system.joint_points[0, 1]
-    phi = run.y[:, 3 * b + 2]
-    x = run.y[:, 3 * b] + np.cos(phi) * sx - np.sin(phi) * sy
-    y = run.y[:, 3 * b + 1] + np.sin(phi) * sx + np.cos(phi) * sy
-    return np.column_stack([x, y])
+    """(ns, 2) planar or (ns, 3) spatial position of joint 0 (the hip) in the slope frame."""
+    hip = measures(model.system).hip
+    return np.array([hip(y, model.system) for y in run.y]).reshape(len(run.t), -1)
+
+
+def attitude_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
+    """Spatial only (else empty): per-body pitch, roll (lateral rocking), yaw (heading drift), (ns, nb) each [rad]."""
+    attitude = measures(model.system).attitude
+    if attitude is None:
+        return {}
+    ns, nb = len(run.t), model.n_bodies
+    values = np.array([[attitude(run.y[i], model.system, b)[:3] for b in range(nb)] for i in range(ns)])
+    values = values.reshape(ns, nb, 3)
+    return {"pitch": values[:, :, 0], "roll": values[:, :, 1], "yaw": values[:, :, 2]}
+
+
+def lateral_summary(model: BuiltModel, run: Integration) -> dict[str, dict[str, float]]:
+    """Spatial only (else empty): the summary's ``lateral`` entry.
+
+    Largest |roll| of any body (lateral rocking), final yaw of body 0 (heading drift) [rad], and
+    the largest lateral friction force and slip velocity of any foot [N, m/s].
+    """
+    attitude = attitude_channels(model, run)
+    if not attitude:
+        return {}
+    channels = contact_channels(model, run)
+    return {
+        "lateral": {
+            "roll_max": float(np.max(np.abs(attitude["roll"]))),
+            "yaw_final": float(attitude["yaw"][-1, 0]),
+            "yaw_max": float(np.max(np.abs(attitude["yaw"]))),
+            "friction_force_lateral_max": float(np.max(np.abs(channels["friction_force_lateral"]))),
+            "slip_velocity_lateral_max": float(np.max(np.abs(channels["slip_velocity_lateral"]))),
+        }
+    }

@@ -7,6 +7,8 @@ Each command module registers its commands on :data:`app`; every command turns b
 from __future__ import annotations
 
 from biped_sim.cli import (
+    analysis_commands,  # noqa: F401
+    bench_commands,  # noqa: F401
     experiment_commands,  # noqa: F401
     run_commands,  # noqa: F401  (registers commands)
 )

@@ -16,18 +16,39 @@ from rich.table import Table
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
 from biped_sim.config import default_output_dir
 from biped_sim.errors import ConfigError
-from biped_sim.simulate import RunResult, simulate
-from biped_sim.walkers import build_model
+from biped_sim.rigid.run import NONDIMENSIONAL, RigidRunResult
+from biped_sim.simulate import RunResult, prepare_model, simulate
 
 
 def _fmt(value: float, digits: int = 5) -> str:
     return "" if not math.isfinite(value) else f"{value:.{digits}f}"
 
 
-def step_table_rich(result: RunResult) -> Table:
-    """The per-step table printed after a run."""
-    table = Table(title="Steps", show_lines=False)
-    for column in ("step", "t [s]", "foot", "period [s]", "length [m]", "slip [m]", "stance [rad]", "swing [rad]"):
+def _header(name: str, unit: str) -> str:
+    """A column header with its unit; the simplest walker's nondimensional columns go bare (see the title)."""
+    return name if unit == NONDIMENSIONAL else f"{name} [{unit}]"
+
+
+def _quantity(value: float, digits: int, unit: str) -> str:
+    """A value and its unit (bare when nondimensional)."""
+    return f"{value:.{digits}f}" + ("" if unit == NONDIMENSIONAL else f" {unit}")
+
+
+def step_table_rich(result: RunResult | RigidRunResult) -> Table:
+    """The per-step table printed after a run (a rigid run's angles are the touchdown ones, as compliant runs')."""
+    seconds, metres = result.unit("s"), result.unit("m")
+    title = "Steps" if seconds != NONDIMENSIONAL else "Steps (nondimensional: g = l = 1)"
+    table = Table(title=title, show_lines=False)
+    for column in (
+        "step",
+        _header("t", seconds),
+        "foot",
+        _header("period", seconds),
+        _header("length", metres),
+        _header("slip", metres),
+        "stance [rad]",
+        "swing [rad]",
+    ):
         table.add_column(column, justify="right")
     s = result.steps
     for k in range(len(s.strike_time)):
@@ -44,19 +65,26 @@ def step_table_rich(result: RunResult) -> Table:
     return table
 
 
-def summary_line(result: RunResult) -> str:
-    """One line: status, steps, mean period, speed, energy residual, constraint violation, cost."""
+def summary_line(result: RunResult | RigidRunResult) -> str:
+    """One line: status, steps, mean period, speed, energy residual, constraint violation (compliant) or impact
+    losses (rigid), cost."""
     s = result.summary
-    status = s["status"] + (f" at t={s['stop_time']:.3f} s" if s["stop_time"] is not None else "")
+    seconds = result.unit("s")
+    status = s["status"] + (f" at t={_quantity(s['stop_time'], 3, seconds)}" if s["stop_time"] is not None else "")
     period = s["mean_step_period"]
-    return (
-        f"{status}: {s['n_steps']} steps, mean period {period:.5f} s, speed {s['mean_speed']:.4f} m/s, "
+    gait = (
+        f"mean period {_quantity(period, 5, seconds)}, speed {_quantity(s['mean_speed'], 4, result.unit('m/s'))}, "
         if period is not None
-        else f"{status}: {s['n_steps']} steps, "
-    ) + (
-        f"energy residual {s['energy_residual_max_relative']:.1e} m g l, "
-        f"|Phi| <= {s['constraint_violation_max']['position']:.1e} m, "
-        f"{s['rhs_evals']} RHS evaluations in {s['wall_time_s']:.2f} s"
+        else ""
+    )
+    if isinstance(result, RigidRunResult):
+        specific = f"impact losses {_quantity(s['energy_dissipated']['impact'], 4, result.unit('J'))}, "
+        model = " (rigid model" + (", nondimensional: g = l = 1)" if seconds == NONDIMENSIONAL else ")")
+    else:
+        specific, model = f"|Phi| <= {s['constraint_violation_max']['position']:.1e} m, ", ""
+    return (
+        f"{status}: {s['n_steps']} steps, {gait}energy residual {s['energy_residual_max_relative']:.1e} m g l, "
+        f"{specific}{s['rhs_evals']} RHS evaluations in {s['wall_time_s']:.2f} s{model}"
     )
 
 
@@ -75,7 +103,7 @@ def run_command(
 
     config = load(config_path, set_)
     out_dir = out or default_output_dir(config, config_path)
-    model = build_model(config)  # validates geometry and the initial state before anything is written
+    model = prepare_model(config)  # validates geometry and the initial state before anything is written
     console = Console(stderr=False)
     show_progress = not quiet and sys.stdout.isatty()
     if show_progress:

@@ -34,7 +34,7 @@ from biped_sim.integrate.explicit import (
     advance,
     make_scratch,
 )
-from biped_sim.integrate.tableaus import TABLEAUS
+from biped_sim.integrate.tableaus import tableau
 from biped_sim.multibody.dispatch import event_count, make_workspace
 
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged"}
@@ -90,6 +90,22 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
     )
 
 
+def recorder_for(
+    ny: int,
+    nf: int,
+    integrator: IntegratorConfig,
+    t_end: float,
+    sample_rate: float,
+    max_strikes: int | None,
+    initial_stance_foot: int,
+) -> tuple[Recorder, float, int]:
+    """(recorder, sample interval, strike capacity) sized for an integration to ``t_end``."""
+    interval = sample_interval(integrator, sample_rate)
+    n_samples = math.floor(t_end / interval + 1e-9) + 2
+    n_strikes = max_strikes if max_strikes else int(t_end * 50) + 16
+    return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval, n_strikes
+
+
 def integrate_model(
     system: tuple,
     y0: np.ndarray,
@@ -105,16 +121,13 @@ def integrate_model(
     y = np.array(y0, dtype=np.float64)
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
-    interval = sample_interval(integrator, sample_rate)
-    n_samples = math.floor(t_end / interval + 1e-9) + 2
-    n_strikes = max_strikes if max_strikes else int(t_end * 50) + 16
-    rec = make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot)
+    rec, interval, n_strikes = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
     if integrator.method in ("radau", "bdf"):
         from biped_sim.integrate.stiff import integrate_stiff
 
         integrate_stiff(system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress)
     else:
-        tab = TABLEAUS[integrator.method]
+        tab = tableau(integrator.method)
         work = make_workspace(system)
         scratch = make_scratch(ny, nf, event_count(system))
         while rec.istate[STATUS] == 0:
@@ -124,6 +137,11 @@ def integrate_model(
             )  # fmt: skip
             if progress is not None:
                 progress(float(rec.fstate[TIME]))
+    return finish_integration(rec, n_strikes, interval)
+
+
+def finish_integration(rec: Recorder, n_strikes: int, interval: float) -> Integration:
+    """Copy the filled part of the recorder's buffers into an :class:`Integration`."""
     status = int(rec.istate[STATUS])
     ns, nk, nl = int(rec.istate[N_SAMPLES]), min(int(rec.istate[N_STRIKES]), n_strikes), int(rec.istate[N_LOG])
     return Integration(

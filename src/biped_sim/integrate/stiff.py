@@ -6,6 +6,8 @@ smaller than the accuracy needs. The Jacobian is a compiled forward-difference J
 events are scipy terminal events on the same event functions as the explicit loop; at each event
 the integration restarts after the discrete update, and the same compiled bookkeeping
 (:func:`~biped_sim.integrate.explicit._apply_events`) logs touchdowns and heel strikes.
+:func:`integrate_scipy` is that event-restart driver for any solve_ivp method; the benchmark's
+baseline runs it with RK45 over plain-Python functions.
 """
 
 from __future__ import annotations
@@ -75,9 +77,8 @@ def integrate_stiff(
     progress: Callable[[float], None] | None,
 ) -> None:
     """Integrate with scipy's Radau or BDF, restarting at every contact event."""
-    ny, nf = y.shape[0], modes.shape[0]
+    ny = y.shape[0]
     work = make_workspace(system)
-    scratch = make_scratch(ny, nf, event_count(system))
     counts = {"jac": 0}
 
     def fun(t: float, state: np.ndarray) -> np.ndarray:
@@ -92,18 +93,55 @@ def integrate_stiff(
         counts["jac"] += 1
         return out
 
+    method = "Radau" if integrator.method == "radau" else "BDF"
+    nfev = integrate_scipy(
+        system, rec, y, modes, work, method, integrator.rtol, integrator.atol, integrator.max_step, t_end, interval,
+        max_strikes, progress, fun, jac=jac,
+    )  # fmt: skip
+    rec.istate[RHS_EVALS] = nfev + counts["jac"] * (ny + 1)
+
+
+def integrate_scipy(
+    system: tuple,
+    rec: Recorder,
+    y: np.ndarray,
+    modes: np.ndarray,
+    work: tuple,
+    method: str,
+    rtol: float,
+    atol: float,
+    max_step: float,
+    t_end: float,
+    interval: float,
+    max_strikes: int,
+    progress: Callable[[float], None] | None,
+    fun: Callable[[float, np.ndarray], np.ndarray],
+    *,
+    jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+    event_values: Callable[[np.ndarray, tuple, np.ndarray], None] = system_event_functions,
+    apply_events: Callable[..., bool] = _apply_events,
+) -> int:
+    """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events; returns its RHS count.
+
+    Each event stops the integration; the discrete update (``apply_events``) then runs on the
+    state just past the event and the integration restarts. ``fun`` reads ``modes``, which the
+    update changes in place. The stiff methods pass the compiled kernels; the benchmark's
+    baseline passes plain-Python ones (``event_values`` and ``apply_events`` as ``.py_func``).
+    """
+    ny, nf = y.shape[0], modes.shape[0]
+    scratch = make_scratch(ny, nf, event_count(system))
     g = np.empty(event_count(system))
 
     def make_event(j: int) -> Callable[[float, np.ndarray], float]:
         def event(t: float, state: np.ndarray) -> float:
-            system_event_functions(state, system, g)
+            event_values(state, system, g)
             return g[j]
 
         event.terminal = True  # type: ignore[attr-defined]
         return event
 
     events = [make_event(j) for j in range(event_count(system))]
-    method = "Radau" if integrator.method == "radau" else "BDF"
+    options = {"jac": jac} if jac is not None else {}
     t = 0.0
     _record_sample(rec, t, y, modes)
     nfev = 0
@@ -112,8 +150,8 @@ def integrate_stiff(
             rec.istate[STATUS] = COMPLETED
             break
         sol = solve_ivp(
-            fun, (t, t_end), y, method=method, rtol=integrator.rtol, atol=integrator.atol,
-            max_step=integrator.max_step, jac=jac, events=events, dense_output=True,
+            fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=events,
+            dense_output=True, **options,
         )  # fmt: skip
         nfev += sol.nfev
         rec.istate[ACCEPTED] += len(sol.t) - 1
@@ -134,7 +172,7 @@ def integrate_stiff(
                 _record_sample(rec, ts, y, modes)
         y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1]
         t = t_stop
-        if hit_event and _apply_events(t, y, system, modes, work, rec, scratch, max_strikes):
+        if hit_event and apply_events(t, y, system, modes, work, rec, scratch, max_strikes):
             rec.istate[N_EVENTS] += 1
         if system_has_fallen(y, system):
             rec.istate[STATUS] = FELL
@@ -143,5 +181,6 @@ def integrate_stiff(
             progress(t)
         if not math.isfinite(t):
             rec.istate[STATUS] = DIVERGED
-    rec.istate[RHS_EVALS] = nfev + counts["jac"] * (ny + 1)
+    rec.istate[RHS_EVALS] = nfev
     rec.fstate[TIME] = t
+    return nfev

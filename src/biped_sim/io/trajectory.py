@@ -1,7 +1,9 @@
 """Reading a finished run directory back: trajectory.h5 (layout in :mod:`biped_sim.io.results`) and summary.json.
 
 Figures, animations, reports and comparisons all read runs through :func:`load_run`, so a run
-directory is the one interface between simulating and presenting.
+directory is the one interface between simulating and presenting. A rigid run (``dynamics: rigid``) has
+none of the contact and constraint data the figures draw: :func:`load_run` refuses it in one line, while
+its summary (step times and periods, what ``compare`` uses) reads as any other through :func:`load_summary`.
 """
 
 from __future__ import annotations
@@ -34,8 +36,10 @@ class RunData:
     energy: dict[str, np.ndarray]  # kinetic, potential, elastic, dissipated_normal, dissipated_friction, residual
     violation_position: np.ndarray  # (ns,) m
     violation_velocity: np.ndarray  # (ns,) m/s
-    hip: np.ndarray  # (ns, 2) m
+    hip: np.ndarray  # (ns, 2) m; spatial runs (ns, 3) with z lateral
     steps: dict[str, np.ndarray]  # strike_time, foot, period, length, slip, ...
+    violation_normalization: np.ndarray | None = None  # (ns,) ||p.p - 1||, spatial runs only
+    attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw (ns, nb) rad, spatial runs only
 
     def column(self, name: str) -> np.ndarray:
         """One state entry over time, by name (e.g. 'phi_leg0')."""
@@ -70,6 +74,12 @@ def load_run(run_dir: str | Path) -> RunData:
     if not path.is_file():
         raise ConfigError(str(run_dir), "no trajectory.h5 in the run directory")
     with h5py.File(path, "r") as f:
+        if f.attrs.get("dynamics") == "rigid":
+            raise ConfigError(
+                str(run_dir),
+                "a rigid run (dynamics: rigid): figures and animations draw compliant runs (contact, constraints); "
+                "its arrays are in trajectory.h5",
+            )
         config = config_from_dict(parse_yaml(f.attrs["config"], source=f"{path}:config"))
         return RunData(
             run_dir=run_dir,
@@ -86,4 +96,6 @@ def load_run(run_dir: str | Path) -> RunData:
             violation_velocity=f["constraints/velocity"][:],
             hip=f["hip"][:],
             steps={name: ds[:] for name, ds in f["steps"].items()},
+            violation_normalization=f["constraints/normalization"][:] if "normalization" in f["constraints"] else None,
+            attitude={name: ds[:] for name, ds in f["attitude"].items()} if "attitude" in f else None,
         )

@@ -15,6 +15,7 @@ import h5py
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.rigid.run import INTEGRATOR
 
 # Settings that the report's comparison tables group by; always present, swept or not.
 SETTING_COLUMNS = (
@@ -58,7 +59,10 @@ FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 
 
 def step_control(config: Config) -> str:
-    """How the integrator's step is set: 'dt = 1e-04 s' (fixed step) or 'rtol = 1e-08, atol = 1e-10'."""
+    """How the integrator's step is set: 'dt = 1e-04 s' (fixed step) or 'rtol = 1e-08, atol = 1e-10'; a rigid run
+    ignores the integrator section (its own DOP853 at rtol 1e-12)."""
+    if config.dynamics == "rigid":
+        return INTEGRATOR
     integ = config.integrator
     if integ.method in FIXED_STEP_METHODS or not integ.adaptive:
         return f"dt = {integ.dt:.0e} s"
@@ -89,8 +93,11 @@ def _number(value: Any) -> float:
 
 
 def contact_maxima(trajectory: Path) -> tuple[float, float]:
-    """(largest penetration [m], largest normal force [N]) over the run, from trajectory.h5."""
+    """(largest penetration [m], largest normal force [N]) over the run, from trajectory.h5 (NaN for a rigid run,
+    which has no contact forces)."""
     with h5py.File(trajectory, "r") as f:
+        if "contact" not in f:
+            return math.nan, math.nan
         penetration = f["contact/penetration"][:]
         normal = f["contact/normal_force"][:]
     if penetration.size == 0:
@@ -99,7 +106,11 @@ def contact_maxima(trajectory: Path) -> tuple[float, float]:
 
 
 def metrics_from_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any]:
-    """The metric columns of a finished run (summary.json content plus trajectory.h5 maxima)."""
+    """The metric columns of a finished run (summary.json content plus trajectory.h5 maxima).
+
+    A rigid run's summary has no ``rejected_steps`` (scipy does not report them): NaN. Its impact losses are its
+    ``energy_dissipated.normal`` (the rigid limit of normal damping) and its constraint violations are 0.
+    """
     periods = [p for p in summary["step_periods"] if p is not None]
     slips = [abs(s) for s in summary["slip_per_step"] if s is not None and math.isfinite(s)]
     penetration, peak_force = contact_maxima(run_dir / "trajectory.h5")
@@ -123,7 +134,7 @@ def metrics_from_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, An
         "wall_time_s": _number(summary["wall_time_s"]),
         "rhs_evals": summary["rhs_evals"],
         "accepted_steps": summary["accepted_steps"],
-        "rejected_steps": summary["rejected_steps"],
+        "rejected_steps": summary.get("rejected_steps", math.nan),
         "stop_time_s": _number(summary["stop_time"]),
         "error": "",
     }

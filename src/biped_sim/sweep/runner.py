@@ -62,10 +62,32 @@ def default_jobs() -> int:
 
 
 @contextlib.contextmanager
+def single_threaded_children() -> Iterator[None]:
+    """Set the thread variables to 1 in this process's environment while child processes start.
+
+    A spawned worker imports numpy (and with it OpenBLAS, which reads its thread count once)
+    before any initializer runs, so the variables must already be in the environment it inherits.
+    """
+    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+@contextlib.contextmanager
 def local_executor(jobs: int) -> Iterator[Executor]:
-    """A process pool of ``jobs`` workers, started with ``spawn`` (no inherited threads or locks)."""
+    """A process pool of ``jobs`` single-threaded workers, started with ``spawn`` (no inherited threads or locks)."""
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=init_worker) as pool:
+    with (
+        single_threaded_children(),
+        ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=init_worker) as pool,
+    ):
         yield pool
 
 
@@ -142,8 +164,10 @@ _WARMED: set[str] = set()
 def warm_up(config: Config) -> None:
     """Run ``config`` for 1 ms once per process and integrator family, so that compiling (or loading
     the cached) numba code is not counted in the first run's wall time: wall times of a sweep
-    compare integrators, not process start-up.
+    compare integrators, not process start-up. Rigid runs have no compiled code to warm.
     """
+    if config.dynamics == "rigid":
+        return
     family = "stiff" if config.integrator.method in STIFF_METHODS else "explicit"
     if family in _WARMED:
         return

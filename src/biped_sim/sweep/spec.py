@@ -148,8 +148,6 @@ def axis_values(axis: AxisSpec) -> list[Any]:
     return axis.values() if isinstance(axis, RangeSpec) else list(axis)
 
 
-
-
 def _format_value(value: Any) -> str:
     """A short, file-name-safe text for one axis value."""
     if isinstance(value, bool):
@@ -294,12 +292,13 @@ def expand(spec: SweepSpec, source: Path, overrides: list[str] | tuple[str, ...]
 
 
 def check_buildable(sweep: Sweep) -> None:
-    """Build every run's walker once (geometry, initial state): a bad run stops the sweep before it starts."""
-    from biped_sim.walkers import build_model
+    """Build every run's walker once (geometry, initial state; the rigid walker for ``dynamics: rigid``): a bad run
+    stops the sweep before it starts."""
+    from biped_sim.simulate import prepare_model
 
     for run in sweep.runs:
         try:
-            build_model(run.config)
+            prepare_model(run.config)
         except ConfigError as exc:
             raise ConfigError(f"{sweep.source}: run {run.index + 1} ({run.stem}): {exc.field}", exc.reason) from None
 

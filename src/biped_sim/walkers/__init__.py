@@ -10,19 +10,29 @@ from collections.abc import Callable
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.compass import build_compass
+from biped_sim.walkers.four_legged import build_four_legged
 from biped_sim.walkers.model import BuiltModel
+from biped_sim.walkers.spatial_compass import build_spatial_compass
 
 BUILDERS: dict[str, Callable[[Config], BuiltModel]] = {
     "compass": build_compass,
 }
+SPATIAL_BUILDERS: dict[str, Callable[[Config], BuiltModel]] = {
+    "compass": build_spatial_compass,
+    "four_legged": build_four_legged,
+}
 
 
 def build_model(config: Config) -> BuiltModel:
-    """Build the compliant multibody model of ``config.walker``."""
-    builder = BUILDERS.get(config.walker.kind)
+    """Build the compliant multibody model of ``config.walker`` in ``config.formulation.kind``."""
+    spatial = config.formulation.kind == "spatial"
+    builder = (SPATIAL_BUILDERS if spatial else BUILDERS).get(config.walker.kind)
     if builder is None:
-        raise ConfigError("walker.kind", f"{config.walker.kind!r} has no compliant-contact builder")
+        raise ConfigError(
+            "walker.kind",
+            f"{config.walker.kind!r} has no compliant-contact builder in the {config.formulation.kind} formulation",
+        )
     return builder(config)
 
 
-__all__ = ["BUILDERS", "BuiltModel", "build_model"]
+__all__ = ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model"]

@@ -41,6 +41,44 @@ def resolve_initial(config: Config) -> InitialState:
     return initial
 
 
+def sagittal_initial_state(
+    config: Config, com_offsets: tuple[float, float], static_penetration: float
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Initial planar state of a stance and a swing leg rolling on the stance foot (README conventions).
+
+    ``com_offsets`` are the distances from the hip down to each leg body's centre of mass. Returns
+    (coords, rates, hip speed): coords (2, 3) = (x, y, phi) of the stance and swing bodies, rates
+    (2, 3) their velocities. Raises ConfigError when the walker would start fallen or with its swing
+    foot in the ground while the scuffing guard is off.
+    """
+    l, R = config.walker.leg_length, config.walker.foot_radius
+    init = resolve_initial(config)
+    for name in ("stance_angle", "swing_angle"):
+        if abs(getattr(init, name)) >= config.simulation.fall_leg_angle:
+            raise ConfigError(
+                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
+            )
+    contact_point = np.array([0.0, -static_penetration])
+    arc_centre = contact_point + np.array([0.0, R])
+    hip = arc_centre - (l - R) * _leg_direction(init.stance_angle)
+    if hip[1] <= config.simulation.fall_hip_height * l:
+        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
+    com_stance = hip + com_offsets[0] * _leg_direction(init.stance_angle)
+    com_swing = hip + com_offsets[1] * _leg_direction(init.swing_angle)
+    v_hip = _rolling_velocity(init.stance_rate, hip, contact_point)
+    v_stance = _rolling_velocity(init.stance_rate, com_stance, contact_point)
+    v_swing = v_hip + _rolling_velocity(init.swing_rate, com_swing, hip)
+    swing_foot_bottom = hip[1] + (l - R) * _leg_direction(init.swing_angle)[1] - R
+    if not config.contact.scuffing_guard and swing_foot_bottom < 0.0:
+        raise ConfigError(
+            "simulation.initial.swing_angle",
+            "the swing foot starts below the ground (and contact.scuffing_guard is off)",
+        )
+    coords = np.array([[*com_stance, init.stance_angle], [*com_swing, init.swing_angle]])
+    rates = np.array([[*v_stance, init.stance_rate], [*v_swing, init.swing_rate]])
+    return coords, rates, float(np.hypot(*v_hip))
+
+
 def build_compass(config: Config) -> BuiltModel:
     """Bodies, joint and feet of the compass walker, and its initial state rolling on its stance foot."""
     w = config.walker
@@ -79,42 +117,18 @@ def build_compass(config: Config) -> BuiltModel:
         ),
     )
 
-    init = resolve_initial(config)
-    for name in ("stance_angle", "swing_angle"):
-        if abs(getattr(init, name)) >= config.simulation.fall_leg_angle:
-            raise ConfigError(
-                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
-            )
     exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
     static_penetration = (total_mass * g * math.cos(gamma) / stiffness) ** (1.0 / exponent)
-    contact_point = np.array([0.0, -static_penetration])
-    arc_centre = contact_point + np.array([0.0, R])
-    hip = arc_centre - (l - R) * _leg_direction(init.stance_angle)
-    if hip[1] <= config.simulation.fall_hip_height * l:
-        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
-    com_stance = hip + d * _leg_direction(init.stance_angle)
-    com_swing = hip + d * _leg_direction(init.swing_angle)
-    v_hip = _rolling_velocity(init.stance_rate, hip, contact_point)
-    v_stance = _rolling_velocity(init.stance_rate, com_stance, contact_point)
-    v_swing = v_hip + _rolling_velocity(init.swing_rate, com_swing, hip)
-    swing_foot_bottom = hip[1] + (l - R) * _leg_direction(init.swing_angle)[1] - R
-    if not config.contact.scuffing_guard and swing_foot_bottom < 0.0:
-        raise ConfigError(
-            "simulation.initial.swing_angle",
-            "the swing foot starts below the ground (and contact.scuffing_guard is off)",
-        )
-
+    coords, rates, hip_speed = sagittal_initial_state(config, (d, d), static_penetration)
     nf = 2
     y0 = np.zeros(12 + nf + 2)
-    y0[0:3] = [com_stance[0], com_stance[1], init.stance_angle]
-    y0[3:6] = [com_swing[0], com_swing[1], init.swing_angle]
-    y0[6:9] = [v_stance[0], v_stance[1], init.stance_rate]
-    y0[9:12] = [v_swing[0], v_swing[1], init.swing_rate]
+    y0[0:6] = coords.ravel()
+    y0[6:12] = rates.ravel()
     modes0 = np.zeros((nf, 3))
     modes0[0, ARMED] = 1.0
     modes0[0, TOUCHING] = 1.0
     # the stance foot "just struck": remember an approach velocity of the scale of the hip speed
-    modes0[0, IMPACT_SPEED] = max(float(np.hypot(*v_hip)), config.contact.impact_velocity_floor)
+    modes0[0, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
     update_modes(y0, system, modes0, make_workspace(system))  # arms the swing foot if ahead and airborne
     return BuiltModel(
         system=system,

@@ -10,13 +10,14 @@ from biped_sim.config import Config, MaterialsConfig
 from biped_sim.contact.friction import FRICTION_LAWS, friction_parameters
 from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
 from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.multibody.spatial import SpatialSystem
 
 
 @dataclass
 class BuiltModel:
     """A walker ready to integrate: the system, its initial state and what the numbers mean."""
 
-    system: PlanarSystem
+    system: PlanarSystem | SpatialSystem
     y0: np.ndarray
     modes0: np.ndarray
     body_names: list[str]
@@ -36,6 +37,15 @@ class BuiltModel:
 
     def state_names(self) -> list[str]:
         """Names of the ODE state entries, in order."""
+        if isinstance(self.system, SpatialSystem):  # (r, p) and (rdot, pdot) per body, 2D bristles per foot
+            coords = [f"{axis}_{body}" for body in self.body_names for axis in ("x", "y", "z", "e0", "e1", "e2", "e3")]
+            rates = [
+                f"{axis}_{body}"
+                for body in self.body_names
+                for axis in ("vx", "vy", "vz", "e0dot", "e1dot", "e2dot", "e3dot")
+            ]
+            bristles = [f"z{axis}_{foot}" for foot in self.foot_names for axis in ("x", "z")]
+            return coords + rates + bristles + ["W_normal", "W_friction"]
         coords = [f"{axis}_{body}" for body in self.body_names for axis in ("x", "y", "phi")]
         rates = [f"{axis}_{body}" for body in self.body_names for axis in ("vx", "vy", "omega")]
         bristles = [f"z_{foot}" for foot in self.foot_names]

@@ -1,0 +1,169 @@
+"""Bifurcation diagram of a rigid walker against the slope: continuation plus brute-force steady states.
+
+Continuation: the period-1 fixed point is followed slope by slope (Newton from the previous solution),
+with its multipliers; the period-doubling slope is where the most negative real multiplier passes -1,
+refined by bisection. Brute force: at each slope the walker walks ``BRUTE_STEPS`` steps from the
+period-1 cycle of the previous slope, slightly perturbed, and the last ``RECORDED`` step periods are
+recorded: one value for a period-1 gait, two for period 2, a cloud for chaos.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.analysis.limit_cycle import (
+    LimitCycle,
+    bisect_flip,
+    continue_cycle,
+    flip_margin,
+    rigid_limit_cycle,
+)
+from biped_sim.config import Config
+from biped_sim.io.atomic import write_text_atomic, write_with
+from biped_sim.rigid.models import rigid_walker
+from biped_sim.rigid.stepping import rigid_step
+
+BRUTE_STEPS = 150
+RECORDED = 16
+PERTURBATION = 1e-4
+
+
+@dataclass
+class BifurcationDiagram:
+    """Continuation rows and brute-force samples."""
+
+    slopes: np.ndarray
+    cycles: list[LimitCycle | None]
+    brute: list[tuple[float, list[float]]]
+    period_doubling_slope: float | None
+
+
+def _brute_force(config: Config, slope: float, start: np.ndarray) -> list[float]:
+    data = config.model_dump(mode="json")
+    data["ground"]["slope"] = slope
+    walker = rigid_walker(Config.model_validate(data))
+    x = walker.from_section(start + PERTURBATION)
+    periods = []
+    for _ in range(BRUTE_STEPS):
+        step = rigid_step(walker, x)
+        if step.status != "strike" or step.x_plus is None:
+            return []
+        periods.append(step.period)
+        x = step.x_plus
+    return periods[-RECORDED:]
+
+
+def bifurcation_diagram(config: Config, start: float, stop: float, n: int) -> BifurcationDiagram:
+    """Continuation and brute force over ``n`` slopes from ``start`` to ``stop``."""
+    slopes = np.linspace(start, stop, n)
+    first = config.model_dump(mode="json")
+    first["ground"]["slope"] = float(start)
+    cycle: LimitCycle | None = rigid_limit_cycle(Config.model_validate(first))
+    cycles: list[LimitCycle | None] = []
+    brute = []
+    flip_bracket: tuple[LimitCycle, LimitCycle] | None = None
+    for slope in slopes:
+        if cycle is not None:
+            try:
+                cycle = continue_cycle(config, float(slope), cycle.fixed_point)
+            except ValueError:
+                cycle = None
+            if cycle is not None and not cycle.converged:
+                cycle = None
+        cycles.append(cycle)
+        previous = cycles[-2] if len(cycles) > 1 else None
+        if (
+            cycle is not None
+            and previous is not None
+            and flip_bracket is None
+            and flip_margin(previous) > 0 >= flip_margin(cycle)
+        ):
+            flip_bracket = (previous, cycle)
+        seed = next((c.section_point for c in reversed(cycles) if c is not None), None)
+        brute.append((float(slope), _brute_force(config, float(slope), seed) if seed is not None else []))
+    flip = bisect_flip(config, *flip_bracket)[0] if flip_bracket is not None else None
+    return BifurcationDiagram(slopes, cycles, brute, flip)
+
+
+def write_bifurcation(diagram: BifurcationDiagram, out_dir) -> None:  # type: ignore[no-untyped-def]
+    """bifurcation.csv (continuation), brute_force.csv (steady periods), bifurcation.png and .svg."""
+    from pathlib import Path
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(
+        [
+            "slope",
+            "converged",
+            "stance_angle",
+            "stance_rate",
+            "swing_rate",
+            "step_period",
+            "max_multiplier",
+            "stable",
+            "multipliers",
+        ]
+    )
+    for slope, cycle in zip(diagram.slopes, diagram.cycles, strict=True):
+        if cycle is None:
+            writer.writerow([repr(float(slope)), False, "", "", "", "", "", "", ""])
+            continue
+        fp = cycle.fixed_point
+        writer.writerow(
+            [
+                repr(float(slope)),
+                cycle.converged,
+                repr(fp["stance_angle"]),
+                repr(fp["stance_rate"]),
+                repr(fp["swing_rate"]),
+                repr(cycle.step_period),
+                repr(cycle.max_multiplier_modulus),
+                cycle.stable,
+                " ".join(f"{m.real:.10g}{m.imag:+.10g}j" for m in cycle.multipliers),
+            ]
+        )
+    write_text_atomic(out_dir / "bifurcation.csv", buffer.getvalue())
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["slope", "step_period"])
+    for slope, periods in diagram.brute:
+        for period in periods:
+            writer.writerow([repr(slope), repr(period)])
+    write_text_atomic(out_dir / "brute_force.csv", buffer.getvalue())
+    _figure(diagram, out_dir)
+
+
+def _figure(diagram: BifurcationDiagram, out_dir) -> None:  # type: ignore[no-untyped-def]
+    from matplotlib.figure import Figure
+
+    from biped_sim.plots import COLUMN_WIDTH_IN, PNG_DPI, figure_style
+
+    with figure_style():
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6))
+        ax = fig.add_subplot()
+        xs = [s for s, periods in diagram.brute for _ in periods]
+        ys = [p for _, periods in diagram.brute for p in periods]
+        ax.plot(xs, ys, ".", color="0.3", markersize=1.5, label="steady state (brute force)")
+        stable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and c.stable]
+        unstable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and not c.stable]
+        if stable:
+            ax.plot(*zip(*stable, strict=True), "-", color="C0", label="period 1, stable")
+        if unstable:
+            ax.plot(*zip(*unstable, strict=True), "--", color="C3", label="period 1, unstable")
+        if diagram.period_doubling_slope is not None:
+            ax.axvline(diagram.period_doubling_slope, color="0.5", linewidth=0.6)
+        ax.set_xlabel("slope [rad]")
+        ax.set_ylabel("step period")
+        ax.legend(loc="best")
+        fig.tight_layout()
+        for suffix in ("png", "svg"):
+            write_with(out_dir / f"bifurcation.{suffix}", lambda tmp, s=suffix: fig.savefig(tmp, format=s, dpi=PNG_DPI))
+
+
+__all__ = ["BifurcationDiagram", "bifurcation_diagram", "write_bifurcation"]

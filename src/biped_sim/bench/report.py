@@ -1,0 +1,179 @@
+"""Presentation of the benchmark: the Markdown table (printed and written), targets, bench.json.
+
+``bench.md`` is exactly what ``biped-sim bench`` prints, so the README's table can be pasted
+from either.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from biped_sim.io.atomic import write_json_atomic, write_text_atomic
+
+COLUMNS = ("method", "dt [s]", "wall [s]", "RHS evals", "steps", "us/eval", "RTF", "period err", "vs baseline")
+
+
+def _num(value: float | None, spec: str) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if isinstance(value, float) and math.isinf(value):
+        return "fell" if spec == "err" else "inf"
+    if spec == "err":
+        return f"{value:.1e}"
+    return format(value, spec)
+
+
+def table(result: dict[str, Any]) -> str:
+    """The per-method Markdown table."""
+    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    for row in result["rows"]:
+        cells = (
+            row["label"],
+            _num(row["dt"], "g"),
+            _num(row["wall_s"], ".3f"),
+            f"{row['rhs_evals']:,}",
+            f"{row['accepted_steps']:,}",
+            _num(row["us_per_eval"], ".2f"),
+            _num(row["rtf"], ".3g"),
+            _num(row["period_error"], "err"),
+            f"{row['ratio_vs_baseline']:.3g}x",
+        )
+        lines.append("| " + " | ".join(cells) + " |")
+    mj = result.get("mujoco") or {}
+    if mj.get("available"):
+        cells = (
+            f"MuJoCo {mj['version']} RK4 (MJCF walker)",
+            _num(mj["timestep"], "g"),
+            _num(mj["wall_s"], ".3f"),
+            "-",
+            f"{mj['steps']:,}",
+            f"{mj['us_per_step']:.2f}/step",
+            _num(mj["rtf"], ".3g"),
+            "-",
+            "-",
+        )
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def headline_row(result: dict[str, Any]) -> dict[str, Any]:
+    """The row of the summary line and the targets (dopri5 rtol 1e-6)."""
+    return next(r for r in result["rows"] if r["label"] == result["headline"])
+
+
+def fastest_accurate_row(result: dict[str, Any]) -> dict[str, Any] | None:
+    """Our fastest row (by RTF) whose step periods meet the tolerance."""
+    ok = [r for r in result["rows"] if r["method"] != "baseline" and r["period_error"] <= result["period_tolerance"]]
+    return max(ok, key=lambda r: r["rtf"]) if ok else None
+
+
+def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
+    """(target, measured, met) for each target of issue 4; met is None when not measured."""
+    head = headline_row(result)
+    out: list[tuple[str, str, bool | None]] = [
+        ("dopri5 rtol 1e-6 >= 50x baseline", f"{head['ratio_vs_baseline']:.0f}x", head["ratio_vs_baseline"] >= 50),
+        ("RHS evaluation < 2 us", f"{result['rhs_alone_us']:.2f} us", result["rhs_alone_us"] < 2.0),
+        ("loop overhead < 25 %", f"{result['loop_overhead']:.0%}", result["loop_overhead"] < 0.25),
+    ]
+    cached = result.get("startup", {}).get("cached")
+    if cached:
+        out.append(("cached start-up < 1.5 s", f"{cached['to_first_step_s']:.2f} s", cached["to_first_step_s"] < 1.5))
+    sweep = result.get("sweep")
+    if sweep and "speedup_2_vs_1" in sweep:
+        out.append(("2 workers >= 1.7x 1 worker", f"{sweep['speedup_2_vs_1']:.2f}x", sweep["speedup_2_vs_1"] >= 1.7))
+    mj = result.get("mujoco") or {}
+    best = fastest_accurate_row(result)
+    if mj.get("available") and best is not None:
+        out.append(
+            (
+                "RTF of our fastest accurate method >= MuJoCo's (timestep 1e-4 s)",
+                f"{best['rtf']:.3g} ({best['label']}) vs {mj['rtf']:.3g}",
+                best["rtf"] >= mj["rtf"],
+            )
+        )
+    return out
+
+
+def notes(result: dict[str, Any]) -> list[str]:
+    """The lines under the table: reference, RHS alone, start-up, sweep, MuJoCo, targets."""
+    ref = result["reference"]
+    lines = [
+        f"Walker `{result['config']}`, {result['t_end']:g} s simulated, median of {result['repeats']} runs after a "
+        f"warm-up ({result['slow_repeats']} for rows over {result['slow_run_s']:g} s a run); adaptive rows use "
+        f"atol = 1e-3 rtol. Period error: worst relative step-period error against "
+        f"{ref['method']} rtol {ref['rtol']:g} ({ref['n_strikes']} heel strikes). Fixed-step rows run at the "
+        f"largest dt meeting {result['period_tolerance']:g}.",
+        f"RHS alone (compiled, on the visited states, best of 3): {result['rhs_alone_us']:.3f} us; loop overhead "
+        f"of the {result['headline']} row: {result['loop_overhead']:.0%} of its best wall time.",
+        f"Baseline vs {result['headline']} step periods: max difference "
+        f"{result['baseline_vs_headline_max_period_difference_s']:.1e} s.",
+    ]
+    startup = result.get("startup", {})
+    if "cold" in startup:
+        cold = startup["cold"]
+        lines.append(
+            f"Cold first run (empty numba cache): {cold['to_first_step_s']:.1f} s from the shell to the first "
+            f"integration step (compiling: {cold['build_s'] + cold['first_integration_s']:.1f} s)."
+        )
+    if "cached" in startup:
+        cached = startup["cached"]
+        lines.append(
+            f"Cached start-up: {cached['to_first_step_s']:.2f} s from the shell to the first integration step "
+            f"(imports {cached['import_s']:.2f} s, build {cached['build_s']:.2f} s, "
+            f"first integration {cached['first_integration_s']:.3f} s)."
+        )
+    sweep = result.get("sweep")
+    if sweep:
+        per = sweep["per_jobs"]
+        parts = [f"{n} worker{'s' if n != '1' else ''}: {v['runs_per_minute']:.0f} runs/min" for n, v in per.items()]
+        lines.append(
+            f"Sweep of {sweep['runs']} runs ({sweep['t_end']:g} s each, files written): " + ", ".join(parts)
+            + (f" ({sweep['speedup_2_vs_1']:.2f}x)." if "speedup_2_vs_1" in sweep else ".")
+        )  # fmt: skip
+    mj = result.get("mujoco")
+    if mj is not None:
+        if mj.get("available"):
+            lines.append(
+                f"MuJoCo {mj['version']} ({mj['integrator']}, timestep {mj['timestep']:g} s): RTF {mj['rtf']:.3g}, "
+                f"{mj['us_per_step']:.1f} us/step, step period {mj['step_period_s']:.4f} s "
+                f"({mj['n_strikes']} heel strikes, {mj['status']}; mean of the last five) vs ours "
+                f"{mj['reference_step_period_s']:.4f} s."
+            )
+        else:
+            lines.append(f"MuJoCo: not run ({mj['reason']}).")
+    lines.append("")
+    lines.append("Targets: " + "; ".join(f"{name}: {value} {_mark(met)}" for name, value, met in targets(result)))
+    lines.append("")
+    lines.append(summary_line(result))
+    return lines
+
+
+def _mark(met: bool | None) -> str:
+    return "(met)" if met else "(missed)" if met is not None else "(not measured)"
+
+
+def summary_line(result: dict[str, Any]) -> str:
+    """``ratio_vs_baseline=<x> rtf=<y> rhs_us=<z>`` for the headline row (rhs_us: wall time per RHS evaluation)."""
+    head = headline_row(result)
+    return f"ratio_vs_baseline={head['ratio_vs_baseline']:.1f} rtf={head['rtf']:.2f} rhs_us={head['us_per_eval']:.3f}"
+
+
+def markdown(result: dict[str, Any]) -> str:
+    """bench.md: title, table and notes (what the command prints)."""
+    title = "biped-sim bench" + (" --quick" if result["quick"] else "")
+    env = result["environment"]
+    header = (
+        f"{title}: Python {env['python']}, numpy {env['numpy']}, scipy {env['scipy']}, numba {env['numba']}, "
+        f"{env['cpus']} CPUs ({env['processor']})"
+    )
+    return "\n".join([header, "", table(result), "", *notes(result)]) + "\n"
+
+
+def write_report(result: dict[str, Any], out_dir: Path) -> tuple[Path, Path]:
+    """Write bench.json and bench.md into ``out_dir`` (atomically); returns their paths."""
+    json_path, md_path = out_dir / "bench.json", out_dir / "bench.md"
+    write_json_atomic(json_path, result)
+    write_text_atomic(md_path, markdown(result))
+    return md_path, json_path

@@ -1,0 +1,182 @@
+"""``biped-sim limit-cycle``, ``bifurcation``, ``converge`` and ``validate``: gait analysis commands."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from biped_sim.cli.common import ConfigArgument, SetOption, app, fail, load, user_errors
+from biped_sim.config import parse_yaml
+from biped_sim.errors import ConfigError
+
+GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
+
+
+def _parse_guess(text: str | None) -> dict[str, float] | None:
+    """--guess: a YAML/JSON mapping of the four README keys, or four numbers in that order."""
+    if text is None:
+        return None
+    value = parse_yaml(text, source="--guess")
+    if isinstance(value, list) and len(value) == 4:
+        value = dict(zip(GUESS_KEYS, value, strict=True))
+    if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
+        raise ConfigError("--guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
+    try:
+        return {k: float(value[k]) for k in GUESS_KEYS}
+    except (TypeError, ValueError):
+        raise ConfigError("--guess", "values must be numbers") from None
+
+
+@app.command("limit-cycle")
+@user_errors
+def limit_cycle_command(
+    config_path: ConfigArgument,
+    set_: SetOption = None,
+    guess: Annotated[
+        str | None,
+        typer.Option("--guess", help="Initial guess: '[stance_angle, stance_rate, swing_angle, swing_rate]'."),
+    ] = None,
+    settle_steps: Annotated[
+        int | None,
+        typer.Option(
+            "--settle-steps",
+            min=0,
+            help="Steps walked from the guess before Newton (default: 30 rigid, 20 compliant); 0 finds the cycle "
+            "nearest the guess, stable or not.",
+        ),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+) -> None:
+    """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
+    from biped_sim.analysis.limit_cycle import limit_cycle
+
+    config = load(config_path, set_)
+    cycle = limit_cycle(config, _parse_guess(guess), settle_steps)
+    doc = cycle.to_json()
+    if as_json:
+        typer.echo(json.dumps(doc, indent=2))
+        return
+    table = Table(title=f"{doc['dynamics']} {doc['walker']} limit cycle, slope {doc['slope']:g}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("converged", f"{doc['converged']} (residual {doc['residual']:.1e}, tolerance {doc['tolerance']:g})")
+    for key, value in doc["fixed_point"].items():
+        table.add_row(key, f"{value:.10f}")
+    table.add_row("step period [s]", f"{doc['step_period']:.8f}")
+    table.add_row("step length [m]", f"{doc['step_length']:.8f}")
+    table.add_row("speed [m/s]", f"{doc['speed']:.6f}")
+    for re, im in doc["multipliers"]:
+        table.add_row("multiplier", f"{re:.8f} {im:+.8f}i  (|{math.hypot(re, im):.6f}|)")
+    table.add_row("stable", str(doc["stable"]))
+    console = Console()
+    console.print(table)
+    for note in doc["notes"]:
+        console.print(f"  {note}", highlight=False)
+
+
+@app.command("converge")
+@user_errors
+def converge_command(
+    config_path: ConfigArgument,
+    set_: SetOption = None,
+    levels: Annotated[int, typer.Option("--levels", min=2, max=7, help="Contact settings (stiffness x10 each).")] = 5,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+) -> None:
+    """The compliant gait against the rigid gait of the same walker as the contact stiffens."""
+    from dataclasses import asdict
+
+    from biped_sim.analysis.limit_cycle import converge
+
+    config = load(config_path, set_)
+    if config.walker.kind != "compass":
+        raise ConfigError("walker.kind", "converge compares the compliant and rigid compass walker")
+    rigid, rows = converge(config, levels)
+    if as_json:
+        typer.echo(json.dumps({"rigid": rigid.to_json(), "levels": [asdict(r) for r in rows]}, indent=2))
+        return
+    table = Table(title=f"Compliant -> rigid, rigid step period {rigid.step_period:.8f} s")
+    for column in (
+        "stiffness",
+        "restitution",
+        "LuGre sigma0",
+        "touchdown diff",
+        "period diff [s]",
+        "settled",
+        "slip [m]",
+    ):
+        table.add_column(column, justify="right")
+    for r in rows:
+        table.add_row(
+            f"{r.stiffness:.3e}",
+            f"{r.restitution:.4f}",
+            f"{r.bristle_stiffness:.0e}",
+            f"{r.touchdown_difference:.2e}",
+            f"{r.period_difference:.2e}",
+            f"{r.settled:.1e}",
+            f"{r.slip:.1e}",
+        )
+    console = Console()
+    console.print(table)
+    smallest = min((r.touchdown_difference for r in rows if math.isfinite(r.touchdown_difference)), default=math.nan)
+    console.print(f"smallest touchdown-state difference: {smallest:.2e}", highlight=False)
+
+
+@app.command("bifurcation")
+@user_errors
+def bifurcation_command(
+    config_path: ConfigArgument,
+    set_: SetOption = None,
+    param: Annotated[str, typer.Option("--param", help="Parameter to vary (ground.slope).")] = "ground.slope",
+    start: Annotated[float, typer.Option("--from", help="First slope [rad].")] = 0.005,
+    stop: Annotated[float, typer.Option("--to", help="Last slope [rad].")] = 0.019,
+    n: Annotated[int, typer.Option("--n", min=2, help="Number of slopes.")] = 57,
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/bifurcation"),
+) -> None:
+    """Continuation of the rigid period-1 gait and brute-force steady states against the slope (CSV, PNG, SVG)."""
+    from biped_sim.analysis.bifurcation import bifurcation_diagram, write_bifurcation
+
+    if param != "ground.slope":
+        raise ConfigError("--param", "only ground.slope is supported")
+    config = load(config_path, set_)
+    if config.dynamics != "rigid":
+        raise ConfigError("dynamics", "bifurcation runs the rigid model: use --set dynamics=rigid")
+    t0 = time.perf_counter()
+    diagram = bifurcation_diagram(config, start, stop, n)
+    write_bifurcation(diagram, out)
+    flip = diagram.period_doubling_slope
+    Console().print(
+        f"{n} slopes in {time.perf_counter() - t0:.1f} s; period doubling at slope "
+        + (f"{flip:.6f}" if flip is not None else "none in range")
+        + f"; files: {out}/ (bifurcation.csv, brute_force.csv, bifurcation.png, bifurcation.svg)",
+        highlight=False,
+    )
+
+
+@app.command("validate")
+@user_errors
+def validate_command(
+    out: Annotated[Path, typer.Option("--out", help="Report directory.")] = Path("results/validation"),
+) -> None:
+    """Every physics check against published or analytic numbers; writes report.md; exit 1 on any failure."""
+    from biped_sim.analysis.validation import run_validation
+
+    console = Console()
+    checks, extras = run_validation(out, progress=lambda stage: console.print(f"checking: {stage}", highlight=False))
+    failed = [c for c in checks if not c.passed]
+    for c in checks:
+        mark = "pass" if c.passed else "FAIL"
+        console.print(f"{mark}  {c.group}: {c.check}: {c.obtained} (expected {c.expected})", highlight=False)
+    console.print(
+        f"{len(checks) - len(failed)} of {len(checks)} checks pass in {extras['wall_time_s']:.0f} s; report: "
+        f"{out / 'report.md'}",
+        highlight=False,
+    )
+    if failed:
+        fail(f"{len(failed)} validation check(s) failed", code=1)

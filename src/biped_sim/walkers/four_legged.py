@@ -1,0 +1,135 @@
+"""Liu's four-legged passive walker: an outer and an inner pair of legs, four disc feet (spatial only).
+
+Each pair is one rigid body: two straight legs (mass m, centre of mass c below the hip, inertia I
+about their centre of mass for any axis across the leg, none about the leg's own axis: slender
+legs) at z' = +-w/2, a cross bar (a uniform rod of mass ``crossbar_mass`` and length w along the
+hip axle) and half the hip mass M_H on the axle. Body 0 is the outer pair (w = foot_spacing_outer),
+body 1 the inner pair (w = foot_spacing_inner); a revolute hip axle along z' joins them. The
+body's centre of mass lies d = 2 m c / M_b below the hip (M_b = 2 m + M_H/2 + crossbar_mass) and
+its inertia about it, in the body frame (x' forward, y' up the legs, z' along the axle), is
+
+    J'_xx = 2 [I + m ((c - d)^2 + w^2/4)] + (M_H/2 + m_bar) d^2 + m_bar w^2/12
+    J'_yy = m w^2/2 + m_bar w^2/12
+    J'_zz = 2 [I + m (c - d)^2] + (M_H/2 + m_bar) d^2.
+
+Feet: discs of radius R in the legs' sagittal planes (centres at (0, -(l - R - d), +-w/2)); feet
+0, 1 are the outer pair's (z' = +w/2, -w/2), 2, 3 the inner pair's, and each foot's scuffing-guard
+partner is the other pair's foot on the same side. The walker starts like the compass walker: the
+outer pair in stance on both feet (each carrying half the weight: static penetration
+(M g cos gamma / 2 K)^(1/n)), the inner pair swinging, leg angles and rates from
+``simulation.initial``. Nothing in the machine or in this start breaks the lateral symmetry, so
+roll and yaw stay at round-off unless the model is perturbed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.errors import ConfigError
+from biped_sim.multibody.spatial import ARMED, IMPACT_SPEED, TOUCHING, SpatialSystem, make_workspace, update_modes
+from biped_sim.walkers.compass import sagittal_initial_state
+from biped_sim.walkers.model import BuiltModel, contact_arrays, contact_stiffness
+from biped_sim.walkers.spatial_compass import (
+    DISC_AXIS,
+    constraint_arrays,
+    revolute,
+    sagittal_to_spatial,
+    spatial_gravity,
+)
+
+
+def pair_properties(config: Config, spacing: float) -> tuple[float, float, np.ndarray]:
+    """(mass, hip-to-centre-of-mass distance d, inertia J' about the centre of mass) of one leg pair."""
+    w = config.walker
+    m, c, inertia, bar = w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.crossbar_mass
+    on_axle = 0.5 * w.hip_mass + bar
+    mass = 2.0 * m + on_axle
+    d = 2.0 * m * c / mass
+    j_xx = 2.0 * (inertia + m * ((c - d) ** 2 + spacing**2 / 4.0)) + on_axle * d**2 + bar * spacing**2 / 12.0
+    j_yy = 0.5 * m * spacing**2 + bar * spacing**2 / 12.0
+    j_zz = 2.0 * (inertia + m * (c - d) ** 2) + on_axle * d**2
+    return mass, d, np.diag([j_xx, j_yy, j_zz])
+
+
+def build_four_legged(config: Config) -> BuiltModel:
+    """Bodies, hip axle and four feet of the four-legged walker, standing on its outer pair."""
+    if config.formulation.kind != "spatial":
+        raise ConfigError("formulation.kind", "walker.kind 'four_legged' needs the spatial formulation")
+    w = config.walker
+    l, R = w.leg_length, w.foot_radius
+    g, gamma = config.gravity, config.ground.slope
+    spacings = (w.foot_spacing_outer, w.foot_spacing_inner)
+    props = [pair_properties(config, s) for s in spacings]
+    if min(np.linalg.eigvalsh(j).min() for _, _, j in props) <= 0.0:
+        raise ConfigError("walker.leg_inertia", "each leg pair needs a positive-definite inertia")
+    masses = np.array([mass for mass, _, _ in props])
+    offsets = [d for _, d, _ in props]
+    inertia = np.array([j for _, _, j in props])
+    total_mass = float(masses.sum())
+    stiffness = contact_stiffness(config)
+    normal, friction, switches = contact_arrays(config, stiffness, total_mass)
+    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, offsets[0], 1, offsets[1]))
+
+    foot_body = np.array([0, 0, 1, 1], dtype=np.int64)
+    foot_center = np.array(
+        [[0.0, -(l - R - offsets[b]), side * 0.5 * spacings[b]] for b in (0, 1) for side in (1.0, -1.0)]
+    )
+    system = SpatialSystem(
+        body_mass=masses,
+        body_inertia=inertia,
+        body_inertia_inv=np.linalg.inv(inertia),
+        con_type=kinds,
+        con_bodies=bodies,
+        con_vecs=vecs,
+        con_row=rows,
+        foot_body=foot_body,
+        foot_center=foot_center,
+        foot_axis=np.array([DISC_AXIS] * 4),
+        foot_radius=np.full(4, R),
+        foot_partner=np.array([2, 3, 0, 1], dtype=np.int64),
+        gravity=spatial_gravity(config),
+        baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),
+        normal_params=normal,
+        friction_params=friction,
+        switches=switches,
+        limits=np.array(
+            [
+                config.contact.impact_velocity_floor,
+                config.simulation.fall_hip_height * l,
+                config.simulation.fall_leg_angle,
+            ]
+        ),
+    )
+
+    exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
+    static_penetration = (0.5 * total_mass * g * math.cos(gamma) / stiffness) ** (1.0 / exponent)
+    coords, rates, hip_speed = sagittal_initial_state(config, (offsets[0], offsets[1]), static_penetration)
+    q, qd = sagittal_to_spatial(coords, rates)
+    nb, nf = 2, 4
+    y0 = np.zeros(14 * nb + 2 * nf + 2)
+    y0[: 7 * nb] = q.ravel()
+    y0[7 * nb : 14 * nb] = qd.ravel()
+    modes0 = np.zeros((nf, 3))
+    for foot in (0, 1):  # the outer pair "just struck"
+        modes0[foot, ARMED] = 1.0
+        modes0[foot, TOUCHING] = 1.0
+        modes0[foot, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
+    update_modes(y0, system, modes0, make_workspace(system))  # arms the inner feet if ahead and airborne
+    return BuiltModel(
+        system=system,
+        y0=y0,
+        modes0=modes0,
+        body_names=["outer", "inner"],
+        foot_names=["outer_left", "outer_right", "inner_left", "inner_right"],
+        leg_length=l,
+        total_mass=total_mass,
+        stiffness=stiffness,
+        meta={
+            "static_penetration": static_penetration,
+            "outer_mass": float(masses[0]),
+            "inner_mass": float(masses[1]),
+        },
+    )

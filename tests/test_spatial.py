@@ -1,0 +1,189 @@
+"""The spatial formulation: Euler-parameter kinematics, planar/spatial agreement, the four-legged walker."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+from biped_sim import config_from_dict, load_config, run, simulate
+from biped_sim.errors import ConfigError
+from biped_sim.io.trajectory import load_run
+from biped_sim.multibody import spatial
+
+from .conftest import CONFIGS
+
+RNG = np.random.default_rng(7)
+SPATIAL = ["formulation.kind=spatial"]
+TIGHT = ["integrator.rtol=1e-9", "integrator.atol=1e-11"]
+
+
+def _matrix(fn, p: np.ndarray, n_in: int) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """The matrix of a compiled linear map x -> fn(p, x) with n_in inputs."""
+    return np.array([fn(tuple(p), tuple(e)) for e in np.eye(n_in)]).T
+
+
+def _random_parameters() -> tuple[np.ndarray, np.ndarray]:
+    p = RNG.normal(size=4)
+    p /= np.linalg.norm(p)
+    pdot = RNG.normal(size=4)
+    return p, pdot - p * (p @ pdot)  # tangent to the unit sphere
+
+
+@pytest.mark.parametrize("trial", range(5))
+def test_euler_parameter_identities(trial: int) -> None:
+    p, pdot = _random_parameters()
+    a = _matrix(spatial.rotate, p, 3)
+    e = _matrix(spatial.e_mul, p, 4)
+    g = _matrix(spatial.g_mul, p, 4)
+    assert a @ a.T == pytest.approx(np.eye(3), abs=1e-14)
+    assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-14)
+    assert e @ g.T == pytest.approx(a, abs=1e-14)  # A = E G^T
+    assert e @ e.T == pytest.approx(np.eye(3), abs=1e-14)
+    assert g @ g.T == pytest.approx(np.eye(3), abs=1e-14)
+    assert e.T @ e == pytest.approx(np.eye(4) - np.outer(p, p), abs=1e-14)
+    assert g.T @ g == pytest.approx(np.eye(4) - np.outer(p, p), abs=1e-14)
+    assert e @ p == pytest.approx(np.zeros(3), abs=1e-15)
+    assert g @ p == pytest.approx(np.zeros(3), abs=1e-15)
+    assert np.array(spatial.g_mul(tuple(pdot), tuple(pdot))) == pytest.approx(np.zeros(3), abs=1e-15)  # Gdot pdot = 0
+    assert _matrix(spatial.g_tmul, p, 3) == pytest.approx(g.T, abs=1e-15)
+    assert _matrix(spatial.rotate_t, p, 3) == pytest.approx(a.T, abs=1e-15)
+
+
+@pytest.mark.parametrize("trial", range(3))
+def test_angular_velocity_from_pdot(trial: int) -> None:
+    """omega~ = Adot A^T (finite differences along a unit path) equals 2 E pdot; omega' = A^T omega = 2 G pdot."""
+    p, pdot = _random_parameters()
+    h = 1e-6
+
+    def unit(t: float) -> np.ndarray:
+        q = p + t * pdot
+        return q / np.linalg.norm(q)
+
+    a = _matrix(spatial.rotate, p, 3)
+    a_dot = (_matrix(spatial.rotate, unit(h), 3) - _matrix(spatial.rotate, unit(-h), 3)) / (2 * h)
+    skew = a_dot @ a.T
+    assert skew == pytest.approx(-skew.T, abs=1e-8)
+    omega = np.array([skew[2, 1], skew[0, 2], skew[1, 0]])
+    assert omega == pytest.approx(2 * np.array(spatial.e_mul(tuple(p), tuple(pdot))), abs=1e-8)
+    assert a.T @ omega == pytest.approx(2 * np.array(spatial.g_mul(tuple(p), tuple(pdot))), abs=1e-8)
+
+
+def test_point_jacobian_is_exact() -> None:
+    """B(p, s) = d(A(p) s)/dp for any p (A is quadratic: central differences are exact), B^T is its transpose."""
+    p = RNG.normal(size=4)  # not normalised: the Jacobian must hold off the unit sphere too
+    s = RNG.normal(size=3)
+    h = 1e-3
+    fd = np.array(
+        [
+            (
+                np.array(spatial.rotate(tuple(p + h * d), tuple(s)))
+                - np.array(spatial.rotate(tuple(p - h * d), tuple(s)))
+            )
+            / (2 * h)
+            for d in np.eye(4)
+        ]
+    ).T
+    b = np.array([spatial.b_mul(tuple(p), tuple(s), tuple(d)) for d in np.eye(4)]).T
+    assert b == pytest.approx(fd, abs=1e-10)
+    bt = np.array([spatial.b_tmul(tuple(p), tuple(s), tuple(d)) for d in np.eye(3)]).T
+    assert bt == pytest.approx(b.T, abs=1e-14)
+    assert b @ p == pytest.approx(2 * np.array(spatial.rotate(tuple(p), tuple(s))), abs=1e-12)  # Euler's theorem
+
+
+def test_spatial_compass_agrees_with_planar_and_balances_energy() -> None:
+    """Same walker, dopri5 at rtol 1e-9 for 10 s: step periods and energy terms agree to 1e-6 relative."""
+    overrides = ["simulation.t_end=10", *TIGHT]
+    planar = simulate(config_from_dict({}, overrides))
+    spatial_run = simulate(config_from_dict({}, [*SPATIAL, *overrides]))
+    assert spatial_run.status == planar.status == "walking"
+    assert spatial_run.summary["n_steps"] == planar.summary["n_steps"] >= 20
+    assert np.array_equal(spatial_run.steps.foot, planar.steps.foot)
+    assert spatial_run.step_periods == pytest.approx(planar.step_periods, rel=1e-6)
+    for kind in ("normal", "friction"):
+        assert spatial_run.summary["energy_dissipated"][kind] == pytest.approx(
+            planar.summary["energy_dissipated"][kind], rel=1e-6
+        )
+    m_g_l = spatial_run.model.total_mass * 9.81 * spatial_run.model.leg_length
+    assert np.max(np.abs(spatial_run.energy.residual)) < 1e-5 * m_g_l
+    assert spatial_run.summary["energy_dissipated"]["normal"] > 0.1 * m_g_l  # the balance is not trivial
+    # the motion stays in the sagittal plane
+    assert spatial_run.summary["lateral"]["roll_max"] < 1e-12
+    assert spatial_run.summary["constraint_violation_max"]["normalization"] < 1e-8
+
+
+def test_four_legged_walker_walks_20_steps() -> None:
+    result = simulate(load_config(CONFIGS / "four_legged_walker.yaml"))
+    assert result.status == "walking"
+    assert result.summary["n_steps"] >= 20
+    feet = result.steps.foot
+    pairs = result.model.system.foot_body[feet]
+    assert np.all(pairs[1:] != pairs[:-1])  # outer and inner pairs alternate
+    last = result.step_periods[-5:]
+    assert (last.max() - last.min()) / last.mean() < 1e-3
+    assert np.all(result.step_lengths > 0.05)
+    # four feet carry the walker: both feet of a pair share the load
+    channels = result.summary["lateral"]
+    assert channels["roll_max"] < 1e-6 and abs(channels["yaw_final"]) < 1e-6
+    m_g_l = result.model.total_mass * 9.81 * result.model.leg_length
+    assert result.summary["energy_residual_max"] < 1e-5 * m_g_l
+
+
+def test_baumgarte_bounds_spatial_violations_standard_method_does_not() -> None:
+    base = [*SPATIAL, "walker.kind=four_legged", "simulation.t_end=10", "integrator.rtol=1e-6", "integrator.atol=1e-8"]
+    stabilised = simulate(config_from_dict({}, base))
+    standard = simulate(config_from_dict({}, [*base, "formulation.baumgarte.alpha=0", "formulation.baumgarte.beta=0"]))
+    assert stabilised.status == "walking" and stabilised.run.t_final == pytest.approx(10.0)
+    b = stabilised.summary["constraint_violation_max"]
+    s = standard.summary["constraint_violation_max"]
+    for name in ("position", "velocity", "normalization"):
+        assert b[name] < 1e-8
+    assert s["position"] > 10 * b["position"]
+    assert s["normalization"] > 10 * b["normalization"]
+    for column in (0, 2):  # without stabilisation the drift grows with time
+        drift = standard.violation[: len(standard.run.t) // 2 * 2, column].reshape(2, -1)
+        assert drift[1].max() > drift[0].max()
+
+
+def test_spatial_run_directory(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    config = config_from_dict({}, [*SPATIAL, "walker.kind=four_legged", "simulation.t_end=1"])
+    run(config, tmp_path)
+    data = load_run(tmp_path)
+    assert data.hip.shape == (len(data.time), 3)
+    assert data.normal_force.shape == (len(data.time), 4)
+    assert data.violation_normalization is not None and data.attitude is not None
+    assert set(data.attitude) == {"pitch", "roll", "yaw"}
+    with h5py.File(tmp_path / "trajectory.h5") as f:
+        assert f["contact/friction_force_lateral"].shape == (len(data.time), 4)
+        assert f["state"].shape[1] == len(f["state_names"]) == 14 * 2 + 2 * 4 + 2
+    assert set(data.summary["constraint_violation_max"]) == {"position", "velocity", "normalization"}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field"),
+    [
+        (["walker.kind=four_legged"], "walker.kind"),
+        ([*SPATIAL, "walker.kind=four_legged", "walker.foot_spacing_inner=0.3"], "walker.foot_spacing_inner"),
+        ([*SPATIAL, "formulation.kind=cylindrical"], "formulation.kind"),
+    ],
+)
+def test_four_legged_config_errors(overrides: list[str], field: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        config_from_dict({}, overrides)
+    assert info.value.field == field
+
+
+def test_constraint_study_figure(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from biped_sim.analysis.constraint_study import study_runs, write_constraint_study
+
+    base = [*SPATIAL, "walker.kind=four_legged", "simulation.t_end=0.3", "integrator.method=rk2"]
+    for gains in (0, 10):
+        overrides = [*base, f"formulation.baumgarte.alpha={gains}", f"formulation.baumgarte.beta={gains}"]
+        run(config_from_dict({}, overrides), tmp_path / "sweep" / "runs" / f"gains{gains}")
+    groups = study_runs(tmp_path / "sweep")
+    assert list(groups) == ["rk2"] and [r.config.formulation.baumgarte.alpha for r in groups["rk2"]] == [0, 10]
+    paths = write_constraint_study(tmp_path / "sweep", tmp_path / "figures")
+    assert [p.name for p in paths] == ["constraint_violation.png", "constraint_violation.svg"]
+    assert all(p.stat().st_size > 0 for p in paths)
+    with pytest.raises(ConfigError):
+        study_runs(tmp_path / "figures")
