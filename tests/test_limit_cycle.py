@@ -1,4 +1,4 @@
-"""Limit cycles: Garcia's fixed point, multipliers two ways, the compass gaits, the compliant start."""
+"""Limit cycles: Garcia's fixed point, multipliers two ways, the compass gaits, the compliant start and Newton."""
 
 from __future__ import annotations
 
@@ -9,10 +9,19 @@ import pytest
 from typer.testing import CliRunner
 
 from biped_sim import load_config
-from biped_sim.analysis.limit_cycle import rigid_limit_cycle, simplest_variational_jacobian
+from biped_sim.analysis.limit_cycle import (
+    LimitCycle,
+    TouchdownSection,
+    compliant_limit_cycle,
+    rigid_limit_cycle,
+    simplest_variational_jacobian,
+)
 from biped_sim.cli import app
+from biped_sim.integrate.driver import integrate_model
+from biped_sim.multibody.planar import constraint_violation, foot_kinematics
 from biped_sim.rigid.models import SimplestWalker
-from tests.conftest import CONFIGS
+from biped_sim.walkers import build_model
+from tests.conftest import CONFIGS, DEFAULT_CONFIG
 
 SIMPLEST = CONFIGS / "simplest_walker.yaml"
 
@@ -72,3 +81,95 @@ def test_limit_cycle_cli_json_and_bad_guess() -> None:
     assert doc["multipliers"][0][0] == pytest.approx(0.5, abs=1e-6)
     bad = runner.invoke(app, ["limit-cycle", str(SIMPLEST), "--guess", "[1, 2]"])
     assert bad.exit_code == 2 and "--guess" in bad.output
+
+
+# --- compliant: Newton on the step map between heel strikes ------------------------------------------------------
+
+GOSWAMI = CONFIGS / "compass_goswami.yaml"
+GOSWAMI_SHORT_STEP = {  # the rigid Goswami compass's unstable short-step cycle (period 0.582 s, multiplier 4.29)
+    "stance_angle": 0.2572735297920956,
+    "swing_angle": -0.2572735297920956,
+    "stance_rate": -1.2113187124166462,
+    "swing_rate": -0.7127563008668898,
+}
+
+
+@pytest.fixture(scope="module")
+def default_compliant() -> LimitCycle:
+    return compliant_limit_cycle(load_config(DEFAULT_CONFIG))
+
+
+def _section(overrides: list[str] | None = None) -> TouchdownSection:
+    config = load_config(DEFAULT_CONFIG, overrides or [])
+    return TouchdownSection(config, build_model(config))
+
+
+@pytest.mark.parametrize("friction", ["ambrosio", "lugre"])
+def test_lift_is_exact_on_the_constraints_and_the_section_and_project_inverts_it(friction: str) -> None:
+    section = _section([f"friction.model={friction}"])
+    z = np.array([0.27, -0.26, -1.58, -1.8, 0.87, -0.17, 0.04, 1e-4][: len(section.names)])
+    y, modes = section.lift(z)
+    assert np.max(np.abs(np.array(constraint_violation(y, section.system)))) < 1e-15
+    delta, delta_dot = foot_kinematics(y, section.system, 0)[:2]
+    assert abs(delta) < 1e-15
+    assert modes[0].tolist() == [1.0, 1.0, delta_dot]  # the striking foot as the touchdown event leaves it
+    assert foot_kinematics(y, section.system, 1)[0] > 0 and modes[1].tolist() == [1.0, 1.0, z[6]]
+    assert np.max(np.abs(section.project(y, modes, 0) - z)) < 1e-15  # to round-off
+    # the same state with the legs' bodies, feet, bristles and modes swapped, read with foot 1 striking
+    swapped = np.concatenate([y[3:6], y[0:3], y[9:12], y[6:9], y[13:14], y[12:13], y[14:]])
+    assert np.array_equal(section.project(swapped, modes[::-1], 1), section.project(y, modes, 0))
+
+
+def test_compliant_newton_converges_on_the_default_walker_gait(default_compliant: LimitCycle, default_run) -> None:
+    cycle = default_compliant
+    assert cycle.converged and cycle.residual <= 1e-10 and cycle.stable
+    assert cycle.step_period == pytest.approx(0.43508, abs=1e-5)
+    assert set(cycle.to_json()["fixed_point"]) == {"stance_angle", "swing_angle", "stance_rate", "swing_rate"}
+    # the settling run of the default walker (34 steps at rtol 1e-8) ends on the same touchdown state
+    settled = default_run.heel_strike_states[-1]
+    assert max(abs(settled[k] - cycle.fixed_point[k]) for k in settled) < 1e-6  # measured 1.3e-7
+    # the fast contact directions are forgotten within a step: 3 zero multipliers of 7
+    assert np.sum(np.abs(cycle.multipliers) < 1e-6) == 3
+
+
+def test_a_run_started_on_the_compliant_fixed_point_stays_there_and_settles_at_the_newton_rate(
+    default_compliant: LimitCycle,
+) -> None:
+    """10 steps from the fixed point repeat it; a perturbed run's touchdowns give the multipliers by least squares."""
+    section = _section()
+    z_star = default_compliant.section_point
+
+    def touchdowns(z: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+        y, modes = section.lift(z)
+        run = integrate_model(section.system, y, modes, section.integrator, 10.0, 1.0, steps, initial_stance_foot=0)
+        assert len(run.strike_t) == steps
+        z_k = [section.project(run.strike_y[k], run.strike_modes[k], int(run.strike_foot[k])) for k in range(steps)]
+        return np.array(z_k), np.diff(np.concatenate([[0.0], run.strike_t]))
+
+    on_cycle, periods = touchdowns(z_star, 10)
+    assert np.ptp(periods) < 1e-8  # measured 1.6e-12
+    assert np.max(np.abs(on_cycle - z_star)) < 1e-9  # measured 8.6e-11
+    perturbed, _ = touchdowns(z_star + 1e-4 * np.eye(len(z_star))[2], 14)
+    deviations = perturbed[3:] - z_star  # from step 4 on, the contact modes and the 0.11 pair have died out
+    identified = np.linalg.lstsq(deviations[:-1], deviations[1:], rcond=None)[0].T
+    dominant = max(np.linalg.eigvals(identified), key=lambda m: (abs(m), m.imag))
+    newton = max(default_compliant.multipliers, key=lambda m: (abs(m), m.imag))
+    assert abs(dominant - newton) < 1e-4  # measured 2e-5
+
+
+def test_rigid_cli_finds_the_unstable_goswami_cycle_without_settling() -> None:
+    guess = "[0.18, -0.9, -0.18, -0.45]"
+    args = ["limit-cycle", str(GOSWAMI), "--set", "dynamics=rigid", "--guess", guess, "--settle-steps", "0", "--json"]
+    out = CliRunner().invoke(app, args)
+    assert out.exit_code == 0, out.output
+    doc = json.loads(out.output)
+    assert doc["converged"] and not doc["stable"]
+    assert doc["step_period"] == pytest.approx(0.58203, abs=1e-5)
+    assert doc["max_multiplier_modulus"] == pytest.approx(4.288, abs=1e-3)
+
+
+def test_compliant_newton_finds_the_unstable_goswami_short_step_gait() -> None:
+    cycle = compliant_limit_cycle(load_config(GOSWAMI), GOSWAMI_SHORT_STEP, settle_steps=0)
+    assert cycle.converged and not cycle.stable
+    assert cycle.step_period == pytest.approx(0.5819, abs=1e-3)  # rigid: 0.58203 s
+    assert cycle.max_multiplier_modulus == pytest.approx(4.28, abs=0.05)  # rigid: 4.288

@@ -17,6 +17,7 @@ from biped_sim import load_config, simulate
 from biped_sim.analysis.limit_cycle import rigid_limit_cycle
 from biped_sim.cli import app
 from biped_sim.errors import ConfigError
+from biped_sim.report import build_report
 from biped_sim.rigid.run import INTEGRATOR, RigidRunResult
 from biped_sim.sweep import check_buildable, load_sweep, run_sweep
 from tests.conftest import CONFIGS
@@ -187,6 +188,9 @@ def test_sweep_over_the_simplest_walkers_slope(tmp_path: Path) -> None:
     assert all(3.8 < row["mean_period_s"] < 4.0 and row["step_control"] == INTEGRATOR for row in rows)
     assert rows[0]["energy_dissipated_normal_J"] < rows[1]["energy_dissipated_normal_J"]  # steeper: harder strikes
     assert math.isnan(rows[0]["max_penetration_m"])
+    report = build_report(tmp_path / "sweep")  # tables and the parameter figures; no contact time series
+    assert "period_vs_slope" in report.figures and "contact_forces" not in report.figures
+    assert (report.out_dir / "figures" / "period_vs_slope.png").is_file()
 
     (tmp_path / "bad.yaml").write_text(
         f"name: bad\nbase: {SIMPLEST}\ngrid:\n  simulation.initial.stance_angle: [0.2, -0.1]\n"

@@ -5,11 +5,15 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from biped_sim import config_from_dict, load_config, run, simulate
+from biped_sim.animate import WalkerDrawing
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import load_run
 from biped_sim.multibody import spatial
+from biped_sim.plots import plot_run
 
 from .conftest import CONFIGS
 
@@ -152,11 +156,25 @@ def test_spatial_run_directory(tmp_path) -> None:  # type: ignore[no-untyped-def
     assert data.hip.shape == (len(data.time), 3)
     assert data.normal_force.shape == (len(data.time), 4)
     assert data.violation_normalization is not None and data.attitude is not None
-    assert set(data.attitude) == {"pitch", "roll", "yaw"}
+    assert set(data.attitude) == {"pitch", "roll", "yaw", "pitch_rate"}
+    # the pitch rate integrates to the pitch (trapezoids over 1 ms samples; impacts make the rate steep, not jump)
+    rate, pitch = data.attitude["pitch_rate"], data.attitude["pitch"]
+    integrated = np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(data.time)[:, None], axis=0)
+    assert integrated == pytest.approx(pitch[1:] - pitch[0], abs=5e-4)
     with h5py.File(tmp_path / "trajectory.h5") as f:
         assert f["contact/friction_force_lateral"].shape == (len(data.time), 4)
         assert f["state"].shape[1] == len(f["state_names"]) == 14 * 2 + 2 * 4 + 2
     assert set(data.summary["constraint_violation_max"]) == {"position", "velocity", "normalization"}
+    # the single-run figures and the animation draw spatial runs too (sagittal view)
+    assert data.leg_angles().shape == data.leg_rates().shape == (len(data.time), 2)
+    written = plot_run(data, tmp_path / "figures")
+    assert all(path.stat().st_size > 0 for path in written)
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    drawing = WalkerDrawing(data, fig)
+    drawing.draw(0)
+    assert len(drawing.legs) == 2 and len(drawing.arrows.U) == 4
+    assert np.hypot(drawing.arrows.U, drawing.arrows.V).max() > 0  # feet on the ground carry the walker
 
 
 @pytest.mark.parametrize(

@@ -1,11 +1,12 @@
 """Animation of a run: the walker walking down its slope, with contact force arrows and a time stamp.
 
-The walker is drawn from trajectory.h5: each leg from its body state (x, y, phi), the hip
-joint, the round feet as arcs, using the geometry of the model rebuilt from the run's stored
-config (one source for the geometry: the walker builder). The scene is drawn in the world frame
-(the slope frame rotated by the slope angle, so the ground visibly descends), and the view
-follows the hip. Frames are decimated to ``fps`` frames per second of playback; GIF through
-Pillow (matplotlib's PillowWriter), MP4 through ffmpeg when it is on the PATH.
+The walker is drawn from trajectory.h5 in its sagittal view: each leg from the hip at its leg
+angle, the round feet as arcs (leg length and foot radius from the run's stored config, which
+feet belong to which body from the walker builder), for planar and spatial runs alike. The
+scene is drawn in the world frame (the slope frame rotated by the slope angle, so the ground
+visibly descends), and the view follows the hip. Frames are decimated to ``fps`` frames per
+second of playback; GIF through Pillow (matplotlib's PillowWriter), MP4 through ffmpeg when it
+is on the PATH.
 """
 
 from __future__ import annotations
@@ -54,47 +55,48 @@ def _rotation(angle: float) -> np.ndarray:
 
 
 class WalkerDrawing:
-    """The artists of one frame and how to place them at a sample."""
+    """The artists of one frame and how to place them at a sample.
+
+    The drawing is the walker's sagittal view, the same for every formulation: each leg body hangs
+    from the hip at its leg angle (planar phi, or the spatial pitch), its foot arc of radius R centred
+    on the leg axis at l - R from the hip; the feet of one body (the four-legged walker's pairs)
+    coincide in this view.
+    """
 
     def __init__(self, run: RunData, fig: Figure) -> None:
         model = build_model(run.config)
-        system = model.system
         self.run = run
         self.l = model.leg_length
+        self.radius = run.config.walker.foot_radius
         self.to_world = _rotation(-run.config.ground.slope)
         self.force_scale = ARROW_LENGTH_PER_WEIGHT * self.l / (model.total_mass * run.config.gravity)
-        self.foot_body = system.foot_body.astype(int)
-        self.foot_center = np.array(system.foot_center)
-        self.foot_radius = np.array(system.foot_radius)
-        # each leg: from its hip point (joint 0, one side per body) to the bottom of its foot arc
-        self.leg_points = []
-        for b in range(model.n_bodies):
-            side = 0 if system.joint_bodies[0, 0] == b else 2
-            foot = int(np.flatnonzero(self.foot_body == b)[0])
-            bottom = self.foot_center[foot] + np.array([0.0, -self.foot_radius[foot]])
-            self.leg_points.append(np.vstack([system.joint_points[0, side : side + 2], bottom]))
+        self.foot_body = model.system.foot_body.astype(int)
+        self.angles = run.leg_angles()
+        self.hip_track = run.hip[:, :2]
         u = np.linspace(-FOOT_ARC_HALF_ANGLE, FOOT_ARC_HALF_ANGLE, 25)
-        self.arc = np.column_stack([np.sin(u), -np.cos(u)])  # unit arc about the body's -y axis
+        self.arc = np.column_stack([np.sin(u), -np.cos(u)])  # unit arc about the leg's axis, hip to foot
 
         self.ax = fig.add_subplot()
         self.ax.set_aspect("equal")
         self.ax.set_xticks([])
         self.ax.set_yticks([])
         self.ax.grid(False)
-        ground_x = np.array([run.hip[:, 0].min() - 2 * self.l, run.hip[:, 0].max() + 2 * self.l])
+        ground_x = np.array([self.hip_track[:, 0].min() - 2 * self.l, self.hip_track[:, 0].max() + 2 * self.l])
         ground = self.to_world @ np.vstack([ground_x, np.zeros(2)])
         self.ax.fill_between(ground[0], ground[1], ground[1] - 2 * self.l, color="0.85", zorder=0)
         self.ax.plot(ground[0], ground[1], color="0.3", linewidth=1.0)
+        n_bodies = self.angles.shape[1]
         self.legs = [
-            self.ax.plot([], [], color=f"C{b}", linewidth=2.0, solid_capstyle="round")[0] for b in range(model.n_bodies)
+            self.ax.plot([], [], color=f"C{b}", linewidth=2.0, solid_capstyle="round")[0] for b in range(n_bodies)
         ]
-        self.feet = [self.ax.plot([], [], color=f"C{b}", linewidth=2.0)[0] for b in self.foot_body]
+        self.feet = [self.ax.plot([], [], color=f"C{b}", linewidth=2.0)[0] for b in range(n_bodies)]
         (self.hip,) = self.ax.plot([], [], "o", color="k", markersize=6, zorder=5)
+        n_feet = len(self.foot_body)
         self.arrows = self.ax.quiver(
-            np.zeros(len(self.foot_body)),
-            np.zeros(len(self.foot_body)),
-            np.zeros(len(self.foot_body)),
-            np.zeros(len(self.foot_body)),
+            np.zeros(n_feet),
+            np.zeros(n_feet),
+            np.zeros(n_feet),
+            np.zeros(n_feet),
             angles="xy",
             scale_units="xy",
             scale=1.0,
@@ -104,31 +106,29 @@ class WalkerDrawing:
         )
         self.stamp = self.ax.text(0.03, 0.95, "", transform=self.ax.transAxes, va="top", family="monospace")
 
-    def _body_points(self, y: np.ndarray, b: int, points: np.ndarray) -> np.ndarray:
-        """Slope-frame positions of body-frame ``points`` (k, 2) of body b."""
-        return y[3 * b : 3 * b + 2] + points @ _rotation(y[3 * b + 2]).T
-
     def draw(self, i: int) -> None:
         """Place every artist at sample ``i``."""
-        run, y = self.run, self.run.state[i]
-        for b, line in enumerate(self.legs):
-            leg = self.to_world @ self._body_points(y, b, self.leg_points[b]).T
-            line.set_data(leg[0], leg[1])
+        run, hip = self.run, self.hip_track[i]
+        centres = []
+        for b, (leg, foot) in enumerate(zip(self.legs, self.feet, strict=True)):
+            rotation = _rotation(self.angles[i, b])
+            centre = hip + (self.l - self.radius) * (rotation @ np.array([0.0, -1.0]))
+            bottom = centre + self.radius * (rotation @ np.array([0.0, -1.0]))
+            leg_world = self.to_world @ np.vstack([hip, bottom]).T
+            leg.set_data(leg_world[0], leg_world[1])
+            arc_world = self.to_world @ (centre + self.radius * self.arc @ rotation.T).T
+            foot.set_data(arc_world[0], arc_world[1])
+            centres.append(centre)
         offsets, vectors = [], []
-        for f, line in enumerate(self.feet):
-            b = self.foot_body[f]
-            arc = self._body_points(y, b, self.foot_center[f] + self.foot_radius[f] * self.arc)
-            world = self.to_world @ arc.T
-            line.set_data(world[0], world[1])
-            centre = self._body_points(y, b, self.foot_center[f][None, :])[0]
-            contact = np.array([centre[0], centre[1] - self.foot_radius[f]])
+        for f, b in enumerate(self.foot_body):
+            contact = centres[b] - np.array([0.0, self.radius])
             force = np.array([run.friction_force[i, f], run.normal_force[i, f]]) * self.force_scale
             offsets.append(self.to_world @ contact)
             vectors.append(self.to_world @ force)
         self.arrows.set_offsets(np.array(offsets))
         vectors_arr = np.array(vectors)
         self.arrows.set_UVC(vectors_arr[:, 0], vectors_arr[:, 1])
-        hip_world = self.to_world @ run.hip[i]
+        hip_world = self.to_world @ hip
         self.hip.set_data([hip_world[0]], [hip_world[1]])
         self.ax.set_xlim(hip_world[0] - 0.9 * self.l, hip_world[0] + 0.9 * self.l)
         self.ax.set_ylim(hip_world[1] - 1.25 * self.l, hip_world[1] + 0.3 * self.l)

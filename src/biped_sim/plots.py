@@ -261,9 +261,10 @@ def phase_portrait_figure(series: Series) -> Figure:
     single = len(series) == 1
     for i, (label, run) in enumerate(series):
         bodies = run.body_names if single else run.body_names[:1]
+        angles, rates = run.leg_angles(), run.leg_rates()
         for j, body in enumerate(bodies):
             name = body if single else label
-            ax.plot(run.column(f"phi_{body}"), run.column(f"omega_{body}"), label=name, **style_of(j if single else i))
+            ax.plot(angles[:, j], rates[:, j], label=name, **style_of(j if single else i))
     ax.set_xlabel(r"leg angle $\theta$ [rad]")
     ax.set_ylabel(r"leg rate $\dot\theta$ [rad/s]")
     add_legend(fig, ax, 2 if single else len(series))

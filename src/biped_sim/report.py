@@ -42,6 +42,7 @@ from biped_sim.plots import (
     slip_figure,
     step_period_figure,
 )
+from biped_sim.rigid.run import INTEGRATOR as RIGID_INTEGRATOR
 from biped_sim.sweep.runner import read_sweep
 from biped_sim.sweep.spec import short_keys
 
@@ -376,8 +377,14 @@ def accuracy_series(view: SweepView) -> list[tuple[str, list[float], list[float]
 
 
 def overlay_runs(view: SweepView) -> tuple[list[tuple[str, RunData]], str]:
-    """The runs to overlay in the time-series figures, and a caption note saying which."""
-    rows = view.finished
+    """The runs to overlay in the time-series figures, and a caption note saying which.
+
+    Rigid runs have no contact or constraint channels to draw: they are left out (their gait is in the
+    tables and the parameter figures).
+    """
+    rows = [row for row in view.finished if row.get("step_control") != RIGID_INTEGRATOR]
+    if not rows:
+        return [], "no compliant run"
     axis = view.numeric_axis()
     exclude: tuple[str, ...] = ()
     note = "all finished runs"
@@ -437,6 +444,8 @@ def build_figures(view: SweepView, figure_dir: Path) -> dict[str, str]:
             "(reference runs, at zero, are not drawn)."
         )
     series, note = overlay_runs(view)
+    if not series:
+        return captions
     figures = {
         "period_vs_step": (step_period_figure(series), "Step period against step number"),
         "constraint_violation": (

@@ -124,14 +124,15 @@ def hip_position(model: BuiltModel, run: Integration) -> np.ndarray:
 
 
 def attitude_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
-    """Spatial only (else empty): per-body pitch, roll (lateral rocking), yaw (heading drift), (ns, nb) each [rad]."""
+    """Spatial only (else empty): per-body pitch, roll (lateral rocking), yaw (heading drift) [rad] and pitch rate
+    (the planar leg angle rate) [rad/s], (ns, nb) each."""
     attitude = measures(model.system).attitude
     if attitude is None:
         return {}
     ns, nb = len(run.t), model.n_bodies
-    values = np.array([[attitude(run.y[i], model.system, b)[:3] for b in range(nb)] for i in range(ns)])
-    values = values.reshape(ns, nb, 3)
-    return {"pitch": values[:, :, 0], "roll": values[:, :, 1], "yaw": values[:, :, 2]}
+    values = np.array([[attitude(run.y[i], model.system, b) for b in range(nb)] for i in range(ns)])
+    values = values.reshape(ns, nb, 4)
+    return {"pitch": values[:, :, 0], "roll": values[:, :, 1], "yaw": values[:, :, 2], "pitch_rate": values[:, :, 3]}
 
 
 def lateral_summary(model: BuiltModel, run: Integration) -> dict[str, dict[str, float]]:

@@ -16,6 +16,7 @@ HDF5 layout (readable with plain h5py; ``time`` is a dimension scale so xarray s
     /constraints/normalization (ns,)         ||p.p - 1|| over the bodies (spatial only)
     /hip                       (ns, 2)       m (spatial: (ns, 3), x, y, z)
     /attitude/{pitch,roll,yaw} (ns, nb)      rad (spatial only: leg angle, lateral rocking, heading drift)
+    /attitude/pitch_rate       (ns, nb)      rad/s (spatial only: leg angular rate about the lateral axis)
     /steps/{strike_time,foot,period,length,slip,stance_angle,stance_rate,swing_angle,swing_rate}
     /events/contact_log        (nl, 4)       time, foot, +1 touchdown / -1 lift-off, approach velocity
 
@@ -145,7 +146,7 @@ def write_trajectory(result: RunResult, path: Path) -> None:
             if attitude:
                 group = f.create_group("attitude", track_order=True)
                 for name, values in attitude.items():
-                    _dataset(group, name, values, "rad", time_ds)
+                    _dataset(group, name, values, "rad/s" if name == "pitch_rate" else "rad", time_ds)
                 group.attrs["bodies"] = model.body_names
             _steps(f, result)
             events = f.create_group("events")

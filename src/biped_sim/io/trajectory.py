@@ -39,7 +39,7 @@ class RunData:
     hip: np.ndarray  # (ns, 2) m; spatial runs (ns, 3) with z lateral
     steps: dict[str, np.ndarray]  # strike_time, foot, period, length, slip, ...
     violation_normalization: np.ndarray | None = None  # (ns,) ||p.p - 1||, spatial runs only
-    attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw (ns, nb) rad, spatial runs only
+    attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw [rad], pitch_rate [rad/s] (ns, nb), spatial only
 
     def column(self, name: str) -> np.ndarray:
         """One state entry over time, by name (e.g. 'phi_leg0')."""
@@ -47,6 +47,18 @@ class RunData:
             return self.state[:, self.state_names.index(name)]
         except ValueError:
             raise ConfigError(str(self.run_dir), f"trajectory.h5 has no state {name!r}") from None
+
+    def leg_angles(self) -> np.ndarray:
+        """(ns, nb) sagittal leg angle of each body [rad]: phi (planar) or the pitch (spatial)."""
+        if self.attitude is not None:
+            return self.attitude["pitch"]
+        return np.column_stack([self.column(f"phi_{body}") for body in self.body_names])
+
+    def leg_rates(self) -> np.ndarray:
+        """(ns, nb) sagittal leg angular rate of each body [rad/s]."""
+        if self.attitude is not None:
+            return self.attitude["pitch_rate"]
+        return np.column_stack([self.column(f"omega_{body}") for body in self.body_names])
 
     @property
     def body_names(self) -> list[str]:
