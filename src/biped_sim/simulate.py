@@ -12,7 +12,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,6 +22,7 @@ import numpy as np
 
 from biped_sim.analysis.gait import (
     EnergyAudit,
+    StepAccess,
     StepTable,
     constraint_drift,
     energy_audit,
@@ -37,7 +37,7 @@ from biped_sim.walkers import BuiltModel, build_model
 
 
 @dataclass
-class RunResult:
+class RunResult(StepAccess):
     """A simulation and what it measured."""
 
     config: Config
@@ -57,61 +57,18 @@ class RunResult:
         """This run's unit for an SI unit: compliant runs are SI throughout."""
         return si_unit
 
-    @property
-    def heel_strike_times(self) -> np.ndarray:
-        return self.steps.strike_time
-
-    @property
-    def step_periods(self) -> np.ndarray:
-        """Periods of the completed steps (between consecutive heel strikes)."""
-        return self.steps.period[:-1] if len(self.steps.period) else self.steps.period
-
-    @property
-    def step_lengths(self) -> np.ndarray:
-        return self.steps.length[:-1] if len(self.steps.length) else self.steps.length
-
-    @property
-    def heel_strike_states(self) -> list[dict[str, float]]:
-        """Leg angles and rates at each heel strike; 'stance' is the leg that just touched down."""
-        s = self.steps
-        return [
-            {
-                "stance_angle": float(s.stance_angle[k]),
-                "stance_rate": float(s.stance_rate[k]),
-                "swing_angle": float(s.swing_angle[k]),
-                "swing_rate": float(s.swing_rate[k]),
-            }
-            for k in range(len(s.strike_time))
-        ]
-
-
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
-
 
 def summarize(result: RunResult) -> dict[str, Any]:
     """The summary.json content."""
     from biped_sim.io.provenance import package_version
 
-    run, steps, config = result.run, result.steps, result.config
-    periods = result.step_periods
-    lengths = result.step_lengths
-    travelled = float(np.nansum(lengths))
-    span = float(steps.strike_time[-1] - steps.strike_time[0]) if len(steps.strike_time) > 1 else 0.0
+    run, config = result.run, result.config
     scale = result.model.total_mass * config.gravity * result.model.leg_length
     return {
         "status": run.status,
         "stop_time": run.stop_time,
         "t_end": run.t_final,
-        "n_steps": len(steps.strike_time),
-        "step_times": steps.strike_time.tolist(),
-        "step_feet": steps.foot.tolist(),
-        "step_periods": periods.tolist(),
-        "step_lengths": lengths.tolist(),
-        "mean_step_period": _finite_or_none(float(np.mean(periods))) if len(periods) else None,
-        "last_step_period": _finite_or_none(float(periods[-1])) if len(periods) else None,
-        "mean_speed": travelled / span if span > 0 else 0.0,
-        "slip_per_step": steps.slip[:-1].tolist() if len(steps.slip) else [],
+        **result.step_summary(),
         "energy_dissipated": {
             "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
             "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),

@@ -9,7 +9,9 @@ as the right-hand side (one source of truth per equation), reached through the f
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +33,59 @@ class StepTable:
     stance_rate: np.ndarray
     swing_angle: np.ndarray
     swing_rate: np.ndarray
+
+
+class StepAccess:
+    """Step accessors shared by the compliant and the rigid run results (which hold a ``steps`` StepTable)."""
+
+    steps: StepTable
+
+    @property
+    def heel_strike_times(self) -> np.ndarray:
+        return self.steps.strike_time
+
+    @property
+    def step_periods(self) -> np.ndarray:
+        """Periods of the completed steps (between consecutive heel strikes)."""
+        return self.steps.period[:-1] if len(self.steps.period) else self.steps.period
+
+    @property
+    def step_lengths(self) -> np.ndarray:
+        return self.steps.length[:-1] if len(self.steps.length) else self.steps.length
+
+    @property
+    def heel_strike_states(self) -> list[dict[str, float]]:
+        """Touchdown leg angles and rates at each heel strike; 'stance' is the leg that just touched down."""
+        s = self.steps
+        return [
+            {
+                "stance_angle": float(s.stance_angle[k]),
+                "stance_rate": float(s.stance_rate[k]),
+                "swing_angle": float(s.swing_angle[k]),
+                "swing_rate": float(s.swing_rate[k]),
+            }
+            for k in range(len(s.strike_time))
+        ]
+
+    def step_summary(self) -> dict[str, Any]:
+        """The summary.json entries of the steps: times, feet, periods, lengths, mean speed, slip."""
+        steps, periods, lengths = self.steps, self.step_periods, self.step_lengths
+        span = float(steps.strike_time[-1] - steps.strike_time[0]) if len(steps.strike_time) > 1 else 0.0
+        return {
+            "n_steps": len(steps.strike_time),
+            "step_times": steps.strike_time.tolist(),
+            "step_feet": steps.foot.tolist(),
+            "step_periods": periods.tolist(),
+            "step_lengths": lengths.tolist(),
+            "mean_step_period": _finite_or_none(float(np.mean(periods))) if len(periods) else None,
+            "last_step_period": _finite_or_none(float(periods[-1])) if len(periods) else None,
+            "mean_speed": float(np.nansum(lengths)) / span if span > 0 else 0.0,
+            "slip_per_step": steps.slip[:-1].tolist() if len(steps.slip) else [],
+        }
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
 
 
 def _rolling_coordinate(y: np.ndarray, model: BuiltModel, foot: int) -> float:

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.analysis.gait import StepTable
+from biped_sim.analysis.gait import StepAccess, StepTable
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.rigid import rigid_limit_cycle_initial
@@ -143,7 +143,7 @@ class RigidEnergy:
 
 
 @dataclass
-class RigidRunResult:
+class RigidRunResult(StepAccess):
     """A rigid simulation and what it measured (the counterpart of :class:`biped_sim.simulate.RunResult`)."""
 
     config: Config
@@ -171,33 +171,6 @@ class RigidRunResult:
     def unit(self, si_unit: str) -> str:
         """This run's unit for an SI unit ('s' is '1 (g = l = 1)' for the simplest walker)."""
         return self.units[si_unit]
-
-    @property
-    def heel_strike_times(self) -> np.ndarray:
-        return self.strike_time
-
-    @property
-    def step_periods(self) -> np.ndarray:
-        """Periods of the completed steps (between consecutive heel strikes)."""
-        return self.steps.period[:-1] if len(self.steps.period) else self.steps.period
-
-    @property
-    def step_lengths(self) -> np.ndarray:
-        return self.steps.length[:-1] if len(self.steps.length) else self.steps.length
-
-    @property
-    def heel_strike_states(self) -> list[dict[str, float]]:
-        """Touchdown (pre-impact) leg angles and rates at each strike, 'stance' the leg landing (as compliant runs)."""
-        s = self.steps
-        return [
-            {
-                "stance_angle": float(s.stance_angle[k]),
-                "stance_rate": float(s.stance_rate[k]),
-                "swing_angle": float(s.swing_angle[k]),
-                "swing_rate": float(s.swing_rate[k]),
-            }
-            for k in range(len(s.strike_time))
-        ]
 
     @property
     def post_impact_states(self) -> list[dict[str, float]]:
@@ -322,10 +295,6 @@ def _energy_and_hip(
     return RigidEnergy(kinetic, potential, dissipated, residual), hip
 
 
-def _finite_or_none(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
-
-
 def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     """The summary.json content: the compliant keys where they make sense, plus ``dynamics`` and ``units``.
 
@@ -336,24 +305,14 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     """
     from biped_sim.io.provenance import package_version
 
-    steps, config, walker = result.steps, result.config, result.walker
-    periods, lengths = result.step_periods, result.step_lengths
-    span = float(steps.strike_time[-1] - steps.strike_time[0]) if len(steps.strike_time) > 1 else 0.0
+    config, walker = result.config, result.walker
     impact = float(result.energy.dissipated_impact[-1]) if len(result.time) else 0.0
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
         "stop_time": result.stop_time,
         "t_end": result.t_final,
-        "n_steps": len(steps.strike_time),
-        "step_times": steps.strike_time.tolist(),
-        "step_feet": steps.foot.tolist(),
-        "step_periods": periods.tolist(),
-        "step_lengths": lengths.tolist(),
-        "mean_step_period": _finite_or_none(float(np.mean(periods))) if len(periods) else None,
-        "last_step_period": _finite_or_none(float(periods[-1])) if len(periods) else None,
-        "mean_speed": float(np.sum(lengths)) / span if span > 0 else 0.0,
-        "slip_per_step": steps.slip[:-1].tolist() if len(steps.slip) else [],
+        **result.step_summary(),
         "energy_dissipated": {"impact": impact, "normal": impact, "friction": 0.0},
         "energy_residual_max": residual_max,
         "energy_residual_max_relative": residual_max / (walker.reference_mass * walker.gravity * walker.leg_length),

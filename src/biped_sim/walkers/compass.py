@@ -17,7 +17,13 @@ import numpy as np
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import ARMED, IMPACT_SPEED, TOUCHING, PlanarSystem, make_workspace, update_modes
-from biped_sim.walkers.model import BuiltModel, contact_arrays, contact_stiffness
+from biped_sim.walkers.model import (
+    BuiltModel,
+    contact_arrays,
+    contact_limits,
+    contact_stiffness,
+    static_contact_penetration,
+)
 
 
 def _leg_direction(theta: float) -> np.ndarray:
@@ -108,17 +114,10 @@ def build_compass(config: Config) -> BuiltModel:
         normal_params=normal,
         friction_params=friction,
         switches=switches,
-        limits=np.array(
-            [
-                config.contact.impact_velocity_floor,
-                config.simulation.fall_hip_height * l,
-                config.simulation.fall_leg_angle,
-            ]
-        ),
+        limits=contact_limits(config),
     )
 
-    exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
-    static_penetration = (total_mass * g * math.cos(gamma) / stiffness) ** (1.0 / exponent)
+    static_penetration = static_contact_penetration(config, total_mass, stiffness)
     coords, rates, hip_speed = sagittal_initial_state(config, (d, d), static_penetration)
     nf = 2
     y0 = np.zeros(12 + nf + 2)

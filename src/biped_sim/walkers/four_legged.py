@@ -23,15 +23,19 @@ roll and yaw stay at round-off unless the model is perturbed.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.spatial import ARMED, IMPACT_SPEED, TOUCHING, SpatialSystem, make_workspace, update_modes
 from biped_sim.walkers.compass import sagittal_initial_state
-from biped_sim.walkers.model import BuiltModel, contact_arrays, contact_stiffness
+from biped_sim.walkers.model import (
+    BuiltModel,
+    contact_arrays,
+    contact_limits,
+    contact_stiffness,
+    static_contact_penetration,
+)
 from biped_sim.walkers.spatial_compass import (
     DISC_AXIS,
     constraint_arrays,
@@ -60,7 +64,6 @@ def build_four_legged(config: Config) -> BuiltModel:
         raise ConfigError("formulation.kind", "walker.kind 'four_legged' needs the spatial formulation")
     w = config.walker
     l, R = w.leg_length, w.foot_radius
-    g, gamma = config.gravity, config.ground.slope
     spacings = (w.foot_spacing_outer, w.foot_spacing_inner)
     props = [pair_properties(config, s) for s in spacings]
     if min(np.linalg.eigvalsh(j).min() for _, _, j in props) <= 0.0:
@@ -95,17 +98,10 @@ def build_four_legged(config: Config) -> BuiltModel:
         normal_params=normal,
         friction_params=friction,
         switches=switches,
-        limits=np.array(
-            [
-                config.contact.impact_velocity_floor,
-                config.simulation.fall_hip_height * l,
-                config.simulation.fall_leg_angle,
-            ]
-        ),
+        limits=contact_limits(config),
     )
 
-    exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
-    static_penetration = (0.5 * total_mass * g * math.cos(gamma) / stiffness) ** (1.0 / exponent)
+    static_penetration = static_contact_penetration(config, 0.5 * total_mass, stiffness)
     coords, rates, hip_speed = sagittal_initial_state(config, (offsets[0], offsets[1]), static_penetration)
     q, qd = sagittal_to_spatial(coords, rates)
     nb, nf = 2, 4

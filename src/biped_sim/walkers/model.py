@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -79,3 +80,21 @@ def contact_arrays(
         [NORMAL_LAWS[c.model].index, FRICTION_LAWS[f.model].index, 1 if c.scuffing_guard else 0], dtype=np.int64
     )
     return normal, friction, switches
+
+
+def contact_limits(config: Config) -> np.ndarray:
+    """The kernels' ``limits`` array: impact velocity floor, fall hip height [m], fall leg angle [rad]."""
+    return np.array(
+        [
+            config.contact.impact_velocity_floor,
+            config.simulation.fall_hip_height * config.walker.leg_length,
+            config.simulation.fall_leg_angle,
+        ]
+    )
+
+
+def static_contact_penetration(config: Config, load_mass: float, stiffness: float) -> float:
+    """Penetration [m] at which one foot carries ``load_mass`` on the slope: K delta^n = m g cos(gamma)."""
+    exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
+    weight = load_mass * config.gravity * math.cos(config.ground.slope)
+    return (weight / stiffness) ** (1.0 / exponent)
