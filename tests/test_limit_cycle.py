@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -173,3 +175,17 @@ def test_compliant_newton_finds_the_unstable_goswami_short_step_gait() -> None:
     assert cycle.converged and not cycle.stable
     assert cycle.step_period == pytest.approx(0.5819, abs=1e-3)  # rigid: 0.58203 s
     assert cycle.max_multiplier_modulus == pytest.approx(4.28, abs=0.05)  # rigid: 4.288
+
+
+def test_bifurcation_detects_period_doubling_and_writes_csv_and_figures(tmp_path: Path) -> None:
+    """Simplest walker across Garcia's flip (0.0151): period 1 below it, period 2 in the brute force above it."""
+    out = tmp_path / "bif"
+    args = ["bifurcation", str(CONFIGS / "simplest_walker.yaml"), "--from", "0.012", "--to", "0.016", "--n", "3"]
+    result = CliRunner().invoke(app, [*args, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    continuation = pd.read_csv(out / "bifurcation.csv")
+    assert list(continuation["stable"]) == [True, True, False]  # the flip lies between 0.014 and 0.016
+    brute = pd.read_csv(out / "brute_force.csv")
+    distinct = brute.groupby("slope")["step_period"].apply(lambda p: len(np.unique(np.round(p, 6))))
+    assert list(distinct) == [1, 1, 2]
+    assert all((out / f"bifurcation.{ext}").stat().st_size > 0 for ext in ("png", "svg"))
