@@ -172,7 +172,7 @@ def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[f
 
 
 @njit(cache=True)
-def _cholesky_solve(a: np.ndarray, b: np.ndarray, m: int) -> None:
+def cholesky_solve(a: np.ndarray, b: np.ndarray, m: int) -> None:
     """Solve a x = b in place for a symmetric positive definite m x m matrix (x overwrites b)."""
     for j in range(m):
         d = a[j, j]
@@ -249,7 +249,7 @@ def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspa
                 s += phi_q[k, c] * phi_q[l, c] * _inverse_mass(system, c)
             schur[k, l] = s
             schur[l, k] = s
-    _cholesky_solve(schur, lam, m)
+    cholesky_solve(schur, lam, m)
     for c in range(n):
         v = force[c]
         for k in range(m):

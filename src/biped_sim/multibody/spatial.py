@@ -67,7 +67,7 @@ from biped_sim.multibody.planar import (
     NORMAL_MODEL,
     SCUFFING_GUARD,
     TOUCHING,
-    _cholesky_solve,
+    cholesky_solve,
 )
 
 # constraint primitives and their row counts
@@ -496,7 +496,7 @@ def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Worksp
                 acc += phi_q[r, c] * x[c, s_]
             schur[r, s_] = acc
             schur[s_, r] = acc
-    _cholesky_solve(schur, lam, m)
+    cholesky_solve(schur, lam, m)
     for c in range(n):
         v = qdd[c]
         for r in range(m):

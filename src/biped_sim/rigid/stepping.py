@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from biped_sim.rigid.models import RigidWalker
 
@@ -78,6 +77,8 @@ def rigid_step(walker: RigidWalker, x_start: np.ndarray, sample_rate: float | No
     The samples fall on the grid k / sample_rate of the step's own clock (t = 0 at its start) and are kept
     whatever the step's outcome (strike, fall or stall).
     """
+    from scipy.integrate import solve_ivp  # imported here: scipy.integrate costs 0.3 s of every CLI start-up
+
     scale = math.sqrt(walker.leg_length / walker.gravity)
     t_limit = MAX_STEP_TIME * scale
     fall_events = [_guard_event(lambda x, i=i: walker.fall_leg_angle - abs(x[i]), 0.0) for i in range(walker.n_q)] + [
