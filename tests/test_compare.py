@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from biped_sim.analysis.compare import compare_periods, model_step_periods, stats_table, step_table
 from biped_sim.io.references import load_reference
+from biped_sim.studies.compare import compare_periods, model_step_periods, stats_table, step_table
 from biped_sim.sweep import load_sweep, run_sweep
 
 from .conftest import CONFIGS, DEFAULT_CONFIG

@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from biped_sim.analysis.drop_test import DROP_TEST_RESTITUTIONS, drop_test
 from biped_sim.contact import friction as fr
 from biped_sim.contact.normal import (
     NORMAL_LAWS,
@@ -19,6 +18,7 @@ from biped_sim.contact.normal import (
     normal_force,
     normal_parameters,
 )
+from biped_sim.studies.drop_test import DROP_TEST_RESTITUTIONS, drop_test
 
 
 def test_hertz_stiffness_formula() -> None:

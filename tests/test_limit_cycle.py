@@ -11,17 +11,13 @@ import pytest
 from typer.testing import CliRunner
 
 from biped_sim import load_config
-from biped_sim.analysis.limit_cycle import (
-    LimitCycle,
-    TouchdownSection,
-    compliant_limit_cycle,
-    rigid_limit_cycle,
-    simplest_variational_jacobian,
-)
 from biped_sim.cli import app
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.planar import constraint_violation, foot_kinematics
+from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker
+from biped_sim.studies.continuation import simplest_variational_jacobian
+from biped_sim.studies.limit_cycle import TouchdownSection, compliant_limit_cycle
 from biped_sim.walkers import build_model
 from tests.conftest import CONFIGS, DEFAULT_CONFIG
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from biped_sim import config_from_dict, load_config
-from biped_sim.analysis.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.models import CompassChain, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from tests.conftest import CONFIGS
@@ -109,7 +109,8 @@ def test_rimless_wheel_analytic_fixed_point_and_multiplier(spokes: int, slope: f
 
 def test_rigid_dynamics_is_simulated_by_the_rigid_model() -> None:
     from biped_sim import simulate
-    from biped_sim.rigid.run import INTEGRATOR, RigidRunResult
+    from biped_sim.rigid.start import INTEGRATOR
+    from biped_sim.simulate.rigid import RigidRunResult
 
     result = simulate(load_config(CONFIGS / "round_foot_walker.yaml", ["dynamics=rigid", "simulation.t_end=1"]))
     assert isinstance(result, RigidRunResult) and result.summary["integrator"] == INTEGRATOR

@@ -14,11 +14,12 @@ import pytest
 from typer.testing import CliRunner
 
 from biped_sim import load_config, simulate
-from biped_sim.analysis.limit_cycle import rigid_limit_cycle
 from biped_sim.cli import app
 from biped_sim.errors import ConfigError
 from biped_sim.report import build_report
-from biped_sim.rigid.run import INTEGRATOR, RigidRunResult
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.start import INTEGRATOR
+from biped_sim.simulate.rigid import RigidRunResult
 from biped_sim.sweep import check_buildable, load_sweep, run_sweep
 from tests.conftest import CONFIGS
 from tests.test_compare import fictitious_reference

@@ -192,7 +192,7 @@ def test_four_legged_config_errors(overrides: list[str], field: str) -> None:
 
 
 def test_constraint_study_figure(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from biped_sim.analysis.constraint_study import study_runs, write_constraint_study
+    from biped_sim.report.constraint_study import study_runs, write_constraint_study
 
     base = [*SPATIAL, "walker.kind=four_legged", "simulation.t_end=0.3", "integrator.method=rk2"]
     for gains in (0, 10):

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from biped_sim.analysis.validation import load_rigid_references, run_validation
+from biped_sim.studies.validation import load_rigid_references, run_validation
 
 
 def test_rigid_references_carry_their_sources() -> None:

@@ -1,9 +1,11 @@
-"""Where numba caches the compiled kernels: a directory keyed by the package's source hash.
+"""Where numba caches the compiled kernels: a directory keyed by a hash of the compiled code's sources.
 
-Numba invalidates a cached function only when its own file changes, not when a function it
-calls (and inlined) in another file does: an edited force law would otherwise keep running
-its old compiled code inside the cached integrator loop. Keying the cache directory on a hash
-of every source file of the package makes any edit start a fresh cache. Must run before any
+Numba invalidates a cached function only when its own file changes, not when a function it calls (and
+inlined) in another file does: an edited force law would otherwise keep running its old compiled code
+inside the cached integrator loop. Keying the cache directory on a hash of every source that compiled
+code is built from makes any such edit start a fresh cache, while an edit of plain Python (plots, CLI,
+reports) keeps it. Those sources are the packages of the compiled core (whose module constants are
+frozen into the kernels too) and any other module that imports numba. Must run before any
 ``@njit(cache=True)`` function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user wins.
 """
 
@@ -11,17 +13,31 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 from pathlib import Path
 
 import numba
 
+PACKAGE = Path(__file__).resolve().parent
+COMPILED_PACKAGES = ("contact", "multibody", "integrate")
+_IMPORTS_NUMBA = re.compile(r"^\s*(from numba\b|import numba\b)", re.M)
+
+
+def compiled_sources() -> list[Path]:
+    """The source files that compiled code is built from, in path order."""
+    paths = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        in_core = path.relative_to(PACKAGE).parts[0] in COMPILED_PACKAGES
+        if in_core or _IMPORTS_NUMBA.search(path.read_text()):
+            paths.append(path)
+    return paths
+
 
 def source_hash() -> str:
-    """SHA-1 (12 hex digits) of the package's Python sources, in path order."""
-    root = Path(__file__).resolve().parent
+    """SHA-1 (12 hex digits) of the compiled code's sources (paths and contents)."""
     digest = hashlib.sha1(usedforsecurity=False)
-    for path in sorted(root.rglob("*.py")):
-        digest.update(str(path.relative_to(root)).encode())
+    for path in compiled_sources():
+        digest.update(str(path.relative_to(PACKAGE)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 

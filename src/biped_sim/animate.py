@@ -22,6 +22,7 @@ from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from biped_sim.config import InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import RunData
 from biped_sim.plots import figure_style
@@ -64,7 +65,9 @@ class WalkerDrawing:
     """
 
     def __init__(self, run: RunData, fig: Figure) -> None:
-        model = build_model(run.config)
+        angles, rates = run.leg_angles()[0], run.leg_rates()[0]
+        start = InitialState(stance_angle=angles[0], stance_rate=rates[0], swing_angle=angles[1], swing_rate=rates[1])
+        model = build_model(run.config, start)  # the run's own start: the same bodies and feet
         self.run = run
         self.l = model.leg_length
         self.radius = run.config.walker.foot_radius

@@ -20,6 +20,8 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from biped_sim.contact.friction import FRICTION_LAWS
+from biped_sim.contact.normal import NORMAL_LAWS
 from biped_sim.errors import ConfigError
 
 
@@ -99,8 +101,9 @@ class MaterialsConfig(_Strict):
     )
 
 
-NormalModelName = Literal["hertz", "kelvin_voigt", "hunt_crossley", "lankarani_nikravesh", "flores"]
-FrictionModelName = Literal["none", "coulomb", "threlfall", "ambrosio", "bengisu_akay", "brown_mcphee", "lugre"]
+# the law names come from the registries: a new law is one function and one registry line
+NormalModelName = Literal[tuple(NORMAL_LAWS)]  # type: ignore[valid-type]
+FrictionModelName = Literal[tuple(FRICTION_LAWS)]  # type: ignore[valid-type]
 IntegratorName = Literal["euler", "rk2", "rk4", "dopri5", "dop853", "radau", "bdf"]
 
 

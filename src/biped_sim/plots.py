@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 
 from biped_sim.io.atomic import write_with
 from biped_sim.io.trajectory import RunData
+from biped_sim.studies.bifurcation import BifurcationDiagram
 
 COLUMN_WIDTH_IN = 3.5
 PANEL_HEIGHT_IN = 2.1
@@ -375,4 +376,27 @@ def comparison_figure(
     add_legend(fig, top, len(series) + 1)
     if published:
         bottom.legend(frameon=False)
+    return fig
+
+
+@styled
+def bifurcation_figure(diagram: BifurcationDiagram) -> Figure:
+    """Steady step periods (brute force) and the period-1 branch (stable, unstable) against the slope."""
+    fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6))
+    ax = fig.add_subplot()
+    xs = [s for s, periods in diagram.brute for _ in periods]
+    ys = [p for _, periods in diagram.brute for p in periods]
+    ax.plot(xs, ys, ".", color="0.3", markersize=1.5, label="steady state (brute force)")
+    stable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and c.stable]
+    unstable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and not c.stable]
+    if stable:
+        ax.plot(*zip(*stable, strict=True), "-", color="C0", label="period 1, stable")
+    if unstable:
+        ax.plot(*zip(*unstable, strict=True), "--", color="C3", label="period 1, unstable")
+    if diagram.period_doubling_slope is not None:
+        ax.axvline(diagram.period_doubling_slope, color="0.5", linewidth=0.6)
+    ax.set_xlabel("slope [rad]")
+    ax.set_ylabel("step period")
+    ax.legend(loc="best")
+    fig.tight_layout()
     return fig

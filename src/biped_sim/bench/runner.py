@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import platform
 import statistics
 import subprocess
 import sys
@@ -29,13 +30,16 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
+import scipy
 from numba import njit
 
 from biped_sim.bench.baseline import integrate_baseline
 from biped_sim.config import Config, load_config
 from biped_sim.integrate.driver import Integration, integrate_model
 from biped_sim.multibody.dispatch import make_workspace, system_rhs
+from biped_sim.sweep import load_sweep, local_executor, run_sweep
 from biped_sim.walkers import BuiltModel, build_model
 
 PERIOD_TOLERANCE = 1e-4  # relative step-period error the fixed-step rows must meet
@@ -340,8 +344,6 @@ def sweep_throughput(config_path: Path, runs: int, t_end: float, jobs: tuple[int
     Timed from creating the process pool to the last run written, so worker start-up is included
     (with the compiled code already in the on-disk cache, as in any sweep but the first after an edit).
     """
-    from biped_sim.sweep import load_sweep, local_executor, run_sweep
-
     result: dict[str, Any] = {"runs": runs, "t_end": t_end, "per_jobs": {}}
     with tempfile.TemporaryDirectory(prefix="biped-sim-bench-sweep-") as tmp:
         sweep_file = Path(tmp) / "sweep.yaml"
@@ -422,7 +424,7 @@ def mujoco_comparison(
 ) -> dict[str, Any]:
     """MuJoCo's real-time factor and step period for the same walker (or why it was not run)."""
     try:
-        from biped_sim.bench.mujoco_walker import run_mujoco_bench
+        from biped_sim.bench.mujoco_walker import run_mujoco_bench  # optional extra (biped-sim[bench])
     except ImportError as exc:
         return {"available": False, "reason": str(exc)}
     try:
@@ -433,11 +435,6 @@ def mujoco_comparison(
 
 def environment() -> dict[str, Any]:
     """Versions and machine facts printed with the table."""
-    import platform
-
-    import numba
-    import scipy
-
     return {
         "python": platform.python_version(),
         "numpy": np.__version__,

@@ -55,7 +55,7 @@ def limit_cycle_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
-    from biped_sim.analysis.limit_cycle import limit_cycle
+    from biped_sim.studies.limit_cycle import limit_cycle
 
     config = load(config_path, set_)
     cycle = limit_cycle(config, _parse_guess(guess), settle_steps)
@@ -92,7 +92,7 @@ def converge_command(
     """The compliant gait against the rigid gait of the same walker as the contact stiffens."""
     from dataclasses import asdict
 
-    from biped_sim.analysis.limit_cycle import converge
+    from biped_sim.studies.convergence import converge
 
     config = load(config_path, set_)
     if config.walker.kind != "compass":
@@ -140,7 +140,8 @@ def bifurcation_command(
     out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/bifurcation"),
 ) -> None:
     """Continuation of the rigid period-1 gait and brute-force steady states against the slope (CSV, PNG, SVG)."""
-    from biped_sim.analysis.bifurcation import bifurcation_diagram, write_bifurcation
+    from biped_sim.plots import bifurcation_figure, save_figure
+    from biped_sim.studies.bifurcation import bifurcation_diagram, write_bifurcation
 
     if param != "ground.slope":
         raise ConfigError("--param", "only ground.slope is supported")
@@ -150,6 +151,7 @@ def bifurcation_command(
     t0 = time.perf_counter()
     diagram = bifurcation_diagram(config, start, stop, n)
     write_bifurcation(diagram, out)
+    save_figure(bifurcation_figure(diagram), out, "bifurcation")
     flip = diagram.period_doubling_slope
     Console().print(
         f"{n} slopes in {time.perf_counter() - t0:.1f} s; period doubling at slope "
@@ -165,7 +167,7 @@ def validate_command(
     out: Annotated[Path, typer.Option("--out", help="Report directory.")] = Path("results/validation"),
 ) -> None:
     """Every physics check against published or analytic numbers; writes report.md; exit 1 on any failure."""
-    from biped_sim.analysis.validation import run_validation
+    from biped_sim.studies.validation import run_validation
 
     console = Console()
     checks, extras = run_validation(out, progress=lambda stage: console.print(f"checking: {stage}", highlight=False))

@@ -185,8 +185,8 @@ def _compare_targets(target: Path, set_: list[str] | None, skip: int) -> tuple[l
     A config file is simulated (nothing else is written); a run directory or a sweep directory
     is read from disk.
     """
-    from biped_sim.analysis.compare import model_step_periods
     from biped_sim.io.trajectory import load_summary
+    from biped_sim.studies.compare import model_step_periods
 
     if target.is_dir():
         if set_:
@@ -226,9 +226,9 @@ def compare_command(
     out: Annotated[Path | None, typer.Option("--out", help="Output directory.")] = None,
 ) -> None:
     """Per-step error table (Markdown, CSV, LaTeX) and figure of model step periods against a reference."""
-    from biped_sim.analysis.compare import compare_periods, stats_table, step_table
     from biped_sim.io.references import load_reference
     from biped_sim.plots import comparison_figure, save_figure
+    from biped_sim.studies.compare import compare_periods, stats_table, step_table
 
     if reference is None:
         raise ConfigError("--reference", NO_REFERENCE)

@@ -16,7 +16,7 @@ from rich.table import Table
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
 from biped_sim.config import default_output_dir
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.run import NONDIMENSIONAL, RigidRunResult
+from biped_sim.rigid.start import NONDIMENSIONAL
 from biped_sim.simulate import RunResult, prepare_model, simulate
 
 
@@ -34,7 +34,7 @@ def _quantity(value: float, digits: int, unit: str) -> str:
     return f"{value:.{digits}f}" + ("" if unit == NONDIMENSIONAL else f" {unit}")
 
 
-def step_table_rich(result: RunResult | RigidRunResult) -> Table:
+def step_table_rich(result: RunResult) -> Table:
     """The per-step table printed after a run (a rigid run's angles are the touchdown ones, as compliant runs')."""
     seconds, metres = result.unit("s"), result.unit("m")
     title = "Steps" if seconds != NONDIMENSIONAL else "Steps (nondimensional: g = l = 1)"
@@ -65,7 +65,7 @@ def step_table_rich(result: RunResult | RigidRunResult) -> Table:
     return table
 
 
-def summary_line(result: RunResult | RigidRunResult) -> str:
+def summary_line(result: RunResult) -> str:
     """One line: status, steps, mean period, speed, energy residual, constraint violation (compliant) or impact
     losses (rigid), cost."""
     s = result.summary
@@ -77,14 +77,12 @@ def summary_line(result: RunResult | RigidRunResult) -> str:
         if period is not None
         else ""
     )
-    if isinstance(result, RigidRunResult):
-        specific = f"impact losses {_quantity(s['energy_dissipated']['impact'], 4, result.unit('J'))}, "
+    model = ""
+    if s.get("dynamics") == "rigid":
         model = " (rigid model" + (", nondimensional: g = l = 1)" if seconds == NONDIMENSIONAL else ")")
-    else:
-        specific, model = f"|Phi| <= {s['constraint_violation_max']['position']:.1e} m, ", ""
     return (
         f"{status}: {s['n_steps']} steps, {gait}energy residual {s['energy_residual_max_relative']:.1e} m g l, "
-        f"{specific}{s['rhs_evals']} RHS evaluations in {s['wall_time_s']:.2f} s{model}"
+        f"{result.integrity_text()}, {s['rhs_evals']} RHS evaluations in {s['wall_time_s']:.2f} s{model}"
     )
 
 
@@ -99,8 +97,6 @@ def run_command(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar and no step table.")] = False,
 ) -> None:
     """Simulate one walker and write trajectory.h5, summary.json and steps.csv."""
-    from biped_sim.io.results import write_run
-
     config = load(config_path, set_)
     out_dir = out or default_output_dir(config, config_path)
     model = prepare_model(config)  # validates geometry and the initial state before anything is written
@@ -120,7 +116,7 @@ def run_command(
             result = simulate(config, model=model, progress=lambda t: bar.update(task, completed=t))
     else:
         result = simulate(config, model=model)
-    write_run(result, out_dir)
+    result.write(out_dir)
     if not quiet:
         console.print(step_table_rich(result))
     console.print(summary_line(result), highlight=False, soft_wrap=True)
@@ -137,8 +133,8 @@ def drop_test_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Drop a disc on the ground without friction: effective restitution of each normal law."""
-    from biped_sim.analysis.drop_test import DROP_TEST_RESTITUTIONS, drop_test_table
     from biped_sim.contact.normal import NORMAL_LAWS
+    from biped_sim.studies.drop_test import DROP_TEST_RESTITUTIONS, drop_test_table
 
     models = model or list(NORMAL_LAWS)
     for name in models:

@@ -123,7 +123,7 @@ def integrate_model(
     ny, nf = y.shape[0], modes.shape[0]
     rec, interval, n_strikes = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
     if integrator.method in ("radau", "bdf"):
-        from biped_sim.integrate.stiff import integrate_stiff
+        from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
 
         integrate_stiff(system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress)
     else:

@@ -99,7 +99,7 @@ _TABLEAUS: dict[str, Tableau] = {
 
 @functools.cache
 def _dop853() -> Tableau:
-    from scipy.integrate._ivp.rk import DOP853
+    from scipy.integrate._ivp.rk import DOP853  # here: scipy.integrate adds 0.3 s to start-up
 
     return _tableau(
         DOP853_KIND,

@@ -1,4 +1,4 @@
-"""Reading a finished run directory back: trajectory.h5 (layout in :mod:`biped_sim.io.results`) and summary.json.
+"""Reading a finished run directory back: trajectory.h5 (layout in :mod:`biped_sim.io.run_files`) and summary.json.
 
 Figures, animations, reports and comparisons all read runs through :func:`load_run`, so a run
 directory is the one interface between simulating and presenting. A rigid run (``dynamics: rigid``) has

@@ -15,7 +15,7 @@ Interface of a formulation (all compiled, allocation-free):
   (the touchdown of a leading foot is a heel strike);
 * Python side: ``make_workspace(system)`` (a NamedTuple with at least an int64 ``onset`` array,
   one entry per foot), ``event_count(system)``, and ``measures``: a :class:`Measures` of the
-  per-sample measurements that :mod:`biped_sim.analysis.gait` takes of a run (kinematics,
+  per-sample measurements that :mod:`biped_sim.measure` takes of a run (kinematics,
   energy, constraint violation, contact channels), so that post-processing serves every formulation.
 """
 

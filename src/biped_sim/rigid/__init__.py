@@ -1,20 +1,7 @@
-"""Rigid (impulsive-impact) reference models of the walkers: flow, heel strike, impact map, runs.
+"""Rigid (impulsive-impact) reference models of the walkers: flow, heel strike, impact map, limit cycles.
 
 ``models`` holds the walkers (one multibody description for the compass and the rimless wheel, MODEL.md
 8's equations for Garcia's simplest walker), ``stepping`` the event-located integration of a step,
-``run`` a rigid run with the files of ``biped-sim run``.
+``limit_cycle`` the step map's fixed points and multipliers, ``start`` a rigid run's validated start.
+The rigid run itself (many steps, measured and written) is :mod:`biped_sim.simulate.rigid`.
 """
-
-from __future__ import annotations
-
-from biped_sim.config import Config
-
-
-def rigid_limit_cycle_initial(config: Config) -> dict[str, float]:
-    """The rigid model's period-1 fixed point (just after heel strike) as the four InitialState keys."""
-    from biped_sim.analysis.limit_cycle import rigid_limit_cycle_initial as fixed_point
-
-    return fixed_point(config)
-
-
-__all__ = ["rigid_limit_cycle_initial"]

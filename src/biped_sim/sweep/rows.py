@@ -1,6 +1,6 @@
 """One row of ``sweep.csv`` per run: its swept values, its settings and what it measured.
 
-The metrics come from the run's summary.json (and two maxima from its trajectory.h5), so a row
+The metrics come from the run's summary.json alone (never its trajectory.h5), so a row
 built by a worker right after its run and a row rebuilt from disk when a sweep resumes are the
 same. Column names carry their units (``_s``, ``_m``, ``_J``...) so the table reads on its own.
 """
@@ -8,14 +8,12 @@ same. Column names carry their units (``_s``, ``_m``, ``_J``...) so the table re
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from biped_sim.config import Config
-from biped_sim.rigid.run import INTEGRATOR
+from biped_sim.rigid.start import INTEGRATOR
 
 # Settings that the report's comparison tables group by; always present, swept or not.
 SETTING_COLUMNS = (
@@ -92,28 +90,14 @@ def _number(value: Any) -> float:
     return math.nan if value is None else float(value)
 
 
-def contact_maxima(trajectory: Path) -> tuple[float, float]:
-    """(largest penetration [m], largest normal force [N]) over the run, from trajectory.h5 (NaN for a rigid run,
-    which has no contact forces)."""
-    with h5py.File(trajectory, "r") as f:
-        if "contact" not in f:
-            return math.nan, math.nan
-        penetration = f["contact/penetration"][:]
-        normal = f["contact/normal_force"][:]
-    if penetration.size == 0:
-        return math.nan, math.nan
-    return float(np.max(penetration)), float(np.max(normal))
-
-
-def metrics_from_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any]:
-    """The metric columns of a finished run (summary.json content plus trajectory.h5 maxima).
+def metrics_from_summary(summary: dict[str, Any]) -> dict[str, Any]:
+    """The metric columns of a finished run, from its summary.json alone.
 
     A rigid run's summary has no ``rejected_steps`` (scipy does not report them): NaN. Its impact losses are its
     ``energy_dissipated.normal`` (the rigid limit of normal damping) and its constraint violations are 0.
     """
     periods = [p for p in summary["step_periods"] if p is not None]
     slips = [abs(s) for s in summary["slip_per_step"] if s is not None and math.isfinite(s)]
-    penetration, peak_force = contact_maxima(run_dir / "trajectory.h5")
     return {
         "status": summary["status"],
         "n_steps": summary["n_steps"],
@@ -129,8 +113,8 @@ def metrics_from_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, An
         "energy_residual_rel": _number(summary["energy_residual_max_relative"]),
         "violation_position_max_m": _number(summary["constraint_violation_max"]["position"]),
         "violation_velocity_max_m_s": _number(summary["constraint_violation_max"]["velocity"]),
-        "max_penetration_m": penetration,
-        "peak_normal_force_N": peak_force,
+        "max_penetration_m": _number(summary.get("max_penetration")),
+        "peak_normal_force_N": _number(summary.get("peak_normal_force")),
         "wall_time_s": _number(summary["wall_time_s"]),
         "rhs_evals": summary["rhs_evals"],
         "accepted_steps": summary["accepted_steps"],

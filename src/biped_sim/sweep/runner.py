@@ -98,7 +98,7 @@ def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
     Workers must see the same file system as this process (they write the run directories).
     """
     try:
-        from distributed import Client, LocalCluster
+        from distributed import Client, LocalCluster  # optional extra (biped-sim[dask])
     except ImportError:
         raise ConfigError("--executor", "dask needs the optional extra: pip install 'biped-sim[dask]'") from None
     with contextlib.ExitStack() as stack:
@@ -181,8 +181,6 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     Any exception is recorded (error.json and the returned row) rather than raised, so one bad
     run never stops a sweep.
     """
-    from biped_sim.io.results import write_run
-
     run_dir = Path(task.run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     _clear_unfinished(run_dir)
@@ -190,8 +188,8 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         config = Config.model_validate(task.config)
         warm_up(config)
         result = simulate(config)
-        write_run(result, run_dir)
-        return metrics_from_summary(result.summary, run_dir)
+        result.write(run_dir)
+        return metrics_from_summary(result.summary)
     except Exception as exc:
         message = f"{type(exc).__name__}: {exc}".splitlines()[0]
         write_json_atomic(
@@ -316,7 +314,7 @@ def run_sweep(
         run_dir = sweep_dir / "runs" / run.name
         summary = finished_summary(run_dir, run.config_hash) if resume else None
         if summary is not None:
-            rows.append(_row(run, metrics_from_summary(summary, run_dir)))
+            rows.append(_row(run, metrics_from_summary(summary)))
             progress.skipped += 1
         else:
             rows.append(_row(run, unfinished_metrics("pending", "")))

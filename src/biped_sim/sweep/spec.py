@@ -34,6 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from biped_sim.config import Config, apply_override, config_from_dict, parse_yaml, set_dotted
 from biped_sim.errors import ConfigError
+from biped_sim.simulate import prepare_model
 
 _DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 STEM_MAX_LENGTH = 96
@@ -294,8 +295,6 @@ def expand(spec: SweepSpec, source: Path, overrides: list[str] | tuple[str, ...]
 def check_buildable(sweep: Sweep) -> None:
     """Build every run's walker once (geometry, initial state; the rigid walker for ``dynamics: rigid``): a bad run
     stops the sweep before it starts."""
-    from biped_sim.simulate import prepare_model
-
     for run in sweep.runs:
         try:
             prepare_model(run.config)

@@ -7,24 +7,32 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from biped_sim.config import Config
+from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.four_legged import build_four_legged
 from biped_sim.walkers.model import BuiltModel
 from biped_sim.walkers.spatial_compass import build_spatial_compass
 
-BUILDERS: dict[str, Callable[[Config], BuiltModel]] = {
+BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
     "compass": build_compass,
 }
-SPATIAL_BUILDERS: dict[str, Callable[[Config], BuiltModel]] = {
+SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
     "compass": build_spatial_compass,
     "four_legged": build_four_legged,
 }
 
 
-def build_model(config: Config) -> BuiltModel:
-    """Build the compliant multibody model of ``config.walker`` in ``config.formulation.kind``."""
+def build_model(config: Config, initial: InitialState | None = None) -> BuiltModel:
+    """Build the compliant multibody model of ``config.walker`` in ``config.formulation.kind``.
+
+    ``initial`` is the start (leg angles and rates); by default the config's own. A config that starts on
+    the rigid limit cycle is resolved by :func:`biped_sim.simulate.prepare_model`, not here.
+    """
+    if initial is None:
+        if not isinstance(config.simulation.initial, InitialState):
+            raise ValueError("build_model: simulation.initial is rigid_limit_cycle; use simulate.prepare_model")
+        initial = config.simulation.initial
     spatial = config.formulation.kind == "spatial"
     builder = (SPATIAL_BUILDERS if spatial else BUILDERS).get(config.walker.kind)
     if builder is None:
@@ -32,7 +40,7 @@ def build_model(config: Config) -> BuiltModel:
             "walker.kind",
             f"{config.walker.kind!r} has no compliant-contact builder in the {config.formulation.kind} formulation",
         )
-    return builder(config)
+    return builder(config, initial)
 
 
 __all__ = ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model"]

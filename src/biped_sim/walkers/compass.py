@@ -37,20 +37,10 @@ def _rolling_velocity(omega: float, point: np.ndarray, pivot: np.ndarray) -> np.
     return omega * np.array([-rel[1], rel[0]])
 
 
-def resolve_initial(config: Config) -> InitialState:
-    """The initial leg state: as configured, or the rigid model's limit cycle."""
-    initial = config.simulation.initial
-    if initial == "rigid_limit_cycle":
-        from biped_sim.rigid import rigid_limit_cycle_initial
-
-        return InitialState(**rigid_limit_cycle_initial(config))
-    return initial
-
-
 def sagittal_initial_state(
-    config: Config, com_offsets: tuple[float, float], static_penetration: float
+    config: Config, init: InitialState, com_offsets: tuple[float, float], static_penetration: float
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """Initial planar state of a stance and a swing leg rolling on the stance foot (README conventions).
+    """Initial planar state of a stance and a swing leg rolling on the stance foot (README conventions), from ``init``.
 
     ``com_offsets`` are the distances from the hip down to each leg body's centre of mass. Returns
     (coords, rates, hip speed): coords (2, 3) = (x, y, phi) of the stance and swing bodies, rates
@@ -58,7 +48,6 @@ def sagittal_initial_state(
     foot in the ground while the scuffing guard is off.
     """
     l, R = config.walker.leg_length, config.walker.foot_radius
-    init = resolve_initial(config)
     for name in ("stance_angle", "swing_angle"):
         if abs(getattr(init, name)) >= config.simulation.fall_leg_angle:
             raise ConfigError(
@@ -85,7 +74,7 @@ def sagittal_initial_state(
     return coords, rates, float(np.hypot(*v_hip))
 
 
-def build_compass(config: Config) -> BuiltModel:
+def build_compass(config: Config, initial: InitialState) -> BuiltModel:
     """Bodies, joint and feet of the compass walker, and its initial state rolling on its stance foot."""
     w = config.walker
     l, R, m, c, I, M_H = w.leg_length, w.foot_radius, w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.hip_mass
@@ -118,7 +107,7 @@ def build_compass(config: Config) -> BuiltModel:
     )
 
     static_penetration = static_contact_penetration(config, total_mass, stiffness)
-    coords, rates, hip_speed = sagittal_initial_state(config, (d, d), static_penetration)
+    coords, rates, hip_speed = sagittal_initial_state(config, initial, (d, d), static_penetration)
     nf = 2
     y0 = np.zeros(12 + nf + 2)
     y0[0:6] = coords.ravel()

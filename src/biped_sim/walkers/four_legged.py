@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.spatial import ARMED, IMPACT_SPEED, TOUCHING, SpatialSystem, make_workspace, update_modes
 from biped_sim.walkers.compass import sagittal_initial_state
@@ -58,7 +58,7 @@ def pair_properties(config: Config, spacing: float) -> tuple[float, float, np.nd
     return mass, d, np.diag([j_xx, j_yy, j_zz])
 
 
-def build_four_legged(config: Config) -> BuiltModel:
+def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     """Bodies, hip axle and four feet of the four-legged walker, standing on its outer pair."""
     if config.formulation.kind != "spatial":
         raise ConfigError("formulation.kind", "walker.kind 'four_legged' needs the spatial formulation")
@@ -102,7 +102,7 @@ def build_four_legged(config: Config) -> BuiltModel:
     )
 
     static_penetration = static_contact_penetration(config, 0.5 * total_mass, stiffness)
-    coords, rates, hip_speed = sagittal_initial_state(config, (offsets[0], offsets[1]), static_penetration)
+    coords, rates, hip_speed = sagittal_initial_state(config, initial, (offsets[0], offsets[1]), static_penetration)
     q, qd = sagittal_to_spatial(coords, rates)
     nb, nf = 2, 4
     y0 = np.zeros(14 * nb + 2 * nf + 2)

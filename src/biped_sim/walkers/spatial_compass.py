@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, InitialState
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.model import BuiltModel
@@ -74,9 +74,9 @@ def spatial_gravity(config: Config) -> np.ndarray:
     return np.array([g * math.sin(gamma), -g * math.cos(gamma), 0.0])
 
 
-def build_spatial_compass(config: Config) -> BuiltModel:
+def build_spatial_compass(config: Config, initial: InitialState) -> BuiltModel:
     """The compass walker of :func:`build_compass` in Euler parameters, kept planar by a planar joint."""
-    planar = build_compass(config)
+    planar = build_compass(config, initial)
     ps = planar.system
     nb, nf = 2, 2
     d = float(ps.joint_points[0, 1])

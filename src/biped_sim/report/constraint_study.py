@@ -7,7 +7,7 @@ Euler-parameter normalisation violation ||p.p - 1|| against time on log scales, 
 pair of gains (alpha = beta = 0 is the standard method)::
 
     biped-sim sweep configs/sweeps/constraint_violation.yaml
-    python -m biped_sim.analysis.constraint_study results/sweeps/constraint_violation docs/figures
+    python -m biped_sim.report.constraint_study results/sweeps/constraint_violation docs/figures
 """
 
 from __future__ import annotations
@@ -99,9 +99,9 @@ def write_constraint_study(sweep_dir: Path, out_dir: Path) -> list[Path]:
 
 
 def main(argv: list[str]) -> int:
-    """``python -m biped_sim.analysis.constraint_study SWEEP_DIR [OUT_DIR]`` (default OUT_DIR: docs/figures)."""
+    """``python -m biped_sim.report.constraint_study SWEEP_DIR [OUT_DIR]`` (default OUT_DIR: docs/figures)."""
     if len(argv) not in (1, 2):
-        print("usage: python -m biped_sim.analysis.constraint_study SWEEP_DIR [OUT_DIR]", file=sys.stderr)
+        print("usage: python -m biped_sim.report.constraint_study SWEEP_DIR [OUT_DIR]", file=sys.stderr)
         return 2
     try:
         paths = write_constraint_study(Path(argv[0]), Path(argv[1] if len(argv) == 2 else "docs/figures"))

@@ -18,6 +18,13 @@ import numpy as np
 
 from biped_sim.config import Config, config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.models import SimplestWalker, rigid_walker
+from biped_sim.rigid.stepping import rigid_step
+from biped_sim.simulate import simulate
+from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
+from biped_sim.studies.convergence import converge
+from biped_sim.studies.drop_test import drop_test_table
 
 ROOT = Path(__file__).resolve().parents[3]
 REFERENCES = ROOT / "configs" / "references" / "rigid_walkers.yaml"
@@ -64,8 +71,6 @@ def _simplest(slope: float) -> Config:
 
 def garcia_checks(refs: dict[str, Any]) -> list[Check]:
     """Simplest walker at 0.009: fixed point, stability, multipliers two ways, period-doubling slope."""
-    from biped_sim.analysis.limit_cycle import period_doubling_slope, rigid_limit_cycle, simplest_variational_jacobian
-    from biped_sim.rigid.models import SimplestWalker
 
     ref = refs["garcia1998"]
     fp = ref["fixed_point"]
@@ -114,7 +119,6 @@ def garcia_checks(refs: dict[str, Any]) -> list[Check]:
 
 def rimless_wheel_checks() -> list[Check]:
     """Analytic rolling fixed point (MODEL.md 8) and multiplier cos^2(2 alpha), 2 slopes x 2 spoke counts."""
-    from biped_sim.analysis.limit_cycle import rigid_limit_cycle
 
     rows = []
     group = "Rimless wheel (analytic)"
@@ -160,7 +164,6 @@ def rimless_wheel_checks() -> list[Check]:
 
 def goswami_checks(refs: dict[str, Any]) -> list[Check]:
     """Goswami's compass gait, rigid, at 3 degrees: a stable period-1 limit cycle exists (reported)."""
-    from biped_sim.analysis.limit_cycle import rigid_limit_cycle
 
     config = load_config(CONFIGS / "compass_goswami.yaml", ["dynamics=rigid"])
     cycle = rigid_limit_cycle(config)
@@ -184,9 +187,6 @@ def goswami_checks(refs: dict[str, Any]) -> list[Check]:
 
 def rigid_physics_checks() -> list[Check]:
     """Energy conserved during a rigid swing; angular momentum about the new contact conserved at impact."""
-    from biped_sim.analysis.limit_cycle import rigid_limit_cycle
-    from biped_sim.rigid.models import rigid_walker
-    from biped_sim.rigid.stepping import rigid_step
 
     config = load_config(CONFIGS / "round_foot_walker.yaml", ["dynamics=rigid"])
     walker = rigid_walker(config)
@@ -223,7 +223,6 @@ def rigid_physics_checks() -> list[Check]:
 
 def convergence_checks() -> tuple[list[Check], list[dict[str, Any]]]:
     """Compliant gait -> rigid gait of the default walker as the contact stiffens (and the table)."""
-    from biped_sim.analysis.limit_cycle import converge
 
     config = load_config(CONFIGS / "round_foot_walker.yaml")
     _, rows = converge(config)
@@ -254,7 +253,6 @@ def convergence_checks() -> tuple[list[Check], list[dict[str, Any]]]:
 
 def contact_law_checks() -> list[Check]:
     """The drop-test claims of the README: effective restitution of each normal law."""
-    from biped_sim.analysis.drop_test import drop_test_table
 
     rows = drop_test_table()
     out = []
@@ -276,7 +274,6 @@ def contact_law_checks() -> list[Check]:
 
 def energy_balance_checks() -> list[Check]:
     """The core's strongest check: E(t) - E(0) + W(t) over 10 s of the default walker (rtol 1e-9)."""
-    from biped_sim.simulate import simulate
 
     config = load_config(
         CONFIGS / "round_foot_walker.yaml", ["simulation.t_end=10", "integrator.rtol=1e-9", "integrator.atol=1e-11"]

@@ -12,20 +12,16 @@ from __future__ import annotations
 import csv
 import io
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from biped_sim.analysis.limit_cycle import (
-    LimitCycle,
-    bisect_flip,
-    continue_cycle,
-    flip_margin,
-    rigid_limit_cycle,
-)
 from biped_sim.config import Config
-from biped_sim.io.atomic import write_text_atomic, write_with
+from biped_sim.io.atomic import write_text_atomic
+from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
+from biped_sim.studies.continuation import bisect_flip, continue_cycle, flip_margin
 
 BRUTE_STEPS = 150
 RECORDED = 16
@@ -90,9 +86,7 @@ def bifurcation_diagram(config: Config, start: float, stop: float, n: int) -> Bi
 
 
 def write_bifurcation(diagram: BifurcationDiagram, out_dir) -> None:  # type: ignore[no-untyped-def]
-    """bifurcation.csv (continuation), brute_force.csv (steady periods), bifurcation.png and .svg."""
-    from pathlib import Path
-
+    """bifurcation.csv (continuation) and brute_force.csv (steady periods); the figure is plots.bifurcation_figure."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     buffer = io.StringIO()
@@ -136,34 +130,6 @@ def write_bifurcation(diagram: BifurcationDiagram, out_dir) -> None:  # type: ig
         for period in periods:
             writer.writerow([repr(slope), repr(period)])
     write_text_atomic(out_dir / "brute_force.csv", buffer.getvalue())
-    _figure(diagram, out_dir)
-
-
-def _figure(diagram: BifurcationDiagram, out_dir) -> None:  # type: ignore[no-untyped-def]
-    from matplotlib.figure import Figure
-
-    from biped_sim.plots import COLUMN_WIDTH_IN, PNG_DPI, figure_style
-
-    with figure_style():
-        fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6))
-        ax = fig.add_subplot()
-        xs = [s for s, periods in diagram.brute for _ in periods]
-        ys = [p for _, periods in diagram.brute for p in periods]
-        ax.plot(xs, ys, ".", color="0.3", markersize=1.5, label="steady state (brute force)")
-        stable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and c.stable]
-        unstable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and not c.stable]
-        if stable:
-            ax.plot(*zip(*stable, strict=True), "-", color="C0", label="period 1, stable")
-        if unstable:
-            ax.plot(*zip(*unstable, strict=True), "--", color="C3", label="period 1, unstable")
-        if diagram.period_doubling_slope is not None:
-            ax.axvline(diagram.period_doubling_slope, color="0.5", linewidth=0.6)
-        ax.set_xlabel("slope [rad]")
-        ax.set_ylabel("step period")
-        ax.legend(loc="best")
-        fig.tight_layout()
-        for suffix in ("png", "svg"):
-            write_with(out_dir / f"bifurcation.{suffix}", lambda tmp, s=suffix: fig.savefig(tmp, format=s, dpi=PNG_DPI))
 
 
 __all__ = ["BifurcationDiagram", "bifurcation_diagram", "write_bifurcation"]

@@ -1,15 +1,15 @@
-"""Gait metrics from an integration: steps, periods, lengths, slip, energy audit, constraint drift.
+"""Steps of a run: the per-step table (periods, lengths, slip, touchdown angles), its summary and CSV.
 
 Heel strikes come from the compiled loop (the first touchdown of a leading foot that is not the
-previous strike's foot: bounces are debounced there). Everything here is post-processing over
-the recorded samples and strike states, using the same compiled kinematics and force functions
-as the right-hand side (one source of truth per equation), reached through the formulation's
-:class:`~biped_sim.multibody.dispatch.Measures` so that planar and spatial runs are measured alike.
+previous strike's foot: bounces are debounced there); the table is read from the strike states.
 """
 
 from __future__ import annotations
 
+import csv
+import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +33,33 @@ class StepTable:
     stance_rate: np.ndarray
     swing_angle: np.ndarray
     swing_rate: np.ndarray
+
+
+STEP_COLUMNS = (
+    ("strike_time", "s"),
+    ("foot", "1"),
+    ("period", "s"),
+    ("length", "m"),
+    ("slip", "m"),
+    ("stance_angle", "rad"),
+    ("stance_rate", "rad/s"),
+    ("swing_angle", "rad"),
+    ("swing_rate", "rad/s"),
+)
+
+
+def steps_csv(steps: StepTable, unit: Callable[[str], str]) -> str:
+    """steps.csv: one row per heel strike (the step it begins); ``unit`` maps an SI unit to the run's."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["step"] + [f"{name} [{unit(units)}]" if units != "1" else name for name, units in STEP_COLUMNS])
+    for k in range(len(steps.strike_time)):
+        row: list[object] = [k + 1]
+        for name, _ in STEP_COLUMNS:
+            value = getattr(steps, name)[k]
+            row.append(int(value) if name == "foot" else ("" if not np.isfinite(value) else repr(float(value))))
+        writer.writerow(row)
+    return buffer.getvalue()
 
 
 class StepAccess:
@@ -118,94 +145,3 @@ def step_table(model: BuiltModel, run: Integration) -> StepTable:
             length[k] = m.contact_x(y_next, system, next_foot) - m.contact_x(y, system, foot)
             slip[k] = _rolling_coordinate(y_next, model, foot) - _rolling_coordinate(y, model, foot)
     return StepTable(run.strike_t.copy(), run.strike_foot.copy(), period, length, slip, *angles.T)
-
-
-@dataclass
-class EnergyAudit:
-    """Energy terms at the samples; residual = E(t) - E(0) + W_dissipated(t)."""
-
-    kinetic: np.ndarray
-    potential: np.ndarray
-    elastic: np.ndarray
-    dissipated_normal: np.ndarray
-    dissipated_friction: np.ndarray
-    residual: np.ndarray
-
-
-def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
-    """Energy balance over the samples (the dissipated work is integrated as ODE states)."""
-    ns = len(run.t)
-    energy = measures(model.system).mechanical_energy
-    terms = np.array([energy(run.y[i], model.system, run.modes[i]) for i in range(ns)]).reshape(ns, 3)
-    w_normal = run.y[:, -2]
-    w_friction = run.y[:, -1]
-    total = terms.sum(axis=1)
-    residual = total - total[0] + (w_normal - w_normal[0]) + (w_friction - w_friction[0])
-    return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, residual)
-
-
-def violation_names(model: BuiltModel) -> tuple[str, ...]:
-    """Names of the columns of :func:`constraint_drift`: position, velocity (and normalization for spatial)."""
-    return measures(model.system).violation_names
-
-
-def constraint_drift(model: BuiltModel, run: Integration) -> np.ndarray:
-    """(ns, k): ||Phi||, ||Phidot|| (and, spatial, ||p.p - 1|| over the bodies) at each sample."""
-    m = measures(model.system)
-    return np.array([m.violation(y, model.system) for y in run.y]).reshape(len(run.t), len(m.violation_names))
-
-
-def contact_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
-    """Per-foot contact channels at the samples, (ns, nf) each.
-
-    Penetration, normal force, friction force and slip velocity along the slope (x); spatial
-    formulations add the lateral (z) friction force and slip velocity.
-    """
-    m = measures(model.system)
-    ns, nf = len(run.t), model.n_feet
-    out = {name: np.zeros((ns, nf)) for name in m.contact_names}
-    for i in range(ns):
-        for f in range(nf):
-            values = m.contact(run.y[i], model.system, run.modes[i], f)
-            for name, value in zip(m.contact_names, values, strict=True):
-                out[name][i, f] = value
-    return out
-
-
-def hip_position(model: BuiltModel, run: Integration) -> np.ndarray:
-    """(ns, 2) planar or (ns, 3) spatial position of joint 0 (the hip) in the slope frame."""
-    hip = measures(model.system).hip
-    return np.array([hip(y, model.system) for y in run.y]).reshape(len(run.t), -1)
-
-
-def attitude_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
-    """Spatial only (else empty): per-body pitch, roll (lateral rocking), yaw (heading drift) [rad] and pitch rate
-    (the planar leg angle rate) [rad/s], (ns, nb) each."""
-    attitude = measures(model.system).attitude
-    if attitude is None:
-        return {}
-    ns, nb = len(run.t), model.n_bodies
-    values = np.array([[attitude(run.y[i], model.system, b) for b in range(nb)] for i in range(ns)])
-    values = values.reshape(ns, nb, 4)
-    return {"pitch": values[:, :, 0], "roll": values[:, :, 1], "yaw": values[:, :, 2], "pitch_rate": values[:, :, 3]}
-
-
-def lateral_summary(model: BuiltModel, run: Integration) -> dict[str, dict[str, float]]:
-    """Spatial only (else empty): the summary's ``lateral`` entry.
-
-    Largest |roll| of any body (lateral rocking), final yaw of body 0 (heading drift) [rad], and
-    the largest lateral friction force and slip velocity of any foot [N, m/s].
-    """
-    attitude = attitude_channels(model, run)
-    if not attitude:
-        return {}
-    channels = contact_channels(model, run)
-    return {
-        "lateral": {
-            "roll_max": float(np.max(np.abs(attitude["roll"]))),
-            "yaw_final": float(attitude["yaw"][-1, 0]),
-            "yaw_max": float(np.max(np.abs(attitude["yaw"]))),
-            "friction_force_lateral_max": float(np.max(np.abs(channels["friction_force_lateral"]))),
-            "slip_velocity_lateral_max": float(np.max(np.abs(channels["slip_velocity_lateral"]))),
-        }
-    }

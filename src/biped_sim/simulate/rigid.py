@@ -19,7 +19,7 @@ What it measures, and how it relates to a compliant run:
 * Heel strikes: time, foot (0 is the initial stance foot, so strikes alternate 1, 0, 1, ...; for the rimless
   wheel the spoke, 1, 2, ..., N - 1, 0, ...), the pre-impact state and the post-impact state (the walker's
   state order; the post-impact one relabelled, its stance leg the one that just landed).
-* The step table (:class:`~biped_sim.analysis.gait.StepTable`, one row per strike, the step it begins) holds
+* The step table (:class:`~biped_sim.measure.steps.StepTable`, one row per strike, the step it begins) holds
   the *touchdown* (pre-impact) angles and rates, with 'stance' the leg touching down and 'swing' the one about
   to leave the ground, as the compliant model records them (its impact takes time); the post-impact states
   are in ``strike_post``. Slip is zero by construction (rolling without slip).
@@ -37,7 +37,6 @@ by construction. Units are SI except for the simplest walker, which is nondimens
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -45,106 +44,22 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.analysis.gait import StepAccess, StepTable
-from biped_sim.config import Config, InitialState
-from biped_sim.errors import ConfigError
-from biped_sim.rigid import rigid_limit_cycle_initial
-from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker, rigid_walker
-from biped_sim.rigid.stepping import RTOL, rigid_step
+from biped_sim.config import Config
+from biped_sim.io.provenance import package_version
+from biped_sim.io.run_files import Channel, TrajectoryFile
+from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
+from biped_sim.measure.steps import STEP_COLUMNS, StepTable
+from biped_sim.rigid.models import RigidWalker
+from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
+from biped_sim.rigid.stepping import rigid_step
+from biped_sim.simulate.result import RunResult
 
-NONDIMENSIONAL = "1 (g = l = 1)"
-INTEGRATOR = f"DOP853 rtol {RTOL:g} (rigid)"
-ANGLE_TOLERANCE = 1e-12  # the rimless wheel may start exactly on its double-support angle pi/N
-
-
-@dataclass(frozen=True)
-class RigidStart:
-    """A validated rigid run's start: the walker and its post-impact state at t = 0 (the walker's state order)."""
-
-    walker: RigidWalker
-    state: np.ndarray
-
-
-def rigid_units(walker: RigidWalker) -> dict[str, str]:
-    """This walker's units for each SI unit the outputs use ('s', 'm', 'm/s', 'rad', 'rad/s', 'J', '1')."""
-    units = {unit: unit for unit in ("s", "m", "m/s", "rad", "rad/s", "J", "1")}
-    if isinstance(walker, SimplestWalker):
-        units.update(dict.fromkeys(("s", "m", "m/s", "rad/s", "J"), NONDIMENSIONAL))
-    elif isinstance(walker, RimlessWheel):
-        units["J"] = "J/kg"  # the hub's mass is not a parameter: energies per kg of it
-    return units
-
-
-def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None:
-    """ConfigError naming the field when the walker cannot start from ``state`` (just after a heel strike)."""
-    legs = walker.legs_state(state)
-    for name, value in legs.items():
-        if not math.isfinite(value):
-            raise ConfigError(f"simulation.initial.{name}", "must be a finite number")
-    for name in walker.state_names[: walker.n_q]:
-        if abs(legs[name]) >= walker.fall_leg_angle:
-            raise ConfigError(
-                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
-            )
-    if walker.hip_height(state) <= config.simulation.fall_hip_height * walker.leg_length:
-        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
-    if isinstance(walker, RimlessWheel):
-        if abs(legs["stance_angle"]) > walker.half_angle + ANGLE_TOLERANCE:
-            raise ConfigError(
-                "simulation.initial.stance_angle",
-                f"the rimless wheel's stance spoke must be within pi/N = {walker.half_angle:.6g} rad of the slope "
-                "normal (else another spoke starts below the ground)",
-            )
-    elif legs["stance_angle"] < 0.0:
-        raise ConfigError(
-            "simulation.initial.stance_angle",
-            "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal (>= 0)",
-        )
-
-
-def rigid_start(config: Config) -> RigidStart:
-    """Build the rigid walker of ``config`` and resolve its initial state (validated; ConfigError naming the field).
-
-    ``simulation.initial: rigid_limit_cycle`` is resolved by Newton on the rigid step map.
-    """
-    if config.dynamics != "rigid":
-        raise ValueError("rigid_start: the config has dynamics: compliant")
-    walker = rigid_walker(config)
-    initial = config.simulation.initial
-    legs = initial.model_dump() if isinstance(initial, InitialState) else rigid_limit_cycle_initial(config)
-    state = walker.state_from_legs(legs)
-    _check_start(config, walker, state)
-    return RigidStart(walker, state)
-
-
-def touchdown_legs(walker: RigidWalker, x_minus: np.ndarray) -> dict[str, float]:
-    """A pre-impact state named as at touchdown: 'stance' the leg (spoke) landing, 'swing' the one leaving.
-
-    The landing leg is the last coordinate of a biped (the swing leg until now) and the rimless wheel's next
-    spoke, which turns at the wheel's single rate.
-    """
-    n = walker.n_q
-    return {
-        "stance_angle": walker.next_stance_angle(x_minus),
-        "stance_rate": float(x_minus[2 * n - 1]),
-        "swing_angle": float(x_minus[0]),
-        "swing_rate": float(x_minus[n]),
-    }
+RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "residual")
 
 
 @dataclass
-class RigidEnergy:
-    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) (J, J/kg or nondimensional)."""
-
-    kinetic: np.ndarray
-    potential: np.ndarray
-    dissipated_impact: np.ndarray
-    residual: np.ndarray
-
-
-@dataclass
-class RigidRunResult(StepAccess):
-    """A rigid simulation and what it measured (the counterpart of :class:`biped_sim.simulate.RunResult`)."""
+class RigidRunResult(RunResult):
+    """A rigid simulation and what it measured."""
 
     config: Config
     walker: RigidWalker
@@ -172,39 +87,46 @@ class RigidRunResult(StepAccess):
         """This run's unit for an SI unit ('s' is '1 (g = l = 1)' for the simplest walker)."""
         return self.units[si_unit]
 
+    def integrity_text(self) -> str:
+        return f"impact losses {self.summary['energy_dissipated']['impact']:.4f}" + (
+            "" if self.unit("J") == NONDIMENSIONAL else f" {self.unit('J')}"
+        )
+
+    def trajectory(self) -> TrajectoryFile:
+        angles, rates = self.unit("rad"), self.unit("rad/s")
+        state_units = f"{angles}, {rates} (see state_names)"
+        energy_units = self.unit("J")
+        channels = [Channel(f"energy/{name}", getattr(self.energy, name), energy_units) for name in RIGID_ENERGY_TERMS]
+        channels.append(Channel("hip", self.hip, self.unit("m")))
+        channels += [
+            Channel(f"steps/{name}", getattr(self.steps, name), self.unit(units), False) for name, units in STEP_COLUMNS
+        ]
+        channels.append(Channel("strikes/time", self.strike_time, self.unit("s"), False))
+        channels.append(Channel("strikes/pre_impact", self.strike_pre, state_units, False))
+        channels.append(Channel("strikes/post_impact", self.strike_post, state_units, False))
+        return TrajectoryFile(
+            self.time,
+            self.unit("s"),
+            self.state,
+            self.walker.state_names,
+            state_units,
+            channels,
+            root_attrs={"dynamics": "rigid"},
+        )
+
     @property
     def post_impact_states(self) -> list[dict[str, float]]:
         """Leg angles and rates just after each strike (the Poincaré section of the rigid limit cycle)."""
         return [self.walker.legs_state(x) for x in self.strike_post]
 
 
-@dataclass
-class _Trace:
-    """What the stepping loop collects: samples (with the step each belongs to) and strikes."""
-
-    times: list[np.ndarray] = field(default_factory=list)
-    states: list[np.ndarray] = field(default_factory=list)
-    sample_step: list[np.ndarray] = field(default_factory=list)
-    strike_time: list[float] = field(default_factory=list)
-    strike_pre: list[np.ndarray] = field(default_factory=list)
-    strike_post: list[np.ndarray] = field(default_factory=list)
-    step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
-
-    def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
-        if not len(t):
-            return
-        self.times.append(t)
-        self.states.append(x.reshape(len(t), -1))
-        self.sample_step.append(np.full(len(t), step_index))
-
-
 def _walk(
     config: Config, start: RigidStart, progress: Callable[[float], None] | None
-) -> tuple[_Trace, str, float | None, float, int, int]:
+) -> tuple[RigidTrace, str, float | None, float, int, int]:
     """Step from the start until t_end, max_steps or a fall; (trace, status, stop_time, t_final, evals, steps)."""
     walker = start.walker
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
-    trace = _Trace()
+    trace = RigidTrace()
     t0, x = 0.0, start.state
     evals = accepted = 0
     while True:
@@ -234,67 +156,6 @@ def _walk(
             progress(t0)
 
 
-def _strike_feet(walker: RigidWalker, n: int) -> np.ndarray:
-    """Foot (spoke) of strikes 1..n, the initial stance foot being 0."""
-    feet = walker.spokes if isinstance(walker, RimlessWheel) else 2
-    return np.arange(1, n + 1) % feet
-
-
-def _step_table(walker: RigidWalker, trace: _Trace) -> StepTable:
-    """One row per strike: the step it begins (period and length nan for the last), touchdown angles and rates."""
-    n = len(trace.strike_time)
-    strike_time = np.array(trace.strike_time)
-    period = np.full(n, np.nan)
-    length = np.full(n, np.nan)
-    slip = np.full(n, np.nan)
-    if n > 1:
-        period[:-1] = np.diff(strike_time)
-        length[:-1] = trace.step_lengths[1:n]
-        slip[:-1] = 0.0
-    touchdown = [touchdown_legs(walker, x) for x in trace.strike_pre]
-    legs = {
-        key: np.array([state[key] for state in touchdown], dtype=float)
-        for key in ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
-    }
-    return StepTable(strike_time, _strike_feet(walker, n), period, length, slip, **legs)
-
-
-def _energy_and_hip(
-    walker: RigidWalker, start: RigidStart, trace: _Trace, times: np.ndarray, states: np.ndarray
-) -> tuple[RigidEnergy, np.ndarray]:
-    """Energy terms and hip position at the samples, in one slope frame for the whole run.
-
-    Step k's models measure positions from its own origin O_k, where its contact point would be at zero stance
-    angle: the contact point is at x = O_k - R theta. O_0 = R theta_0 (contact at x = 0 at the start). A step's
-    length is its contact point's advance from the step's start to the next one's, so
-    O_{k+1} - R theta_{k+1}+ = O_k - R theta_k+ + length_k. Potentials shift by -(weight) sin(gamma) O_k.
-    """
-    R, l = walker.foot_radius, walker.leg_length
-    step_start = np.vstack([start.state, *trace.strike_post])[:, 0]
-    origin = np.zeros(len(step_start))
-    origin[0] = R * step_start[0]
-    for k, length in enumerate(trace.step_lengths):
-        origin[k + 1] = origin[k] + length + R * (step_start[k + 1] - step_start[k])
-    weight = walker.reference_mass * walker.gravity  # hip mass 1 and g = 1 for the simplest walker
-    losses = [
-        walker.energy(pre)[0] - walker.energy(post)[0]
-        for pre, post in zip(trace.strike_pre, trace.strike_post, strict=True)
-    ]
-    dissipated_by_step = np.concatenate([[0.0], np.cumsum(losses)])
-    step_of_sample = np.concatenate(trace.sample_step)
-    sample_origin = origin[step_of_sample]
-    terms = np.array([walker.energy(x) for x in states]).reshape(len(times), 2)
-    kinetic = terms[:, 0]
-    potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
-    kinetic_0, potential_0 = walker.energy(start.state)
-    energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
-    dissipated = dissipated_by_step[step_of_sample]
-    residual = kinetic + potential - energy_0 + dissipated
-    theta = states[:, 0]
-    hip = np.column_stack([sample_origin - R * theta - (l - R) * np.sin(theta), R + (l - R) * np.cos(theta)])
-    return RigidEnergy(kinetic, potential, dissipated, residual), hip
-
-
 def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     """The summary.json content: the compliant keys where they make sense, plus ``dynamics`` and ``units``.
 
@@ -303,8 +164,6 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     ``friction`` is 0 (no slip): impact = normal + friction. ``constraint_violation_max`` is exactly 0: the
     reduced coordinates satisfy the constraints by construction. Solver counters are scipy's DOP853's.
     """
-    from biped_sim.io.provenance import package_version
-
     config, walker = result.config, result.walker
     impact = float(result.energy.dissipated_impact[-1]) if len(result.time) else 0.0
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
@@ -317,6 +176,8 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
         "energy_residual_max": residual_max,
         "energy_residual_max_relative": residual_max / (walker.reference_mass * walker.gravity * walker.leg_length),
         "constraint_violation_max": {"position": 0.0, "velocity": 0.0},
+        "max_penetration": None,
+        "peak_normal_force": None,
         "rhs_evals": result.rhs_evals,
         "accepted_steps": result.accepted_steps,
         "wall_time_s": result.wall_time_s,
@@ -344,7 +205,7 @@ def simulate_rigid(
     ny = len(start.state)
     times = np.concatenate(trace.times)
     states = np.vstack(trace.states)
-    energy, hip = _energy_and_hip(walker, start, trace, times, states)
+    energy, hip = rigid_energy_and_hip(walker, start, trace, times, states)
     result = RigidRunResult(
         config=config,
         walker=walker,
@@ -358,7 +219,7 @@ def simulate_rigid(
         strike_time=np.array(trace.strike_time),
         strike_pre=np.array(trace.strike_pre).reshape(-1, ny),
         strike_post=np.array(trace.strike_post).reshape(-1, ny),
-        steps=_step_table(walker, trace),
+        steps=rigid_step_table(walker, trace),
         rhs_evals=evals,
         accepted_steps=accepted,
         wall_time_s=wall,

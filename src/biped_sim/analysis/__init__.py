@@ -1,1 +1,0 @@
-"""Analysis: gait metrics, energy audit, drop test, limit cycles, validation."""

@@ -1,0 +1,107 @@
+"""Measures of a rigid run: its heel-strike trace, step table, energy terms and hip path.
+
+Step k's models measure positions from their own origin; :func:`rigid_energy_and_hip` puts every sample in
+one slope frame so that the energy balance E(t) - E(0) + W_impact(t) is checked across steps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from biped_sim.measure.steps import StepTable
+from biped_sim.rigid.models import RigidWalker, RimlessWheel
+from biped_sim.rigid.start import RigidStart, touchdown_legs
+
+
+@dataclass
+class RigidEnergy:
+    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) (J, J/kg or nondimensional)."""
+
+    kinetic: np.ndarray
+    potential: np.ndarray
+    dissipated_impact: np.ndarray
+    residual: np.ndarray
+
+
+@dataclass
+class RigidTrace:
+    """What the stepping loop collects: samples (with the step each belongs to) and strikes."""
+
+    times: list[np.ndarray] = field(default_factory=list)
+    states: list[np.ndarray] = field(default_factory=list)
+    sample_step: list[np.ndarray] = field(default_factory=list)
+    strike_time: list[float] = field(default_factory=list)
+    strike_pre: list[np.ndarray] = field(default_factory=list)
+    strike_post: list[np.ndarray] = field(default_factory=list)
+    step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
+
+    def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
+        if not len(t):
+            return
+        self.times.append(t)
+        self.states.append(x.reshape(len(t), -1))
+        self.sample_step.append(np.full(len(t), step_index))
+
+
+def strike_feet(walker: RigidWalker, n: int) -> np.ndarray:
+    """Foot (spoke) of strikes 1..n, the initial stance foot being 0."""
+    feet = walker.spokes if isinstance(walker, RimlessWheel) else 2
+    return np.arange(1, n + 1) % feet
+
+
+def rigid_step_table(walker: RigidWalker, trace: RigidTrace) -> StepTable:
+    """One row per strike: the step it begins (period and length nan for the last), touchdown angles and rates."""
+    n = len(trace.strike_time)
+    strike_time = np.array(trace.strike_time)
+    period = np.full(n, np.nan)
+    length = np.full(n, np.nan)
+    slip = np.full(n, np.nan)
+    if n > 1:
+        period[:-1] = np.diff(strike_time)
+        length[:-1] = trace.step_lengths[1:n]
+        slip[:-1] = 0.0
+    touchdown = [touchdown_legs(walker, x) for x in trace.strike_pre]
+    legs = {
+        key: np.array([state[key] for state in touchdown], dtype=float)
+        for key in ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
+    }
+    return StepTable(strike_time, strike_feet(walker, n), period, length, slip, **legs)
+
+
+def rigid_energy_and_hip(
+    walker: RigidWalker, start: RigidStart, trace: RigidTrace, times: np.ndarray, states: np.ndarray
+) -> tuple[RigidEnergy, np.ndarray]:
+    """Energy terms and hip position at the samples, in one slope frame for the whole run.
+
+    Step k's models measure positions from its own origin O_k, where its contact point would be at zero stance
+    angle: the contact point is at x = O_k - R theta. O_0 = R theta_0 (contact at x = 0 at the start). A step's
+    length is its contact point's advance from the step's start to the next one's, so
+    O_{k+1} - R theta_{k+1}+ = O_k - R theta_k+ + length_k. Potentials shift by -(weight) sin(gamma) O_k.
+    """
+    R, l = walker.foot_radius, walker.leg_length
+    step_start = np.vstack([start.state, *trace.strike_post])[:, 0]
+    origin = np.zeros(len(step_start))
+    origin[0] = R * step_start[0]
+    for k, length in enumerate(trace.step_lengths):
+        origin[k + 1] = origin[k] + length + R * (step_start[k + 1] - step_start[k])
+    weight = walker.reference_mass * walker.gravity  # hip mass 1 and g = 1 for the simplest walker
+    losses = [
+        walker.energy(pre)[0] - walker.energy(post)[0]
+        for pre, post in zip(trace.strike_pre, trace.strike_post, strict=True)
+    ]
+    dissipated_by_step = np.concatenate([[0.0], np.cumsum(losses)])
+    step_of_sample = np.concatenate(trace.sample_step)
+    sample_origin = origin[step_of_sample]
+    terms = np.array([walker.energy(x) for x in states]).reshape(len(times), 2)
+    kinetic = terms[:, 0]
+    potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
+    kinetic_0, potential_0 = walker.energy(start.state)
+    energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
+    dissipated = dissipated_by_step[step_of_sample]
+    residual = kinetic + potential - energy_0 + dissipated
+    theta = states[:, 0]
+    hip = np.column_stack([sample_origin - R * theta - (l - R) * np.sin(theta), R + (l - R) * np.cos(theta)])
+    return RigidEnergy(kinetic, potential, dissipated, residual), hip

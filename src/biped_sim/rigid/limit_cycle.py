@@ -1,0 +1,256 @@
+"""Period-1 gaits of the rigid walkers: the step-to-step map, Newton on its fixed point, Floquet multipliers.
+
+Poincare section: just after a heel strike. Its coordinates are the independent post-impact variables
+(see each rigid walker's ``section_names``): the impact fixes the others (the swing angle is minus the
+stance angle; for the simplest walker the swing rate is cos(2 theta) times the stance rate; the rimless
+wheel's stance angle is pi/N), so their multipliers are exactly zero and are dropped by working in
+section coordinates. The multipliers are the eigenvalues of the step map's Jacobian by central
+differences with relative step ``FD_STEP`` (truncation ~ h^2 ~ 1e-10, integration noise ~ 1e-12 / h ~
+1e-7 relative at worst; the validation compares them with the simplest walker's variational equations).
+
+The Newton solver and the finite-difference Jacobian are generic (any step map on a section): the
+compliant limit cycle (:mod:`biped_sim.studies.limit_cycle`) uses them too. A compliant run that starts
+on ``simulation.initial: rigid_limit_cycle`` gets its state from :func:`rigid_limit_cycle_initial`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.errors import ConfigError
+from biped_sim.rigid.models import RigidWalker, initial_state, rigid_walker
+from biped_sim.rigid.stepping import RigidStep, rigid_step
+
+RIGID_TOLERANCE = 1e-10
+FD_STEP = 1e-6
+MAX_NEWTON = 30
+SETTLE_STEPS = 30
+STABILITY_MARGIN = 1e-9  # |lambda| < 1 - margin counts as stable
+
+
+@dataclass
+class LimitCycle:
+    """A period-1 fixed point of the step map and its multipliers."""
+
+    dynamics: str
+    walker: str
+    slope: float
+    converged: bool
+    iterations: int
+    residual: float
+    section_names: tuple[str, ...]
+    section_point: np.ndarray
+    fixed_point: dict[str, float]
+    touchdown: dict[str, float]
+    step_period: float
+    step_length: float
+    jacobian: np.ndarray
+    multipliers: np.ndarray
+    tolerance: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def max_multiplier_modulus(self) -> float:
+        return float(np.max(np.abs(self.multipliers))) if len(self.multipliers) else math.nan
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.converged and self.max_multiplier_modulus < 1.0 - STABILITY_MARGIN)
+
+    @property
+    def speed(self) -> float:
+        return self.step_length / self.step_period if self.step_period > 0 else math.nan
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON document of ``biped-sim limit-cycle --json``."""
+        order = np.argsort(-np.abs(self.multipliers))
+        return {
+            "dynamics": self.dynamics,
+            "walker": self.walker,
+            "slope": self.slope,
+            "converged": self.converged,
+            "iterations": self.iterations,
+            "residual": self.residual,
+            "tolerance": self.tolerance,
+            "section": list(self.section_names),
+            "fixed_point": self.fixed_point,
+            "touchdown": self.touchdown,
+            "step_period": self.step_period,
+            "step_length": self.step_length,
+            "speed": self.speed,
+            "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers[order]],
+            "max_multiplier_modulus": self.max_multiplier_modulus,
+            "stable": self.stable,
+            "notes": self.notes,
+        }
+
+
+class StepFailedError(RuntimeError):
+    """The walker fell or stalled during a step of the map."""
+
+
+# --- rigid ---------------------------------------------------------------------------------------------------
+
+
+def rigid_map(walker: RigidWalker, z: np.ndarray) -> tuple[np.ndarray, RigidStep]:
+    """The step-to-step map on the section: post-impact coordinates -> the next ones."""
+    step = rigid_step(walker, walker.from_section(np.asarray(z, dtype=float)))
+    if step.status != "strike" or step.x_plus is None:
+        raise StepFailedError(f"the rigid {walker.name} {step.status} during the step")
+    return walker.to_section(step.x_plus), step
+
+
+def map_jacobian(func: Callable[[np.ndarray], np.ndarray], z: np.ndarray, step: float = FD_STEP) -> np.ndarray:
+    """Central-difference Jacobian; each coordinate perturbed by step * max(1, |z_i|)."""
+    n = len(z)
+    jac = np.zeros((n, n))
+    for i in range(n):
+        h = step * max(1.0, abs(z[i]))
+        dz = np.zeros(n)
+        dz[i] = h
+        jac[:, i] = (func(z + dz) - func(z - dz)) / (2.0 * h)
+    return jac
+
+
+def newton_fixed_point(
+    func: Callable[[np.ndarray], np.ndarray],
+    z0: np.ndarray,
+    tolerance: float,
+    max_iter: int = MAX_NEWTON,
+    fd_step: float = FD_STEP,
+) -> tuple[np.ndarray, bool, int, float]:
+    """Newton on F(z) = P(z) - z with a finite-difference Jacobian (relative step ``fd_step``); damped when a
+    full step fails.
+
+    Returns (z, converged, iterations, residual |P(z) - z|_inf).
+    """
+    z = np.asarray(z0, dtype=float)
+    residual = math.inf
+    for iteration in range(1, max_iter + 1):
+        f = func(z) - z
+        residual = float(np.max(np.abs(f)))
+        if residual <= tolerance:
+            return z, True, iteration - 1, residual
+        jac = map_jacobian(func, z, fd_step) - np.eye(len(z))
+        delta = np.linalg.lstsq(jac, -f, rcond=None)[0]
+        scale = 1.0
+        while True:
+            try:
+                candidate = z + scale * delta
+                new_residual = float(np.max(np.abs(func(candidate) - candidate)))
+                if new_residual < residual or scale < 1e-3:
+                    break
+            except StepFailedError:
+                pass
+            scale *= 0.5
+            if scale < 1e-3:
+                return z, False, iteration, residual
+        z = candidate
+    residual = float(np.max(np.abs(func(z) - z)))
+    return z, residual <= tolerance, max_iter, residual
+
+
+def settle(step_map: Callable[[np.ndarray], np.ndarray], z: np.ndarray, steps: int) -> np.ndarray:
+    """Iterate the map ``steps`` times from z (a walk toward a stable cycle); stop at the last good point."""
+    for _ in range(steps):
+        try:
+            z_next = step_map(z)
+        except StepFailedError:
+            break
+        if not np.all(np.isfinite(z_next)):
+            break
+        z = z_next
+    return z
+
+
+def rigid_limit_cycle(
+    config: Config, guess: dict[str, float] | None = None, settle_steps: int = SETTLE_STEPS
+) -> LimitCycle:
+    """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
+
+    The initial guess is ``guess`` (the four README keys), else the config's initial state, else (for the
+    rigid_limit_cycle start) a generic post-impact state. The guess first walks ``settle_steps`` steps, so
+    that Newton starts near the stable cycle when there is one (Newton from the raw guess if that fails);
+    ``settle_steps = 0`` finds the cycle nearest the guess, stable or not.
+    """
+    rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
+    walker = rigid_walker(rigid)
+    if guess is not None:
+        starts = [walker.state_from_legs(guess)]
+    elif config.simulation.initial == "rigid_limit_cycle":
+        starts = _generic_starts(walker)
+    else:
+        starts = [initial_state(rigid, walker)]
+
+    def step_map(z: np.ndarray) -> np.ndarray:
+        return rigid_map(walker, z)[0]
+
+    found = None
+    for start in starts:
+        z0 = walker.to_section(start)
+        for z_start in (settle(step_map, z0, settle_steps), z0) if settle_steps else (z0,):
+            try:
+                found = newton_fixed_point(step_map, z_start, RIGID_TOLERANCE)
+                _, step = rigid_map(walker, found[0])
+            except StepFailedError:
+                found = None
+                continue
+            if found[1]:
+                break
+        if found is not None and found[1]:
+            break
+    if found is None:
+        raise ConfigError("simulation.initial", f"no rigid limit cycle: the rigid {walker.name} falls from the guess")
+    z, converged, iterations, residual = found
+    jac = map_jacobian(step_map, z)
+    x_plus = walker.from_section(z)
+    touchdown = walker.legs_state(np.concatenate([step.x_minus[: walker.n_q][::-1], step.x_minus[walker.n_q :][::-1]]))
+    return LimitCycle(
+        dynamics="rigid",
+        walker=walker.name,
+        slope=walker.slope,
+        converged=converged,
+        iterations=iterations,
+        residual=residual,
+        section_names=walker.section_names,
+        section_point=z,
+        fixed_point=walker.legs_state(x_plus),
+        touchdown=touchdown,
+        step_period=step.period,
+        step_length=step.length,
+        jacobian=jac,
+        multipliers=np.linalg.eigvals(jac),
+        tolerance=RIGID_TOLERANCE,
+        notes=[
+            "section just after heel strike; coordinates " + ", ".join(walker.section_names),
+            f"multipliers: central differences, relative step {FD_STEP:g}; the coordinates the impact fixes "
+            "(zero multipliers) are not section coordinates",
+            "touchdown: the state just before the strike, relabelled (stance = the leg touching down)",
+        ],
+    )
+
+
+def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
+    """Post-impact states typical of passive gaits (rates scaled by sqrt(g / l)), tried when no guess is given."""
+    scale = math.sqrt(walker.gravity / walker.leg_length)
+    if walker.name == "rimless_wheel":
+        return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
+    return [
+        np.array([angle, -angle, -k * scale, -0.4 * k * scale]) for angle, k in ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
+    ]
+
+
+def rigid_limit_cycle_initial(config: Config) -> dict[str, float]:
+    """The rigid model's period-1 fixed point as a compliant run's initial state (the four README keys)."""
+    cycle = rigid_limit_cycle(config)
+    if not cycle.converged:
+        raise ConfigError(
+            "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
+        )
+    return cycle.fixed_point

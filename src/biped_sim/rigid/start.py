@@ -1,0 +1,93 @@
+"""The start of a rigid run: the walker of a config and its validated post-impact initial state."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.config import Config, InitialState
+from biped_sim.errors import ConfigError
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
+from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker, rigid_walker
+from biped_sim.rigid.stepping import RTOL
+
+NONDIMENSIONAL = "1 (g = l = 1)"
+INTEGRATOR = f"DOP853 rtol {RTOL:g} (rigid)"
+ANGLE_TOLERANCE = 1e-12  # the rimless wheel may start exactly on its double-support angle pi/N
+
+
+@dataclass(frozen=True)
+class RigidStart:
+    """A validated rigid run's start: the walker and its post-impact state at t = 0 (the walker's state order)."""
+
+    walker: RigidWalker
+    state: np.ndarray
+
+
+def rigid_units(walker: RigidWalker) -> dict[str, str]:
+    """This walker's units for each SI unit the outputs use ('s', 'm', 'm/s', 'rad', 'rad/s', 'J', '1')."""
+    units = {unit: unit for unit in ("s", "m", "m/s", "rad", "rad/s", "J", "1")}
+    if isinstance(walker, SimplestWalker):
+        units.update(dict.fromkeys(("s", "m", "m/s", "rad/s", "J"), NONDIMENSIONAL))
+    elif isinstance(walker, RimlessWheel):
+        units["J"] = "J/kg"  # the hub's mass is not a parameter: energies per kg of it
+    return units
+
+
+def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None:
+    """ConfigError naming the field when the walker cannot start from ``state`` (just after a heel strike)."""
+    legs = walker.legs_state(state)
+    for name, value in legs.items():
+        if not math.isfinite(value):
+            raise ConfigError(f"simulation.initial.{name}", "must be a finite number")
+    for name in walker.state_names[: walker.n_q]:
+        if abs(legs[name]) >= walker.fall_leg_angle:
+            raise ConfigError(
+                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
+            )
+    if walker.hip_height(state) <= config.simulation.fall_hip_height * walker.leg_length:
+        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
+    if isinstance(walker, RimlessWheel):
+        if abs(legs["stance_angle"]) > walker.half_angle + ANGLE_TOLERANCE:
+            raise ConfigError(
+                "simulation.initial.stance_angle",
+                f"the rimless wheel's stance spoke must be within pi/N = {walker.half_angle:.6g} rad of the slope "
+                "normal (else another spoke starts below the ground)",
+            )
+    elif legs["stance_angle"] < 0.0:
+        raise ConfigError(
+            "simulation.initial.stance_angle",
+            "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal (>= 0)",
+        )
+
+
+def rigid_start(config: Config) -> RigidStart:
+    """Build the rigid walker of ``config`` and resolve its initial state (validated; ConfigError naming the field).
+
+    ``simulation.initial: rigid_limit_cycle`` is resolved by Newton on the rigid step map.
+    """
+    if config.dynamics != "rigid":
+        raise ValueError("rigid_start: the config has dynamics: compliant")
+    walker = rigid_walker(config)
+    initial = config.simulation.initial
+    legs = initial.model_dump() if isinstance(initial, InitialState) else rigid_limit_cycle_initial(config)
+    state = walker.state_from_legs(legs)
+    _check_start(config, walker, state)
+    return RigidStart(walker, state)
+
+
+def touchdown_legs(walker: RigidWalker, x_minus: np.ndarray) -> dict[str, float]:
+    """A pre-impact state named as at touchdown: 'stance' the leg (spoke) landing, 'swing' the one leaving.
+
+    The landing leg is the last coordinate of a biped (the swing leg until now) and the rimless wheel's next
+    spoke, which turns at the wheel's single rate.
+    """
+    n = walker.n_q
+    return {
+        "stance_angle": walker.next_stance_angle(x_minus),
+        "stance_rate": float(x_minus[2 * n - 1]),
+        "swing_angle": float(x_minus[0]),
+        "swing_rate": float(x_minus[n]),
+    }

@@ -1,0 +1,159 @@
+"""A compliant run: the penalty-contact model of a config, integrated and measured."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.io.provenance import package_version
+from biped_sim.io.run_files import Channel, TrajectoryFile
+from biped_sim.measure.channels import (
+    attitude_channels,
+    constraint_drift,
+    contact_channels,
+    contact_peaks,
+    hip_position,
+    lateral_summary,
+    violation_names,
+)
+from biped_sim.measure.energy import EnergyAudit, energy_audit
+from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
+from biped_sim.simulate.result import RunResult
+from biped_sim.walkers import BuiltModel
+
+CHANNEL_UNITS = {
+    "penetration": "m",
+    "normal_force": "N",
+    "friction_force": "N",
+    "slip_velocity": "m/s",
+    "friction_force_lateral": "N",
+    "slip_velocity_lateral": "m/s",
+}
+ENERGY_TERMS = ("kinetic", "potential", "elastic", "dissipated_normal", "dissipated_friction", "residual")
+VIOLATION_UNITS = {"position": "m", "velocity": "m/s", "normalization": "1"}
+
+
+@dataclass
+class CompliantRunResult(RunResult):
+    """A compliant simulation and what it measured."""
+
+    config: Config
+    model: BuiltModel
+    run: Integration
+    steps: StepTable
+    energy: EnergyAudit
+    violation: np.ndarray  # (ns, 2) ||Phi||, ||Phidot|| (spatial: (ns, 3), + ||p.p - 1||)
+    wall_time_s: float
+    summary: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def status(self) -> str:
+        return self.run.status
+
+    @cached_property
+    def contact(self) -> dict[str, np.ndarray]:
+        """Per-foot contact channels at the samples (penetration, forces, slip velocities), (ns, nf) each."""
+        return contact_channels(self.model, self.run)
+
+    @cached_property
+    def hip(self) -> np.ndarray:
+        """(ns, 2) or, spatial, (ns, 3) hip position in the slope frame [m]."""
+        return hip_position(self.model, self.run)
+
+    @cached_property
+    def attitude(self) -> dict[str, np.ndarray]:
+        """Spatial runs: per-body pitch, roll, yaw [rad] and pitch rate [rad/s]; empty for planar runs."""
+        return attitude_channels(self.model, self.run)
+
+    def integrity_text(self) -> str:
+        return f"|Phi| <= {self.summary['constraint_violation_max']['position']:.1e} m"
+
+    def trajectory(self) -> TrajectoryFile:
+        run, model = self.run, self.model
+        channels = [Channel(f"contact/{name}", values, CHANNEL_UNITS[name]) for name, values in self.contact.items()]
+        channels.append(Channel("contact/modes", run.modes, "armed (1/0), touching (1/0), impact velocity (m/s)"))
+        channels += [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in ENERGY_TERMS]
+        channels += [
+            Channel(f"constraints/{name}", self.violation[:, k], VIOLATION_UNITS[name])
+            for k, name in enumerate(violation_names(model))
+        ]
+        channels.append(Channel("hip", self.hip, "m"))
+        channels += [
+            Channel(f"attitude/{name}", values, "rad/s" if name == "pitch_rate" else "rad")
+            for name, values in self.attitude.items()
+        ]
+        channels += [Channel(f"steps/{name}", getattr(self.steps, name), units, False) for name, units in STEP_COLUMNS]
+        channels.append(Channel("events/contact_log", run.contact_log, "s, index, +1/-1, m/s", False))
+        group_attrs: dict[str, dict[str, Any]] = {"contact": {"feet": model.foot_names}}
+        if self.attitude:
+            group_attrs["attitude"] = {"bodies": model.body_names}
+        return TrajectoryFile(
+            run.t, "s", run.y, model.state_names(), "SI (see state_names)", channels, group_attrs=group_attrs
+        )
+
+
+def summarize(result: CompliantRunResult) -> dict[str, Any]:
+    """The summary.json content."""
+    run, config = result.run, result.config
+    scale = result.model.total_mass * config.gravity * result.model.leg_length
+    return {
+        "status": run.status,
+        "stop_time": run.stop_time,
+        "t_end": run.t_final,
+        **result.step_summary(),
+        "energy_dissipated": {
+            "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
+            "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),
+        },
+        "energy_residual_max": float(np.max(np.abs(result.energy.residual))),
+        "energy_residual_max_relative": float(np.max(np.abs(result.energy.residual)) / scale),
+        "constraint_violation_max": {
+            name: float(np.max(result.violation[:, k])) for k, name in enumerate(violation_names(result.model))
+        },
+        **contact_peaks(result.contact),
+        **lateral_summary(result.attitude, result.contact),
+        "rhs_evals": run.rhs_evals,
+        "accepted_steps": run.accepted_steps,
+        "rejected_steps": run.rejected_steps,
+        "events": run.events,
+        "wall_time_s": result.wall_time_s,
+        "integrator": config.integrator.method,
+        "config_hash": config.hash(),
+        "version": package_version(),
+    }
+
+
+def simulate_compliant(
+    config: Config, model: BuiltModel, progress: Callable[[float], None] | None = None
+) -> CompliantRunResult:
+    """Integrate the built ``model`` of ``config`` and measure the gait; writes nothing."""
+    start = time.perf_counter()
+    run = integrate_model(
+        model.system,
+        model.y0,
+        model.modes0,
+        config.integrator,
+        config.simulation.t_end,
+        config.output.sample_rate,
+        max_strikes=config.simulation.max_steps,
+        progress=progress,
+    )
+    wall = time.perf_counter() - start
+    result = CompliantRunResult(
+        config=config,
+        model=model,
+        run=run,
+        steps=step_table(model, run),
+        energy=energy_audit(model, run),
+        violation=constraint_drift(model, run),
+        wall_time_s=wall,
+    )
+    result.summary = summarize(result)
+    return result

@@ -1,0 +1,53 @@
+"""One result type for every run, compliant or rigid: status, summary, steps, channels, and ``write()``.
+
+The two kinds of run differ in what they measure (contact and constraints against impacts), not in how
+they are used: the CLI, the sweep runner and the storage layer see only :class:`RunResult`. Derived
+channels are computed the first time they are asked for and cached, so that the summary, the trajectory
+file and the figures never compute them twice.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import Any
+
+from biped_sim.config import Config
+from biped_sim.io.run_files import TrajectoryFile, write_run_directory
+from biped_sim.measure.steps import StepAccess, StepTable, steps_csv
+
+
+class RunResult(StepAccess, ABC):
+    """A simulated run and what it measured (see :class:`~biped_sim.simulate.compliant.CompliantRunResult`
+    and :class:`~biped_sim.simulate.rigid.RigidRunResult`)."""
+
+    config: Config
+    status: str  # 'walking', 'fell' or 'diverged'
+    steps: StepTable
+    wall_time_s: float
+    summary: dict[str, Any]
+
+    def unit(self, si_unit: str) -> str:
+        """This run's unit for an SI unit (compliant runs are SI throughout)."""
+        return si_unit
+
+    @abstractmethod
+    def trajectory(self) -> TrajectoryFile:
+        """The content of trajectory.h5."""
+
+    @abstractmethod
+    def integrity_text(self) -> str:
+        """One clause on the model's own check: the constraint violation, or the impact losses."""
+
+    def write(self, out_dir: str | Path) -> None:
+        """Write trajectory.h5, steps.csv, config.yaml and summary.json into ``out_dir`` (each atomically,
+        summary.json last)."""
+        write_run_directory(
+            Path(out_dir),
+            self.trajectory(),
+            config_yaml=self.config.to_yaml(),
+            config_hash=self.config.hash(),
+            status=self.status,
+            steps_csv=steps_csv(self.steps, self.unit),
+            summary=self.summary,
+        )

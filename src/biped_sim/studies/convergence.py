@@ -1,0 +1,84 @@
+"""The compliant gait approaching the rigid one as the contact stiffens, dissipates and stops slipping.
+
+The second strong check of the compliant model (MODEL.md 8): with stiff contact, e -> 0 and no slip it
+must converge to the rigid (impulsive-impact) model's gait.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
+from biped_sim.simulate import simulate
+from biped_sim.studies.limit_cycle import TOUCHDOWN_KEYS
+from biped_sim.walkers.model import contact_stiffness
+
+CONVERGE_LEVELS = 5
+CONVERGE_STEPS = 20
+
+
+@dataclass
+class ConvergenceRow:
+    """The compliant gait at one contact setting against the rigid gait."""
+
+    stiffness: float
+    restitution: float
+    bristle_stiffness: float
+    status: str
+    touchdown_difference: float  # max |compliant - rigid| over the four touchdown variables
+    period_difference: float  # compliant - rigid step period [s]
+    settled: float  # change of the touchdown state over the last compliant step
+    slip: float  # stance-foot slip over the last step [m]
+
+
+def converge(
+    config: Config, levels: int = CONVERGE_LEVELS, steps: int = CONVERGE_STEPS
+) -> tuple[LimitCycle, list[ConvergenceRow]]:
+    """The compliant gait approaching the rigid one as the contact stiffens, dissipates and stops slipping.
+
+    Level k (0-based): contact stiffness 10^k times the config's (Hertz or explicit), restitution
+    0.3 / sqrt(10)^k, and LuGre friction (mu_k 1.0, mu_s 1.2) whose bristle stiffness sigma0 = 1e4 * 10^k
+    per metre (damping sigma1 = 20 sqrt(sigma0 / 1e4)): LuGre sticks elastically instead of creeping as
+    the regularised laws do, so the slip vanishes with sigma0. Each compliant run starts on the rigid limit
+    cycle and walks ``steps`` steps; its last touchdown state and step period are compared with the rigid
+    touchdown (the pre-impact state, relabelled) and period.
+    """
+    rigid = rigid_limit_cycle(config)
+    rigid_touchdown = np.array([rigid.touchdown[k] for k in TOUCHDOWN_KEYS])
+    base_stiffness = contact_stiffness(config)
+    rows = []
+    for k in range(levels):
+        data = config.model_dump(mode="json")
+        stiffness = base_stiffness * 10.0**k
+        restitution = 0.3 / math.sqrt(10.0) ** k
+        sigma0 = 1e4 * 10.0**k
+        data["contact"].update(stiffness=stiffness, materials=None, restitution=restitution)
+        data["friction"].update(
+            model="lugre", mu_kinetic=1.0, mu_static=1.2, sigma0=sigma0, sigma1=20.0 * math.sqrt(sigma0 / 1e4)
+        )
+        data["simulation"].update(initial=rigid.fixed_point, max_steps=steps, t_end=max(200.0, config.simulation.t_end))
+        result = simulate(Config.model_validate(data))
+        states = result.heel_strike_states
+        if result.status != "walking" or len(states) < 3:
+            rows.append(
+                ConvergenceRow(stiffness, restitution, sigma0, result.status, math.nan, math.nan, math.nan, math.nan)
+            )
+            continue
+        touchdowns = np.array([[s[key] for key in TOUCHDOWN_KEYS] for s in states])
+        rows.append(
+            ConvergenceRow(
+                stiffness=stiffness,
+                restitution=restitution,
+                bristle_stiffness=sigma0,
+                status=result.status,
+                touchdown_difference=float(np.max(np.abs(touchdowns[-1] - rigid_touchdown))),
+                period_difference=float(result.step_periods[-1] - rigid.step_period),
+                settled=float(np.max(np.abs(touchdowns[-1] - touchdowns[-2]))),
+                slip=float(result.summary["slip_per_step"][-1]),
+            )
+        )
+    return rigid, rows
