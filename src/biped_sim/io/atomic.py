@@ -1,7 +1,10 @@
 """Atomic file writing: write to a temporary file in the target directory, then rename.
 
 A reader (or a resumed sweep) never sees a half-written file: either the old file, the new one,
-or none. ``os.replace`` is atomic on POSIX within one file system.
+or none. ``os.replace`` is atomic on POSIX within one file system. Temporary entries are named
+``.<target name>.<random>.tmp`` (what :func:`remove_stale_temporaries` clears after a killed write) and
+are created with the usual permissions (0666 or 0777 less the umask), not ``mkstemp``'s 0600, so that
+the renamed file is as readable as any other the user writes.
 """
 
 from __future__ import annotations
@@ -9,10 +12,39 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import tempfile
+import secrets
+import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+TEMPORARY_GLOB = ".*.tmp"
+
+
+def _create_file(path: Path) -> None:
+    os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+
+
+def temporary_sibling(target: Path, *, directory: bool = False) -> Path:
+    """Create a new, empty temporary file (or directory) beside ``target`` and return its path."""
+    create: Callable[[Path], None] = os.mkdir if directory else _create_file
+    for _ in range(100):
+        path = target.with_name(f".{target.name}.{secrets.token_hex(4)}.tmp")
+        try:
+            create(path)
+        except FileExistsError:
+            continue
+        return path
+    raise FileExistsError(f"no free temporary name beside {target}")
+
+
+def remove_stale_temporaries(directory: Path) -> None:
+    """Remove the temporary entries a killed write left in ``directory`` (files and staged directories)."""
+    for path in directory.glob(TEMPORARY_GLOB):
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
@@ -20,15 +52,12 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``target``; rename it onto ``target`` if the block succeeds."""
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    tmp_path = temporary_sibling(target)
     try:
         yield tmp_path
         os.replace(tmp_path, target)
     finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
+        tmp_path.unlink(missing_ok=True)
 
 
 def write_text_atomic(target: str | Path, text: str) -> None:

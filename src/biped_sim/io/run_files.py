@@ -53,7 +53,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
+from biped_sim.io.atomic import remove_stale_temporaries, write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
 
 
@@ -131,6 +131,18 @@ def write_trajectory(path: Path, trajectory: TrajectoryFile, config_yaml: str, c
     write_with(path, writer)
 
 
+def start_run_directory(out_dir: Path) -> None:
+    """Make ``out_dir`` ready for a new write: create it, remove the completion marker (summary.json) first, then
+    the temporary files a killed write left.
+
+    From then until summary.json is written again the directory reads as unfinished, so a write that dies
+    half-way never leaves an old summary beside new data files.
+    """
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "summary.json").unlink(missing_ok=True)
+    remove_stale_temporaries(out_dir)
+
+
 def write_run_directory(
     out_dir: Path,
     trajectory: TrajectoryFile,
@@ -141,8 +153,9 @@ def write_run_directory(
     steps_csv: str,
     summary: dict[str, Any],
 ) -> None:
-    """Write the four files of a run directory, each atomically; summary.json last (it marks completion)."""
-    out_dir.mkdir(parents=True, exist_ok=True)
+    """Write the four files of a run directory, each atomically: the old summary.json is removed first and the
+    new one written last (it marks completion)."""
+    start_run_directory(out_dir)
     write_trajectory(out_dir / "trajectory.h5", trajectory, config_yaml, config_hash, status)
     write_text_atomic(out_dir / "steps.csv", steps_csv)
     write_text_atomic(out_dir / "config.yaml", config_yaml)

@@ -57,6 +57,9 @@ def format_value(value: Any, fmt: str) -> str:
     if is_missing(value):
         return ""
     if fmt and isinstance(value, int | float) and not isinstance(value, bool):
+        if fmt.endswith("d") and isinstance(value, float):
+            # an integer counter read from a column with gaps is a float: 34.0 is shown as 34
+            return format(int(value), fmt) if value.is_integer() else format(value, "g")
         return format(value, fmt)
     return str(value)
 

@@ -70,21 +70,57 @@ class RunData:
         return self.run_dir.name
 
 
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).splitlines() or [type(exc).__name__])[0]
+
+
 def load_summary(run_dir: Path) -> dict[str, Any]:
-    """summary.json of a finished run; ConfigError if the directory holds no finished run."""
+    """summary.json of a finished run; ConfigError if the directory holds no finished run or the file is damaged."""
     path = run_dir / "summary.json"
     if not path.is_file():
         raise ConfigError(str(run_dir), "not a finished run directory (no summary.json)")
-    return json.loads(path.read_text())
+    try:
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:  # ValueError: truncated or not JSON (JSONDecodeError, UnicodeDecodeError)
+        raise ConfigError(str(path), f"damaged or truncated ({_first_line(exc)})") from None
+    if not isinstance(summary, dict):
+        raise ConfigError(str(path), "damaged: not a run summary")
+    return summary
+
+
+def trajectory_problem(path: Path, config_hash: str) -> str | None:
+    """Why the trajectory.h5 at ``path`` cannot be the result of the config with ``config_hash``, or None.
+
+    Opens the file and reads its metadata (every group and dataset header, which HDF5 writes last), not its
+    data: cheap enough to check every finished run when a sweep resumes.
+    """
+    try:
+        with h5py.File(path, "r") as f:
+            if f.attrs.get("config_hash") != config_hash:
+                return "trajectory.h5 of another config"
+            f.visititems(lambda name, item: None)
+    except (OSError, KeyError, RuntimeError, ValueError) as exc:
+        return "trajectory.h5 missing" if not path.exists() else f"trajectory.h5 unreadable ({_first_line(exc)})"
+    return None
 
 
 def load_run(run_dir: str | Path) -> RunData:
-    """Read a finished run directory (ConfigError if it is not one)."""
+    """Read a finished run directory (ConfigError if it is not one, or if its files are damaged)."""
     run_dir = Path(run_dir)
     summary = load_summary(run_dir)
     path = run_dir / "trajectory.h5"
     if not path.is_file():
         raise ConfigError(str(run_dir), "no trajectory.h5 in the run directory")
+    try:
+        return _read_trajectory(run_dir, path, summary)
+    except ConfigError:
+        raise
+    except (OSError, KeyError, RuntimeError, ValueError) as exc:  # what h5py raises on a truncated or damaged file
+        raise ConfigError(str(path), f"damaged or truncated ({_first_line(exc)})") from None
+
+
+def _read_trajectory(run_dir: Path, path: Path, summary: dict[str, Any]) -> RunData:
+    """The arrays of a compliant run's trajectory.h5 (h5py's own errors are turned into one line by the caller)."""
     with h5py.File(path, "r") as f:
         if f.attrs.get("dynamics") == "rigid":
             raise ConfigError(
