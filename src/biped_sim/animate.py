@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 
 from biped_sim.config import InitialState
 from biped_sim.errors import ConfigError
+from biped_sim.io.output import check_writable_dir
 from biped_sim.io.trajectory import RunData
 from biped_sim.plots import figure_style
 from biped_sim.walkers import build_model
@@ -34,11 +35,14 @@ FORMATS = (".gif", ".mp4")
 
 
 def check_output(out: Path) -> None:
-    """Reject an unsupported file type (or .mp4 without ffmpeg) before any work is done."""
+    """Reject an unsupported file type (or .mp4 without ffmpeg) or an unusable location before any work is done."""
+    if out.is_dir():
+        raise ConfigError("--out", f"{out} is a directory; give a file name ending in .gif or .mp4")
     if out.suffix.lower() not in FORMATS:
         raise ConfigError("--out", f"unsupported animation type {out.suffix or '(none)'!r}; use .gif or .mp4")
     if out.suffix.lower() == ".mp4" and not animation.writers.is_available("ffmpeg"):
         raise ConfigError("--out", ".mp4 needs ffmpeg on the PATH; install it or write a .gif")
+    check_writable_dir(out.parent)
 
 
 def frame_indices(time: np.ndarray, fps: float, speed: float, t_start: float, t_end: float | None) -> np.ndarray:

@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 import matplotlib as mpl
 import numpy as np
@@ -24,6 +24,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from biped_sim.io.atomic import write_with
+from biped_sim.io.output import OutputKind, staged_directory
 from biped_sim.io.trajectory import RunData
 from biped_sim.studies.bifurcation import BifurcationDiagram
 
@@ -104,12 +105,12 @@ def style_of(index: int) -> dict[str, object]:
 
 def add_legend(fig: Figure, ax: Axes, count: int) -> None:
     """A legend inside the axes for a few series, below the figure for many."""
-    if count <= 1:
+    handles, labels = ax.get_legend_handles_labels()
+    if count <= 1 or not handles:  # nothing drawn: e.g. a run that fell or diverged before its first heel strike
         return
     if count <= LEGEND_INSIDE_MAX:
-        ax.legend(frameon=False)
+        ax.legend(handles, labels, frameon=False)
     else:
-        handles, labels = ax.get_legend_handles_labels()
         fig.legend(handles, labels, loc="outside lower center", ncol=2, frameon=False)
 
 
@@ -117,6 +118,22 @@ def _positive(values: np.ndarray) -> np.ndarray:
     """Values for a log axis: zeros and negatives become gaps."""
     values = np.asarray(values, dtype=float)
     return np.where(values > 0, values, np.nan)
+
+
+def log_scale(ax: Axes, axis: Literal["x", "y"] = "y") -> None:
+    """A log scale on ``axis`` when the data drawn on it have a positive value; else it stays linear, with a note.
+
+    matplotlib cannot place log ticks without one, and fails only when the figure is saved: a run whose
+    constraint violations are all zero or NaN (one that diverged at once) would stop every figure after it.
+    """
+    data = [np.asarray(line.get_ydata() if axis == "y" else line.get_xdata(), dtype=float) for line in ax.get_lines()]
+    if any(np.any(np.isfinite(values) & (values > 0)) for values in data):
+        if axis == "y":
+            ax.set_yscale("log")
+        else:
+            ax.set_xscale("log")
+        return
+    ax.text(0.5, 0.5, "no positive values to draw", transform=ax.transAxes, ha="center", va="center", color="0.4")
 
 
 def completed_periods(run: RunData) -> np.ndarray:
@@ -149,8 +166,8 @@ def constraint_violation_figure(series: Series) -> Figure:
     for i, (label, run) in enumerate(series):
         top.plot(run.time, _positive(run.violation_position), label=label, **style_of(i))
         bottom.plot(run.time, _positive(run.violation_velocity), label=label, **style_of(i))
-    top.set_yscale("log")
-    bottom.set_yscale("log")
+    log_scale(top)
+    log_scale(bottom)
     top.set_ylabel(r"$\|\Phi\|$ [m]")
     bottom.set_ylabel(r"$\|\dot\Phi\|$ [m/s]")
     bottom.set_xlabel("time [s]")
@@ -235,7 +252,7 @@ def energy_balance_figure(series: Series) -> Figure:
     axes[0].set_ylabel("normal damping [J]")
     axes[1].set_ylabel("friction [J]")
     axes[2].set_ylabel("|energy residual| [J]")
-    axes[2].set_yscale("log")
+    log_scale(axes[2])
     axes[2].set_xlabel("time [s]")
     add_legend(fig, axes[0], len(series))
     return fig
@@ -280,10 +297,19 @@ RUN_FIGURES = (
     "slip",
     "phase_portrait",
 )
+PLOT_OUTPUT = OutputKind("plot", tuple(f"{name}.{fmt}" for name in RUN_FIGURES for fmt in ("png", "svg")))
 
 
 def plot_run(run: RunData, out_dir: Path) -> list[Path]:
-    """Every single-run figure of ``run`` into ``out_dir`` (PNG + SVG each)."""
+    """Every single-run figure of ``run`` into ``out_dir`` (PNG + SVG each), which is replaced as a whole once all
+    are drawn: a failure leaves the old figures as they were, and no old figure stays beside new ones."""
+    with staged_directory(out_dir, PLOT_OUTPUT) as stage:
+        paths = _draw_run(run, stage)
+    return [out_dir / path.name for path in paths]
+
+
+def _draw_run(run: RunData, out_dir: Path) -> list[Path]:
+    """Draw and save the single-run figures into ``out_dir``."""
     series = [(run.label, run)]
     figures = {
         "step_period": step_period_figure(series),
@@ -308,7 +334,7 @@ def parameter_lines_figure(
     for i, (label, x, y) in enumerate(lines):
         ax.plot(x, _positive(np.asarray(y, dtype=float)) if log_y else y, marker="o", label=label, **style_of(i))
     if log_y:
-        ax.set_yscale("log")
+        log_scale(ax)
     ax.set_xlabel(x_label)
     ax.set_ylabel(y_label)
     add_legend(fig, ax, len(lines))
@@ -316,11 +342,11 @@ def parameter_lines_figure(
 
 
 @styled
-def bar_figure(labels: Sequence[str], values: Sequence[float], x_label: str) -> Figure:
-    """One horizontal bar per run (sweeps without a numeric axis)."""
+def bar_figure(labels: Sequence[str], values: Sequence[float | None], x_label: str) -> Figure:
+    """One horizontal bar per run (sweeps without a numeric axis); a run without the value (None) has no bar."""
     fig, (ax,) = new_figure(height=0.8 + 0.2 * len(labels))
     positions = np.arange(len(labels))
-    ax.barh(positions, values, color="C0")
+    ax.barh(positions, [math.nan if value is None else value for value in values], color="C0")
     ax.set_yticks(positions, labels)
     ax.invert_yaxis()
     ax.grid(axis="y", visible=False)
@@ -335,8 +361,8 @@ def accuracy_cost_figure(series: Sequence[tuple[str, Sequence[float], Sequence[f
     for i, (label, wall, deviation) in enumerate(series):
         ax.plot(wall, _positive(np.asarray(deviation, dtype=float)), marker="os^vD<>"[i % 7], linestyle="none",
                 label=label, color=f"C{i % 10}")  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_yscale("log")
+    log_scale(ax, "x")
+    log_scale(ax, "y")
     ax.set_xlabel("integration wall time [s]")
     ax.set_ylabel("max |step period - reference| [s]")
     add_legend(fig, ax, len(series))

@@ -1,7 +1,8 @@
 """``biped-sim sweep``, ``report``, ``plot``, ``animate`` and ``compare``: experiments on top of ``run``.
 
-Each command checks all of its input before it writes anything; bad input is one line on
-stderr and exit code 2 (see :func:`~biped_sim.cli.common.user_errors`).
+Each command checks all of its input, and its output location, before it computes or writes anything;
+bad input is one line on stderr and exit code 2 (see :func:`~biped_sim.cli.common.user_errors` for the
+exit codes).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from rich.progress import (
 
 from biped_sim.cli.common import SetOption, app, load, user_errors
 from biped_sim.errors import ConfigError
+from biped_sim.io.output import OutputKind, check_output_dir, check_writable_dir, staged_directory
 
 if TYPE_CHECKING:
     from biped_sim.sweep import SweepProgress
@@ -32,6 +34,15 @@ NO_REFERENCE = (
     "errors Corral et al. 2020 report, configs/references/corral2020_liu_errors.yaml): add yours as a "
     "reference file, see docs/experiments.md"
 )
+COMPARE_OUTPUT = OutputKind("compare", ("compare_steps.*", "compare_stats.*", "compare.png", "compare.svg"))
+DAMAGED_SHOWN = 5
+
+
+def damaged_line(damaged: dict[str, str]) -> str:
+    """One line naming the finished runs found damaged, which the sweep runs again."""
+    named = [f"{name} ({why})" for name, why in list(damaged.items())[:DAMAGED_SHOWN]]
+    more = f" and {len(damaged) - DAMAGED_SHOWN} more" if len(damaged) > DAMAGED_SHOWN else ""
+    return f"warning: running {len(damaged)} damaged finished run(s) again: {', '.join(named)}{more}"
 
 
 class SweepReporter:
@@ -66,6 +77,8 @@ class SweepReporter:
     def __call__(self, progress: SweepProgress, name: str | None, row: dict[str, Any] | None) -> None:
         if name is None:
             pending = progress.total - progress.skipped
+            if progress.damaged:
+                typer.echo(damaged_line(progress.damaged), err=True)
             if not self.quiet:
                 self.console.print(
                     f"{progress.total} runs: {progress.skipped} already finished, {pending} to run", highlight=False
@@ -108,13 +121,18 @@ def sweep_command(
     if jobs is not None and jobs < 1:
         raise ConfigError("--jobs", "must be at least 1")
     sweep = load_sweep(sweep_file, set_ or [])
-    check_buildable(sweep)
     sweep_dir = out or sweep.default_output_dir()
+    check_writable_dir(sweep_dir)
+    check_buildable(sweep)
     pending = pending_runs(sweep, sweep_dir, resume)
     workers = max(1, min(jobs or default_jobs(), len(pending)))
     console = Console()
-    with make_executor(executor, workers, scheduler) as pool, SweepReporter(console, quiet) as reporter:
-        outcome = run_sweep(sweep, sweep_dir, pool, resume=resume, on_progress=reporter)
+    try:
+        with make_executor(executor, workers, scheduler) as pool, SweepReporter(console, quiet) as reporter:
+            outcome = run_sweep(sweep, sweep_dir, pool, resume=resume, on_progress=reporter)
+    except KeyboardInterrupt:
+        typer.echo(f"interrupted: finished runs are kept in {sweep_dir}/; the same command runs the rest", err=True)
+        raise typer.Exit(130) from None
     counts = ", ".join(f"{n} {status}" for status, n in sorted(outcome.progress.statuses.items()))
     console.print(
         f"sweep {sweep.spec.name}: {len(sweep.runs)} runs, {outcome.progress.skipped} already finished"
@@ -142,6 +160,8 @@ def report_command(
         f"report: {report.markdown_path} ({len(report.tables)} tables in tables/, "
         f"{len(report.figures)} figures in figures/)"
     )
+    if report.missing:
+        typer.echo(f"note: {report.missing}")
 
 
 @app.command("plot")
@@ -152,11 +172,16 @@ def plot_command(
 ) -> None:
     """The single-run figures: step period, constraint violation, contact forces, energy, slip, phase portrait."""
     from biped_sim.io.trajectory import load_run
-    from biped_sim.plots import plot_run
+    from biped_sim.plots import PLOT_OUTPUT, plot_run
 
+    out_dir = out or run_dir / "figures"
+    check_output_dir(out_dir, PLOT_OUTPUT)
     run = load_run(run_dir)
-    paths = plot_run(run, out or run_dir / "figures")
-    typer.echo(f"figures: {paths[0].parent}/ ({len(paths) // 2} figures, PNG and SVG)")
+    paths = plot_run(run, out_dir)
+    typer.echo(f"figures: {out_dir}/ ({len(paths) // 2} figures, PNG and SVG)")
+    if run.summary.get("stop_time") is not None:
+        status, stop = run.summary.get("status"), run.summary["stop_time"]
+        typer.echo(f"note: the run {status} at t = {stop:.3f} s; the figures end there")
 
 
 @app.command("animate")
@@ -179,8 +204,10 @@ def animate_command(
     typer.echo(f"animation: {out} ({frames} frames at {fps:g} fps)")
 
 
-def _compare_targets(target: Path, set_: list[str] | None, skip: int) -> tuple[list[tuple[str, list[float]]], Path]:
-    """(label, model step periods) of each target run, and the default output directory.
+def _compare_targets(
+    target: Path, set_: list[str] | None, skip: int
+) -> tuple[list[tuple[str, list[float]]], str | None]:
+    """(label, model step periods) of each target run, and a line on the sweep's runs without results (or None).
 
     A config file is simulated (nothing else is written); a run directory or a sweep directory
     is read from disk.
@@ -201,15 +228,15 @@ def _compare_targets(target: Path, set_: list[str] | None, skip: int) -> tuple[l
             ]
             if not series:
                 raise ConfigError(str(target), "no finished run in this sweep")
-            return series, target / "compare"
+            return series, view.missing_note("compared")
         summary = load_summary(target)
-        return [(target.name, model_step_periods(summary["step_times"], skip))], target / "compare"
+        return [(target.name, model_step_periods(summary["step_times"], skip))], None
     from biped_sim.simulate import simulate
 
     config = load(target, set_)
     result = simulate(config)
     label = target.stem + (f" ({', '.join(set_)})" if set_ else "")
-    return [(label, model_step_periods(result.summary["step_times"], skip))], Path("results") / "compare" / target.stem
+    return [(label, model_step_periods(result.summary["step_times"], skip))], None
 
 
 @app.command("compare")
@@ -243,22 +270,25 @@ def compare_command(
         )
     if not target.exists():
         raise ConfigError(str(target), "no such config file, run directory or sweep directory")
-    series, default_out = _compare_targets(target, set_, skip)
-    out_dir = out or default_out
+    out_dir = out or (target / "compare" if target.is_dir() else Path("results") / "compare" / target.stem)
+    check_output_dir(out_dir, COMPARE_OUTPUT)
+    series, missing = _compare_targets(target, set_, skip)
     comparisons = [compare_periods(ref, periods, label) for label, periods in series]
     tables = [step_table(comparisons), stats_table(comparisons)]
-    for table in tables:
-        table.write(out_dir)
-    published = comparisons[0].published
     figure = comparison_figure(
         ref.steps,
         ref.values,
         ref.spec.std,
         ref.short_name,
         [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
-        published,
+        comparisons[0].published,
     )
-    save_figure(figure, out_dir, "compare")
+    with staged_directory(out_dir, COMPARE_OUTPUT) as stage:
+        for table in tables:
+            table.write(stage)
+        save_figure(figure, stage, "compare")
     typer.echo(tables[0].markdown() if len(comparisons) == 1 else "")
     typer.echo(tables[1].markdown())
     typer.echo(f"files: {out_dir}/ (compare_steps, compare_stats as .md/.csv/.tex; compare.png, compare.svg)")
+    if missing:
+        typer.echo(f"note: {missing}")

@@ -14,6 +14,11 @@ per integrator or model), step period against step number, constraint violation 
 contact forces around a heel strike, energy dissipated and the balance residual, stance-foot
 slip per step, phase portraits, and the cost of each run. Overlays of many runs show the runs at
 one value of the numeric parameter (stated in the caption), at most ``MAX_OVERLAY`` of them.
+
+A sweep need not be complete: runs that raised (``error``), were not run (``pending``) or have any
+other status without results are listed in the tables with empty metrics, and left out of the figures
+with one line saying how many and why. The report is written into a temporary directory that replaces
+the old one only when everything is written (:func:`~biped_sim.io.output.staged_directory`).
 """
 
 from __future__ import annotations
@@ -23,10 +28,15 @@ from pathlib import Path
 
 from biped_sim.errors import ConfigError
 from biped_sim.io.atomic import write_text_atomic
+from biped_sim.io.output import OutputKind, check_output_dir, staged_directory
 from biped_sim.io.tables import Table
 from biped_sim.report.figures import build_figures
 from biped_sim.report.tables import tables_for
 from biped_sim.report.view import SweepView
+
+REPORT_OUTPUT = OutputKind(
+    "report", ("report.md", *(f"tables/*.{ext}" for ext in ("md", "csv", "tex")), "figures/*.png", "figures/*.svg")
+)
 
 
 @dataclass
@@ -36,6 +46,7 @@ class Report:
     out_dir: Path
     tables: list[Table]
     figures: dict[str, str]  # name -> caption
+    missing: str | None = None  # one line on the runs without results, if any
 
     @property
     def markdown_path(self) -> Path:
@@ -65,20 +76,29 @@ def report_markdown(view: SweepView, tables: list[Table], captions: dict[str, st
     lines += [table.markdown(heading_level=2) for table in tables]
     lines.append("## Figures")
     lines.append("")
+    missing = view.missing_note("drawn")
+    if missing:
+        lines += [f"*{missing}.*", ""]
     for name, caption in captions.items():
         lines += [f"![{caption}](figures/{name}.png)", "", f"*{caption}* ([SVG](figures/{name}.svg))", ""]
     return "\n".join(lines)
 
 
 def build_report(sweep_dir: Path, out_dir: Path | None = None) -> Report:
-    """Write report.md, tables/*.{md,csv,tex} and figures/*.{png,svg} for the sweep in ``sweep_dir``."""
+    """Write report.md, tables/*.{md,csv,tex} and figures/*.{png,svg} for the sweep in ``sweep_dir``.
+
+    The output directory (default ``sweep_dir/report``) is checked before anything is computed and replaced as
+    a whole when everything is written; ConfigError on a damaged sweep or an unusable output directory.
+    """
     view = SweepView.load(sweep_dir)
     if not view.finished:
         raise ConfigError(str(sweep_dir), "no finished run in this sweep (run or resume it first)")
     out_dir = out_dir or sweep_dir / "report"
+    check_output_dir(out_dir, REPORT_OUTPUT)
     tables = tables_for(view)
-    for table in tables:
-        table.write(out_dir / "tables")
-    captions = build_figures(view, out_dir / "figures")
-    write_text_atomic(out_dir / "report.md", report_markdown(view, tables, captions))
-    return Report(out_dir=out_dir, tables=tables, figures=captions)
+    with staged_directory(out_dir, REPORT_OUTPUT) as stage:
+        for table in tables:
+            table.write(stage / "tables")
+        captions = build_figures(view, stage / "figures")
+        write_text_atomic(stage / "report.md", report_markdown(view, tables, captions))
+    return Report(out_dir=out_dir, tables=tables, figures=captions, missing=view.missing_note("drawn"))

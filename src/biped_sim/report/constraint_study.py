@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import RunData, load_run
-from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, save_figure, style_of, styled
+from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, log_scale, save_figure, style_of, styled
 
 FIGURE_NAME = "constraint_violation"
 INTEGRATOR_ORDER = ("euler", "rk2", "rk4", "dopri5", "dop853", "radau", "bdf")
@@ -83,7 +83,7 @@ def constraint_study_figure(groups: dict[str, list[RunData]]) -> Figure:
             for row, values in enumerate(channels):
                 axes[row, col].plot(run.time, _positive(np.asarray(values)), label=gains_label(run), **style)
         for row in range(rows):
-            axes[row, col].set_yscale("log")
+            log_scale(axes[row, col])
         axes[-1, col].set_xlabel("time [s]")
     axes[0, 0].set_ylabel(r"$\|\Phi\|$ [m]")
     axes[1, 0].set_ylabel(r"$\|\dot\Phi\|$ [m/s]")

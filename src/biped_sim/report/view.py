@@ -10,7 +10,7 @@ from typing import Any
 import pandas as pd
 
 from biped_sim.io.tables import Column
-from biped_sim.sweep.runner import read_sweep
+from biped_sim.sweep.rows import read_sweep
 from biped_sim.sweep.spec import short_keys
 
 MAX_OVERLAY = 10
@@ -100,7 +100,20 @@ class SweepView:
 
     @property
     def finished(self) -> list[dict[str, Any]]:
+        """The runs with results (walking, fell or diverged): what figures and comparisons can use."""
         return [row for row in self.rows if row["status"] in FINISHED]
+
+    def missing_note(self, verb: str) -> str | None:
+        """One line on the runs without results, e.g. '2 of 5 runs have no results and are not drawn (1 error,
+        1 pending)'; None when every run has results."""
+        counts: dict[str, int] = {}
+        for row in self.rows:
+            if row["status"] not in FINISHED:
+                counts[row["status"]] = counts.get(row["status"], 0) + 1
+        if not counts:
+            return None
+        detail = ", ".join(f"{n} {status}" for status, n in counts.items())
+        return f"{sum(counts.values())} of {len(self.rows)} runs have no results and are not {verb} ({detail})"
 
     def label(self, row: dict[str, Any], exclude: tuple[str, ...] = ()) -> str:
         """'slope=0.018, rk4 dt = 1e-04 s': the swept values of a run (integrator with its step control)."""

@@ -8,6 +8,7 @@ with local_executor(jobs=2) as executor:
 
 from __future__ import annotations
 
+from biped_sim.sweep.rows import read_sweep
 from biped_sim.sweep.runner import (
     SweepOutcome,
     SweepProgress,
@@ -17,7 +18,6 @@ from biped_sim.sweep.runner import (
     local_executor,
     make_executor,
     pending_runs,
-    read_sweep,
     run_sweep,
 )
 from biped_sim.sweep.spec import RangeSpec, RunSpec, Sweep, SweepSpec, check_buildable, expand, load_sweep

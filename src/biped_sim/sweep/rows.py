@@ -1,18 +1,25 @@
-"""One row of ``sweep.csv`` per run: its swept values, its settings and what it measured.
+"""One row of ``sweep.csv`` per run: its swept values, its settings and what it measured; the table written and read.
 
 The metrics come from the run's summary.json alone (never its trajectory.h5), so a row
 built by a worker right after its run and a row rebuilt from disk when a sweep resumes are the
 same. Column names carry their units (``_s``, ``_m``, ``_J``...) so the table reads on its own.
+A run without results (status ``error``, ``pending``, or any other a later tool adds) has empty metrics.
 """
 
 from __future__ import annotations
 
+import importlib.util
+import json
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from biped_sim.config import Config
+from biped_sim.errors import ConfigError
+from biped_sim.io.atomic import write_text_atomic, write_with
 from biped_sim.rigid.start import INTEGRATOR
 
 # Settings that the report's comparison tables group by; always present, swept or not.
@@ -53,6 +60,7 @@ METRIC_COLUMNS = (
     "error",
 )
 
+INTEGER_COLUMNS = ("n_steps", "rhs_evals", "accepted_steps", "rejected_steps")
 FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 
 
@@ -129,3 +137,49 @@ def unfinished_metrics(status: str, error: str) -> dict[str, Any]:
     row: dict[str, Any] = dict.fromkeys(METRIC_COLUMNS, math.nan)
     row.update(status=status, error=error)
     return row
+
+
+def parquet_available() -> bool:
+    """pyarrow (or fastparquet) present: the sweep table is also written as Parquet."""
+    return any(importlib.util.find_spec(name) is not None for name in ("pyarrow", "fastparquet"))
+
+
+def table_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    """The sweep table as a DataFrame (integer counters stay integers where present)."""
+    frame = pd.DataFrame(rows)
+    for column in INTEGER_COLUMNS:
+        frame[column] = frame[column].astype("Int64")
+    return frame
+
+
+def write_table(rows: list[dict[str, Any]], sweep_dir: Path) -> None:
+    """Write sweep.csv (and sweep.parquet) atomically."""
+    frame = table_frame(rows)
+    write_text_atomic(sweep_dir / "sweep.csv", frame.to_csv(index=False))
+    if parquet_available():
+        write_with(sweep_dir / "sweep.parquet", lambda tmp: frame.to_parquet(tmp, index=False))
+
+
+def read_sweep(sweep_dir: Path) -> tuple[dict[str, Any], pd.DataFrame]:
+    """(manifest, table) of a sweep directory; ConfigError if it is not one or its files are damaged."""
+    manifest_path, table_path = sweep_dir / "sweep.json", sweep_dir / "sweep.csv"
+    if not manifest_path.is_file() or not table_path.is_file():
+        raise ConfigError(str(sweep_dir), "not a sweep directory (no sweep.json and sweep.csv)")
+    try:
+        data = json.loads(manifest_path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError(str(manifest_path), f"damaged or truncated ({exc})") from None
+    dtypes = {"error": str, **dict.fromkeys(INTEGER_COLUMNS, "Int64")}
+    try:
+        frame = pd.read_csv(table_path, keep_default_na=False, na_values=[""], dtype=dtypes)
+    except (OSError, ValueError) as exc:  # pandas' parser errors are ValueErrors
+        raise ConfigError(str(table_path), f"damaged or truncated ({str(exc).strip()})") from None
+    missing = [c for c in ("run", *METRIC_COLUMNS) if c not in frame.columns]
+    if not isinstance(data, dict) or not isinstance(data.get("runs"), list) or "axes" not in data:
+        raise ConfigError(str(manifest_path), "damaged: not a sweep manifest")
+    if missing:
+        raise ConfigError(str(table_path), f"damaged or truncated (no columns {', '.join(missing)})")
+    if len(frame) != len(data["runs"]) or frame["run"].isna().any() or frame["status"].isna().any():
+        raise ConfigError(str(table_path), f"damaged or truncated ({len(frame)} rows for {len(data['runs'])} runs)")
+    frame["error"] = frame["error"].fillna("")
+    return data, frame

@@ -1,47 +1,53 @@
 """Running a sweep: executors, the worker function, resume, and the sweep table.
 
 The runner is written against :class:`concurrent.futures.Executor`: a local
-``ProcessPoolExecutor`` (explicit ``spawn`` context, one BLAS/numba thread per worker) or a Dask
-cluster through ``distributed.Client(...).get_executor()``, with no second code path. Each
-worker simulates one run, writes its own run directory (every file atomically, summary.json
-last) and returns one small row; the parent never touches a run's HDF5 file while it is written.
+:class:`~biped_sim.sweep.pool.WorkerPool` (fresh interpreters, one BLAS/numba thread per worker; a dead
+worker fails only its own run) or a Dask cluster through ``distributed.Client(...).get_executor()``,
+with no second code path. Each worker simulates one run, writes its own run directory (every file
+atomically, summary.json last) and returns one small row; the parent never touches a run's HDF5 file
+while it is written. A sweep holds a lock on its directory (:mod:`biped_sim.sweep.lock`).
 
 Layout of a sweep directory::
 
     sweep.json            manifest: name, source, axes, overrides, one entry per run
     sweep.csv             one row per run (rows.py), rewritten atomically after every run
     sweep.parquet         the same table, when pyarrow is installed
+    .sweep.lock           held while a sweep writes the directory
     runs/<stem>-<hash>/   trajectory.h5, steps.csv, config.yaml, summary.json (or error.json)
 
-A run is finished when its summary.json exists and names the run's config hash; resuming skips
-exactly those. A run that raised leaves error.json (and no summary.json) and is retried on resume.
+A run is finished when its summary.json exists and names the run's config hash and its trajectory.h5
+opens and carries that hash; resuming skips exactly those, and runs again (and names) the damaged ones.
+A run that raised, or whose worker died, leaves error.json (and no summary.json) and is retried on resume.
+Interrupted (Ctrl-C), a sweep cancels what has not started, stops what runs and leaves a table that
+matches the run directories: finished runs as finished, the others pending.
 """
 
 from __future__ import annotations
 
 import contextlib
-import importlib.util
+import inspect
 import json
-import multiprocessing
 import os
 import traceback
 from collections.abc import Callable, Iterator
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from biped_sim.config import Config, config_from_dict
 from biped_sim.errors import ConfigError
-from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
+from biped_sim.io.atomic import write_json_atomic
+from biped_sim.io.run_files import start_run_directory
+from biped_sim.io.trajectory import trajectory_problem
 from biped_sim.simulate import simulate
-from biped_sim.sweep.rows import METRIC_COLUMNS, metrics_from_summary, settings_of, unfinished_metrics
+from biped_sim.sweep.lock import sweep_lock
+from biped_sim.sweep.pool import WorkerDiedError, WorkerPool
+from biped_sim.sweep.rows import metrics_from_summary, settings_of, unfinished_metrics, write_table
 from biped_sim.sweep.spec import RunSpec, Sweep
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
-INTEGER_COLUMNS = ("n_steps", "rhs_evals", "accepted_steps", "rejected_steps")
+RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
 FAILED_STATUSES = ("error", "diverged")
 STIFF_METHODS = ("radau", "bdf")
 WARM_UP_TIME = 1e-3  # s of simulated time
@@ -62,32 +68,13 @@ def default_jobs() -> int:
 
 
 @contextlib.contextmanager
-def single_threaded_children() -> Iterator[None]:
-    """Set the thread variables to 1 in this process's environment while child processes start.
-
-    A spawned worker imports numpy (and with it OpenBLAS, which reads its thread count once)
-    before any initializer runs, so the variables must already be in the environment it inherits.
-    """
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
-    os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
-    try:
-        yield
-    finally:
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
-
-
-@contextlib.contextmanager
 def local_executor(jobs: int) -> Iterator[Executor]:
-    """A process pool of ``jobs`` single-threaded workers, started with ``spawn`` (no inherited threads or locks)."""
-    context = multiprocessing.get_context("spawn")
-    with (
-        single_threaded_children(),
-        ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=init_worker) as pool,
-    ):
+    """A pool of ``jobs`` single-threaded worker processes (fresh interpreters: no inherited threads or locks).
+
+    The thread variables are in the workers' environment from the start: numpy reads OpenBLAS's thread
+    count once, on import, before any initializer could set it.
+    """
+    with WorkerPool(jobs, env={**os.environ, **dict.fromkeys(THREAD_VARIABLES, "1")}) as pool:
         yield pool
 
 
@@ -105,8 +92,9 @@ def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
         if scheduler:
             try:
                 client = stack.enter_context(Client(scheduler, timeout="10s"))
-            except (OSError, TimeoutError) as exc:
-                raise ConfigError("--scheduler", f"cannot connect to {scheduler}: {exc}") from None
+            except (OSError, TimeoutError, ValueError, TypeError) as exc:  # unreachable, or not an address at all
+                reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise ConfigError("--scheduler", f"cannot connect to {scheduler!r}: {reason}") from None
         else:
             cluster = stack.enter_context(
                 LocalCluster(
@@ -150,11 +138,14 @@ class RunTask:
     config: dict[str, Any]
 
 
+def record_error(run_dir: Path, name: str, message: str, trace: str) -> None:
+    """error.json of a run that raised or whose worker died: it has no results, and is retried on resume."""
+    write_json_atomic(run_dir / "error.json", {"status": "error", "error": message, "traceback": trace, "name": name})
+
+
 def _clear_unfinished(run_dir: Path) -> None:
-    """Remove what an earlier, unfinished attempt may have left: temp files, an old marker, an error record."""
-    for path in run_dir.glob(".*.tmp"):
-        path.unlink(missing_ok=True)
-    (run_dir / "summary.json").unlink(missing_ok=True)
+    """Remove what an earlier attempt may have left: the old marker and temp files, an error record."""
+    start_run_directory(run_dir)
     (run_dir / "error.json").unlink(missing_ok=True)
 
 
@@ -182,7 +173,6 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     run never stops a sweep.
     """
     run_dir = Path(task.run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
     _clear_unfinished(run_dir)
     try:
         config = Config.model_validate(task.config)
@@ -191,12 +181,15 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         result.write(run_dir)
         return metrics_from_summary(result.summary)
     except Exception as exc:
-        message = f"{type(exc).__name__}: {exc}".splitlines()[0]
-        write_json_atomic(
-            run_dir / "error.json",
-            {"status": "error", "error": message, "traceback": traceback.format_exc(), "name": task.name},
-        )
+        message = error_message(exc)
+        record_error(run_dir, task.name, message, traceback.format_exc())
         return unfinished_metrics("error", message)
+
+
+def error_message(exc: BaseException) -> str:
+    """The one line the sweep table shows for a failed run: 'RuntimeError: ...', or 'worker died (signal 9)'."""
+    text = str(exc) if isinstance(exc, WorkerDiedError) else f"{type(exc).__name__}: {exc}"
+    return text.splitlines()[0]
 
 
 def finished_summary(run_dir: Path, config_hash: str) -> dict[str, Any] | None:
@@ -211,27 +204,6 @@ def finished_summary(run_dir: Path, config_hash: str) -> dict[str, Any] | None:
     return summary
 
 
-def parquet_available() -> bool:
-    """pyarrow (or fastparquet) present: the sweep table is also written as Parquet."""
-    return any(importlib.util.find_spec(name) is not None for name in ("pyarrow", "fastparquet"))
-
-
-def table_frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
-    """The sweep table as a DataFrame (integer counters stay integers where present)."""
-    frame = pd.DataFrame(rows)
-    for column in INTEGER_COLUMNS:
-        frame[column] = frame[column].astype("Int64")
-    return frame
-
-
-def write_table(rows: list[dict[str, Any]], sweep_dir: Path) -> None:
-    """Write sweep.csv (and sweep.parquet) atomically."""
-    frame = table_frame(rows)
-    write_text_atomic(sweep_dir / "sweep.csv", frame.to_csv(index=False))
-    if parquet_available():
-        write_with(sweep_dir / "sweep.parquet", lambda tmp: frame.to_parquet(tmp, index=False))
-
-
 @dataclass
 class SweepProgress:
     """Counts reported to the progress callback after every run."""
@@ -241,6 +213,7 @@ class SweepProgress:
     done: int = 0
     failed: int = 0
     statuses: dict[str, int] = field(default_factory=dict)
+    damaged: dict[str, str] = field(default_factory=dict)  # finished runs found damaged (run again): name -> why
 
     def add(self, status: str) -> None:
         self.done += 1
@@ -280,15 +253,118 @@ def manifest(sweep: Sweep) -> dict[str, Any]:
     }
 
 
+def verified_summary(run_dir: Path, config_hash: str) -> tuple[dict[str, Any] | None, str | None]:
+    """(summary, None) for a finished, intact run; (None, why) for a damaged one; (None, None) if it never finished.
+
+    Intact: summary.json parses and names ``config_hash``, trajectory.h5 opens and carries it, and the other
+    files are there.
+    """
+    if not (run_dir / "summary.json").exists():
+        return None, None
+    summary = finished_summary(run_dir, config_hash)
+    if summary is None:
+        return None, "summary.json unreadable or of another config"
+    problem = trajectory_problem(run_dir / "trajectory.h5", config_hash)
+    missing = [name for name in RUN_FILES if not (run_dir / name).is_file()]
+    if problem is None and missing:
+        problem = f"{missing[0]} missing"
+    return (summary, None) if problem is None else (None, problem)
+
+
+@dataclass
+class Survey:
+    """What a sweep directory already holds: the intact finished runs and the damaged ones."""
+
+    finished: dict[str, dict[str, Any]]  # run name -> summary
+    damaged: dict[str, str]  # run name -> what is wrong
+
+
+def survey(sweep: Sweep, sweep_dir: Path, resume: bool) -> Survey:
+    """Check every run directory of ``sweep`` (nothing is finished without ``resume``)."""
+    found = Survey({}, {})
+    if resume:
+        for run in sweep.runs:
+            summary, problem = verified_summary(sweep_dir / "runs" / run.name, run.config_hash)
+            if summary is not None:
+                found.finished[run.name] = summary
+            elif problem is not None:
+                found.damaged[run.name] = problem
+    return found
+
+
 def pending_runs(sweep: Sweep, sweep_dir: Path, resume: bool) -> list[RunSpec]:
-    """The runs still to do: all of them without ``resume``, else those without a finished summary."""
-    if not resume:
-        return list(sweep.runs)
-    return [run for run in sweep.runs if finished_summary(sweep_dir / "runs" / run.name, run.config_hash) is None]
+    """The runs still to do: all of them without ``resume``, else those not finished intact."""
+    finished = survey(sweep, sweep_dir, resume).finished
+    return [run for run in sweep.runs if run.name not in finished]
 
 
 def _row(run: RunSpec, metrics: dict[str, Any]) -> dict[str, Any]:
     return {"run": run.name, "config_hash": run.config_hash, **run.params, **settings_of(run.config), **metrics}
+
+
+def _metrics(future: Future[dict[str, Any]], run: RunSpec, run_dir: Path) -> dict[str, Any]:
+    """A finished task's metric columns; a task the executor could not run (e.g. its worker died) is recorded
+    as an error here, since its worker could not record it."""
+    try:
+        return future.result()
+    except Exception as exc:
+        message = error_message(exc)
+        record_error(run_dir, run.name, message, "".join(traceback.format_exception(exc)))
+        return unfinished_metrics("error", message)
+
+
+def _stop(executor: Executor) -> None:
+    """Cancel the queue and stop running tasks where the executor can (``cancel_futures``: the local pool ends its
+    workers); Dask's executor cannot, and only stops being waited for."""
+    if "cancel_futures" in inspect.signature(executor.shutdown).parameters:
+        executor.shutdown(wait=True, cancel_futures=True)
+    else:
+        executor.shutdown(wait=False)
+
+
+@dataclass
+class _Ledger:
+    """The sweep table being filled in, the counts, and the progress callback."""
+
+    sweep_dir: Path
+    rows: list[dict[str, Any]]
+    progress: SweepProgress
+    on_progress: Callable[[SweepProgress, str | None, dict[str, Any] | None], None] | None
+
+    def record(self, run: RunSpec, metrics: dict[str, Any], announce: bool = True) -> None:
+        self.rows[run.index] = _row(run, metrics)
+        self.progress.add(metrics["status"])
+        write_table(self.rows, self.sweep_dir)
+        if announce and self.on_progress is not None:
+            self.on_progress(self.progress, run.name, self.rows[run.index])
+
+    def settle(self, runs: list[RunSpec]) -> None:
+        """After an interrupt: record the runs that finished on disk meanwhile, so that the table matches the
+        run directories (the others stay pending)."""
+        for run in runs:
+            if self.rows[run.index]["status"] == "pending":
+                summary = finished_summary(self.sweep_dir / "runs" / run.name, run.config_hash)
+                if summary is not None:
+                    self.record(run, metrics_from_summary(summary), announce=False)
+
+
+def _execute(pending: list[RunSpec], executor: Executor, ledger: _Ledger) -> None:
+    """Submit every pending run and record each as it finishes; on an interrupt stop the executor, settle, re-raise."""
+    futures: dict[Future[dict[str, Any]], RunSpec] = {}
+    runs_dir = ledger.sweep_dir / "runs"
+    try:
+        for run in pending:
+            task = RunTask(run.name, str(runs_dir / run.name), run.config.model_dump(mode="json"))
+            futures[executor.submit(execute_run, task)] = run
+        for future in as_completed(futures):
+            run = futures[future]
+            ledger.record(run, _metrics(future, run, runs_dir / run.name))
+    except BaseException:
+        for future in futures:
+            future.cancel()
+        _stop(executor)
+        ledger.settle(pending)
+        raise
 
 
 def run_sweep(
@@ -302,60 +378,25 @@ def run_sweep(
     """Run every pending run of ``sweep`` on ``executor``; write the run directories and the sweep table.
 
     ``on_progress(progress, run_name, row)`` is called once before the first run (name None) and
-    after each run. With ``resume``, runs whose summary.json carries their config hash are not
-    run again. Interrupted (KeyboardInterrupt), the table of what finished is still written.
+    after each run. With ``resume``, runs finished intact are not run again; damaged ones are (and are
+    listed in ``progress.damaged``). The sweep directory is locked for the duration (ConfigError naming
+    the holder if another sweep writes it). Interrupted (KeyboardInterrupt), the queue is cancelled, the
+    executor stopped and the table of what finished written before the interrupt propagates.
     """
     sweep_dir.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(sweep_dir / "sweep.json", manifest(sweep))
-    rows: list[dict[str, Any]] = []
-    pending: list[RunSpec] = []
-    progress = SweepProgress(total=len(sweep.runs))
-    for run in sweep.runs:
-        run_dir = sweep_dir / "runs" / run.name
-        summary = finished_summary(run_dir, run.config_hash) if resume else None
-        if summary is not None:
-            rows.append(_row(run, metrics_from_summary(summary)))
-            progress.skipped += 1
-        else:
-            rows.append(_row(run, unfinished_metrics("pending", "")))
-            pending.append(run)
-    write_table(rows, sweep_dir)
-    if on_progress is not None:
-        on_progress(progress, None, None)
-    futures: dict[Future[dict[str, Any]], RunSpec] = {}
-    try:
-        for run in pending:
-            task = RunTask(run.name, str(sweep_dir / "runs" / run.name), run.config.model_dump(mode="json"))
-            futures[executor.submit(execute_run, task)] = run
-        for future in as_completed(futures):
-            run = futures[future]
-            try:
-                metrics = future.result()
-            except Exception as exc:  # the worker process itself died (e.g. killed): record and go on
-                metrics = unfinished_metrics("error", f"{type(exc).__name__}: {exc}".splitlines()[0])
-            rows[run.index] = _row(run, metrics)
-            progress.add(metrics["status"])
-            write_table(rows, sweep_dir)
-            if on_progress is not None:
-                on_progress(progress, run.name, rows[run.index])
-    except BaseException:
-        for future in futures:
-            future.cancel()
-        raise
-    finally:
+    with sweep_lock(sweep_dir):
+        write_json_atomic(sweep_dir / "sweep.json", manifest(sweep))
+        found = survey(sweep, sweep_dir, resume)
+        progress = SweepProgress(total=len(sweep.runs), skipped=len(found.finished), damaged=found.damaged)
+        rows = [
+            _row(run, metrics_from_summary(found.finished[run.name]))
+            if run.name in found.finished
+            else _row(run, unfinished_metrics("pending", ""))
+            for run in sweep.runs
+        ]
         write_table(rows, sweep_dir)
-    return SweepOutcome(sweep_dir=sweep_dir, rows=rows, progress=progress)
-
-
-def read_sweep(sweep_dir: Path) -> tuple[dict[str, Any], pd.DataFrame]:
-    """(manifest, table) of a sweep directory; ConfigError if it is not one."""
-    manifest_path, table_path = sweep_dir / "sweep.json", sweep_dir / "sweep.csv"
-    if not manifest_path.is_file() or not table_path.is_file():
-        raise ConfigError(str(sweep_dir), "not a sweep directory (no sweep.json and sweep.csv)")
-    data = json.loads(manifest_path.read_text())
-    frame = pd.read_csv(table_path, keep_default_na=False, na_values=[""], dtype={"error": str})
-    missing = [c for c in ("run", *METRIC_COLUMNS) if c not in frame.columns]
-    if missing:
-        raise ConfigError(str(table_path), f"missing columns {', '.join(missing)}")
-    frame["error"] = frame["error"].fillna("")
-    return data, frame
+        if on_progress is not None:
+            on_progress(progress, None, None)
+        pending = [run for run in sweep.runs if run.name not in found.finished]
+        _execute(pending, executor, _Ledger(sweep_dir, rows, progress, on_progress))
+        return SweepOutcome(sweep_dir=sweep_dir, rows=rows, progress=progress)

@@ -37,7 +37,9 @@ from biped_sim.errors import ConfigError
 from biped_sim.simulate import prepare_model
 
 _DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+_NAME_SAFE = re.compile(r"[A-Za-z0-9.+-]+")
 STEM_MAX_LENGTH = 96
+MAX_RUNS = 1_000_000  # a sweep file that expands to more runs is refused before anything is expanded
 
 
 class RangeSpec(BaseModel):
@@ -126,10 +128,14 @@ class SweepSpec(BaseModel):
     def _axes_consistent(self) -> SweepSpec:
         if not self.grid and not self.zipped:
             raise ValueError("grid: a sweep needs at least one axis in grid or zip")
-        lengths = {key: len(axis_values(axis)) for key, axis in self.zipped.items()}
+        lengths = {key: axis_length(axis) for key, axis in self.zipped.items()}
         if len(set(lengths.values())) > 1:
             detail = ", ".join(f"{key} has {n}" for key, n in lengths.items())
             raise ValueError(f"zip: lists must have equal lengths ({detail})")
+        count = math.prod(axis_length(axis) for axis in self.grid.values()) * max(lengths.values(), default=1)
+        if count > MAX_RUNS:
+            where = "grid" if self.grid else "zip"
+            raise ValueError(f"{where}: the sweep expands to {count:,} runs, more than the limit of {MAX_RUNS:,}")
         for key in self.overrides:
             if key in self.grid or key in self.zipped:
                 raise ValueError(f"set: {key} is also a sweep axis")
@@ -149,6 +155,11 @@ def axis_values(axis: AxisSpec) -> list[Any]:
     return axis.values() if isinstance(axis, RangeSpec) else list(axis)
 
 
+def axis_length(axis: AxisSpec) -> int:
+    """The number of values of one axis, without expanding a range."""
+    return axis.num if isinstance(axis, RangeSpec) else len(axis)
+
+
 def _format_value(value: Any) -> str:
     """A short, file-name-safe text for one axis value."""
     if isinstance(value, bool):
@@ -157,7 +168,8 @@ def _format_value(value: Any) -> str:
         text = f"{value:g}" if math.isfinite(value) else str(value)
     else:
         text = str(value)
-    return re.sub(r"[^A-Za-z0-9.+-]+", "-", text).strip("-") or "x"
+    # runs of other characters become one '-'; a value's own sign stays (slope -0.3 is 'slope=-0.3')
+    return "-".join(_NAME_SAFE.findall(text)) or "x"
 
 
 def short_keys(keys: list[str]) -> dict[str, str]:

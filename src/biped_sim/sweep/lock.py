@@ -1,0 +1,38 @@
+"""One sweep at a time per sweep directory: an exclusive lock on ``SWEEP_DIR/.sweep.lock`` while a sweep writes it.
+
+Two sweeps into one directory would run the same runs twice and overwrite each other's table. The lock
+is an advisory ``flock`` on a file that holds the holder's pid and host, so that the second sweep can
+say who holds it; the kernel releases it when the holder ends, however it ends (no stale lock after a
+``kill -9``). The file itself stays (removing it would let two sweeps lock two different files).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+
+from biped_sim.errors import ConfigError
+
+LOCK_NAME = ".sweep.lock"
+
+
+@contextlib.contextmanager
+def sweep_lock(sweep_dir: Path) -> Iterator[None]:
+    """Hold the lock of ``sweep_dir`` (an existing directory) for the block; ConfigError naming the holder if taken."""
+    fd = os.open(sweep_dir / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 256, 0).decode(errors="replace").strip() or "holder unknown"
+            reason = f"another sweep is writing this directory ({holder}); wait for it or choose another --out"
+            raise ConfigError(str(sweep_dir), reason) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()} on host {socket.gethostname()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
