@@ -37,6 +37,7 @@ sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its rep
 lint: $(STAMP)
 	$(BIN)/ruff check src tests
 	$(BIN)/ruff format --check src tests
+	$(BIN)/lint-imports
 
 format: $(STAMP)
 	$(BIN)/ruff format src tests
