@@ -95,13 +95,11 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
     assert import_cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
 
 
-@pytest.mark.xfail(strict=True, reason="integrate/explicit.py and multibody/spatial.py are being split")
 def test_modules_stay_small() -> None:
     long = {name: n for name, path in sources().items() if (n := len(path.read_text().splitlines())) > MAX_MODULE_LINES}
     assert long == {}
 
 
-@pytest.mark.xfail(strict=True, reason="explicit.advance is being split")
 def test_functions_fit_on_a_screen() -> None:
     long = []
     for name, path in sources().items():

@@ -10,7 +10,8 @@ import pytest
 from biped_sim import config_from_dict
 from biped_sim.contact.friction import FRICTION_LAWS
 from biped_sim.contact.normal import NORMAL_LAWS
-from biped_sim.multibody.planar import make_workspace, rhs
+from biped_sim.multibody.dispatch import make_workspace
+from biped_sim.multibody.planar import rhs
 from biped_sim.multibody.reference import reference_rhs
 from biped_sim.walkers import build_model
 

@@ -12,8 +12,10 @@ from biped_sim import config_from_dict, load_config, run, simulate
 from biped_sim.animate import WalkerDrawing
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import load_run
-from biped_sim.multibody import spatial
+from biped_sim.multibody import euler_parameters as ep
+from biped_sim.multibody.dispatch import formulation_of, make_workspace, system_rhs
 from biped_sim.plots import plot_run
+from biped_sim.walkers import build_model
 
 from .conftest import CONFIGS
 
@@ -37,9 +39,9 @@ def _random_parameters() -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("trial", range(5))
 def test_euler_parameter_identities(trial: int) -> None:
     p, pdot = _random_parameters()
-    a = _matrix(spatial.rotate, p, 3)
-    e = _matrix(spatial.e_mul, p, 4)
-    g = _matrix(spatial.g_mul, p, 4)
+    a = _matrix(ep.rotate, p, 3)
+    e = _matrix(ep.e_mul, p, 4)
+    g = _matrix(ep.g_mul, p, 4)
     assert a @ a.T == pytest.approx(np.eye(3), abs=1e-14)
     assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-14)
     assert e @ g.T == pytest.approx(a, abs=1e-14)  # A = E G^T
@@ -49,9 +51,9 @@ def test_euler_parameter_identities(trial: int) -> None:
     assert g.T @ g == pytest.approx(np.eye(4) - np.outer(p, p), abs=1e-14)
     assert e @ p == pytest.approx(np.zeros(3), abs=1e-15)
     assert g @ p == pytest.approx(np.zeros(3), abs=1e-15)
-    assert np.array(spatial.g_mul(tuple(pdot), tuple(pdot))) == pytest.approx(np.zeros(3), abs=1e-15)  # Gdot pdot = 0
-    assert _matrix(spatial.g_tmul, p, 3) == pytest.approx(g.T, abs=1e-15)
-    assert _matrix(spatial.rotate_t, p, 3) == pytest.approx(a.T, abs=1e-15)
+    assert np.array(ep.g_mul(tuple(pdot), tuple(pdot))) == pytest.approx(np.zeros(3), abs=1e-15)  # Gdot pdot = 0
+    assert _matrix(ep.g_tmul, p, 3) == pytest.approx(g.T, abs=1e-15)
+    assert _matrix(ep.rotate_t, p, 3) == pytest.approx(a.T, abs=1e-15)
 
 
 @pytest.mark.parametrize("trial", range(3))
@@ -64,13 +66,13 @@ def test_angular_velocity_from_pdot(trial: int) -> None:
         q = p + t * pdot
         return q / np.linalg.norm(q)
 
-    a = _matrix(spatial.rotate, p, 3)
-    a_dot = (_matrix(spatial.rotate, unit(h), 3) - _matrix(spatial.rotate, unit(-h), 3)) / (2 * h)
+    a = _matrix(ep.rotate, p, 3)
+    a_dot = (_matrix(ep.rotate, unit(h), 3) - _matrix(ep.rotate, unit(-h), 3)) / (2 * h)
     skew = a_dot @ a.T
     assert skew == pytest.approx(-skew.T, abs=1e-8)
     omega = np.array([skew[2, 1], skew[0, 2], skew[1, 0]])
-    assert omega == pytest.approx(2 * np.array(spatial.e_mul(tuple(p), tuple(pdot))), abs=1e-8)
-    assert a.T @ omega == pytest.approx(2 * np.array(spatial.g_mul(tuple(p), tuple(pdot))), abs=1e-8)
+    assert omega == pytest.approx(2 * np.array(ep.e_mul(tuple(p), tuple(pdot))), abs=1e-8)
+    assert a.T @ omega == pytest.approx(2 * np.array(ep.g_mul(tuple(p), tuple(pdot))), abs=1e-8)
 
 
 def test_point_jacobian_is_exact() -> None:
@@ -80,19 +82,16 @@ def test_point_jacobian_is_exact() -> None:
     h = 1e-3
     fd = np.array(
         [
-            (
-                np.array(spatial.rotate(tuple(p + h * d), tuple(s)))
-                - np.array(spatial.rotate(tuple(p - h * d), tuple(s)))
-            )
+            (np.array(ep.rotate(tuple(p + h * d), tuple(s))) - np.array(ep.rotate(tuple(p - h * d), tuple(s))))
             / (2 * h)
             for d in np.eye(4)
         ]
     ).T
-    b = np.array([spatial.b_mul(tuple(p), tuple(s), tuple(d)) for d in np.eye(4)]).T
+    b = np.array([ep.b_mul(tuple(p), tuple(s), tuple(d)) for d in np.eye(4)]).T
     assert b == pytest.approx(fd, abs=1e-10)
-    bt = np.array([spatial.b_tmul(tuple(p), tuple(s), tuple(d)) for d in np.eye(3)]).T
+    bt = np.array([ep.b_tmul(tuple(p), tuple(s), tuple(d)) for d in np.eye(3)]).T
     assert bt == pytest.approx(b.T, abs=1e-14)
-    assert b @ p == pytest.approx(2 * np.array(spatial.rotate(tuple(p), tuple(s))), abs=1e-12)  # Euler's theorem
+    assert b @ p == pytest.approx(2 * np.array(ep.rotate(tuple(p), tuple(s))), abs=1e-12)  # Euler's theorem
 
 
 def test_spatial_compass_agrees_with_planar_and_balances_energy() -> None:
@@ -114,6 +113,22 @@ def test_spatial_compass_agrees_with_planar_and_balances_energy() -> None:
     # the motion stays in the sagittal plane
     assert spatial_run.summary["lateral"]["roll_max"] < 1e-12
     assert spatial_run.summary["constraint_violation_max"]["normalization"] < 1e-8
+
+
+@pytest.mark.parametrize("overrides", [[], SPATIAL, ["walker.kind=four_legged", *SPATIAL]])
+def test_state_layout_points_where_the_kernels_write(overrides: list[str]) -> None:
+    """The formulation's named offsets: sliding the stance leg makes its feet's bristles and friction work move."""
+    model = build_model(config_from_dict({}, [*overrides, "friction.model=lugre"]))
+    layout = formulation_of(model.system).layout_of(model.system)
+    assert layout.size == model.y0.size == len(model.state_names())
+    assert model.state_names()[layout.work_normal] == "W_normal"
+    y = model.y0.copy()
+    y[layout.rate(0, "vx")] += 0.1
+    ydot = np.zeros_like(y)
+    system_rhs(0.0, y, model.system, model.modes0, make_workspace(model.system), ydot)
+    for foot in range(model.n_feet):
+        assert np.any(ydot[layout.bristle(foot)] != 0.0) == (model.system.foot_body[foot] == 0)
+    assert ydot[layout.work_friction] > 0.0
 
 
 def test_four_legged_walker_walks_20_steps() -> None:

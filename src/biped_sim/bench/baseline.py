@@ -14,9 +14,11 @@ import numpy as np
 
 from biped_sim.config import IntegratorConfig
 from biped_sim.integrate.driver import Integration, finish_integration, recorder_for
-from biped_sim.integrate.explicit import _apply_events
+from biped_sim.integrate.recorder import apply_events
 from biped_sim.integrate.stiff import integrate_scipy
 from biped_sim.multibody import planar
+from biped_sim.multibody.dispatch import contact_buffers
+from biped_sim.multibody.events import system_event_functions
 from biped_sim.multibody.reference import reference_rhs
 from biped_sim.walkers import BuiltModel
 
@@ -34,14 +36,14 @@ def integrate_baseline(
     system = model.system
     y = np.array(model.y0, dtype=np.float64)
     modes = np.array(model.modes0, dtype=np.float64)
-    rec, interval, n_strikes = recorder_for(y.shape[0], modes.shape[0], integrator, t_end, sample_rate, max_strikes, 0)
+    rec, interval = recorder_for(y.shape[0], modes.shape[0], integrator, t_end, sample_rate, max_strikes, 0)
 
     def fun(t: float, state: np.ndarray) -> np.ndarray:
         return reference_rhs(t, state, system, modes)
 
-    integrate_scipy(
-        system, rec, y, modes, planar.make_workspace(system), "RK45", integrator.rtol, integrator.atol,
+    rec = integrate_scipy(
+        system, rec, y, modes, contact_buffers(system), "RK45", integrator.rtol, integrator.atol,
         integrator.max_step, t_end, interval, max_strikes or 0, None, fun,
-        event_values=planar.event_functions.py_func, apply_events=_apply_events.py_func,
+        event_values=system_event_functions.py_func, apply_events=apply_events.py_func,
     )  # fmt: skip
-    return finish_integration(rec, n_strikes, interval)
+    return finish_integration(rec, interval, max_strikes)

@@ -2,7 +2,8 @@
 
 :func:`integrate_model` is the one entry point for every method; the explicit methods run in
 the compiled loop of :mod:`biped_sim.integrate.explicit`, ``radau`` and ``bdf`` in
-:mod:`biped_sim.integrate.stiff`.
+:mod:`biped_sim.integrate.stiff`. Between compiled calls the driver enlarges the contact log and
+the strike buffers when one more event might not fit (:func:`~biped_sim.integrate.recorder.with_room`).
 """
 
 from __future__ import annotations
@@ -14,32 +15,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import IntegratorConfig
-from biped_sim.integrate.explicit import (
-    ACCEPTED,
-    COMPLETED,
-    DIVERGED,
-    FALL_TIME,
-    FELL,
-    LAST_STRIKE_FOOT,
-    N_EVENTS,
-    N_ISTATE,
-    N_LOG,
-    N_SAMPLES,
-    N_STRIKES,
-    REJECTED,
-    RHS_EVALS,
-    STATUS,
-    TIME,
-    Recorder,
-    advance,
-    make_scratch,
-)
-from biped_sim.integrate.tableaus import tableau
-from biped_sim.multibody.dispatch import event_count, make_workspace
+from biped_sim.integrate.explicit import Settings, advance
+from biped_sim.integrate.recorder import COMPLETED, DIVERGED, FELL, RUNNING, Recorder, make_recorder, with_room
+from biped_sim.integrate.stepper import Loop, make_scratch
+from biped_sim.integrate.tableaus import FIXED, tableau
+from biped_sim.multibody.dispatch import contact_buffers, make_workspace
+from biped_sim.multibody.events import event_count
 
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged"}
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
-LOG_CAPACITY = 200_000
 
 
 @dataclass
@@ -72,24 +56,6 @@ def sample_interval(integrator: IntegratorConfig, sample_rate: float) -> float:
     return interval
 
 
-def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stance_foot: int) -> Recorder:
-    """Allocate output buffers and the loop state."""
-    istate = np.zeros(N_ISTATE, dtype=np.int64)
-    istate[LAST_STRIKE_FOOT] = initial_stance_foot
-    return Recorder(
-        istate=istate,
-        fstate=np.zeros(3),
-        sample_t=np.zeros(n_samples),
-        sample_y=np.zeros((n_samples, ny)),
-        sample_modes=np.zeros((n_samples, nf, 3)),
-        strike_t=np.zeros(n_strikes),
-        strike_foot=np.zeros(n_strikes, dtype=np.int64),
-        strike_y=np.zeros((n_strikes, ny)),
-        strike_modes=np.zeros((n_strikes, nf, 3)),
-        log=np.zeros((LOG_CAPACITY, 4)),
-    )
-
-
 def recorder_for(
     ny: int,
     nf: int,
@@ -98,12 +64,12 @@ def recorder_for(
     sample_rate: float,
     max_strikes: int | None,
     initial_stance_foot: int,
-) -> tuple[Recorder, float, int]:
-    """(recorder, sample interval, strike capacity) sized for an integration to ``t_end``."""
+) -> tuple[Recorder, float]:
+    """(recorder, sample interval) for an integration to ``t_end`` (samples sized for it; strikes and log grow)."""
     interval = sample_interval(integrator, sample_rate)
     n_samples = math.floor(t_end / interval + 1e-9) + 2
-    n_strikes = max_strikes if max_strikes else int(t_end * 50) + 16
-    return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval, n_strikes
+    n_strikes = (max_strikes if max_strikes else int(t_end * 50) + 16) + nf  # has_room holds until max_strikes
+    return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval
 
 
 def integrate_model(
@@ -121,33 +87,43 @@ def integrate_model(
     y = np.array(y0, dtype=np.float64)
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
-    rec, interval, n_strikes = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
+    rec, interval = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
     if integrator.method in ("radau", "bdf"):
         from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
 
-        integrate_stiff(system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress)
+        rec = integrate_stiff(system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress)
     else:
         tab = tableau(integrator.method)
-        work = make_workspace(system)
         scratch = make_scratch(ny, nf, event_count(system))
-        while rec.istate[STATUS] == 0:
-            advance(
-                system, work, tab, rec, scratch, y, modes, t_end, integrator.dt, integrator.adaptive,
-                integrator.rtol, integrator.atol, integrator.max_step, interval, max_strikes or 0, STEP_BUDGET,
-            )  # fmt: skip
+        loop = Loop(tab, system, make_workspace(system), contact_buffers(system), y, modes, scratch, rec)
+        control = integrator.adaptive and tab.kind != FIXED
+        cfg = Settings(
+            t_end, integrator.dt, control, integrator.rtol, integrator.atol, integrator.max_step, interval,
+            max_strikes or 0,
+        )  # fmt: skip
+        while loop.rec.state[0].status == RUNNING:
+            loop = loop._replace(rec=with_room(loop.rec, nf))
+            advance(loop, cfg, STEP_BUDGET)
             if progress is not None:
-                progress(float(rec.fstate[TIME]))
-    return finish_integration(rec, n_strikes, interval)
+                progress(float(loop.rec.state[0].time))
+        rec = loop.rec
+    return finish_integration(rec, interval, max_strikes)
 
 
-def finish_integration(rec: Recorder, n_strikes: int, interval: float) -> Integration:
-    """Copy the filled part of the recorder's buffers into an :class:`Integration`."""
-    status = int(rec.istate[STATUS])
-    ns, nk, nl = int(rec.istate[N_SAMPLES]), min(int(rec.istate[N_STRIKES]), n_strikes), int(rec.istate[N_LOG])
+def finish_integration(rec: Recorder, interval: float, max_strikes: int | None = None) -> Integration:
+    """Copy the filled part of the recorder's buffers into an :class:`Integration`.
+
+    At most ``max_strikes`` heel strikes are reported (an event may strike after the last one counted).
+    """
+    st = rec.state[0]
+    status = int(st.status)
+    ns, nk, nl = int(st.n_samples), int(st.n_strikes), int(st.n_log)
+    if max_strikes:
+        nk = min(nk, max_strikes)
     return Integration(
         status=STATUS_NAMES[status],
-        t_final=float(rec.fstate[TIME]),
-        stop_time=float(rec.fstate[FALL_TIME]) if status in (FELL, DIVERGED) else None,
+        t_final=float(st.time),
+        stop_time=float(st.stop_time) if status in (FELL, DIVERGED) else None,
         t=rec.sample_t[:ns].copy(),
         y=rec.sample_y[:ns].copy(),
         modes=rec.sample_modes[:ns].copy(),
@@ -156,9 +132,9 @@ def finish_integration(rec: Recorder, n_strikes: int, interval: float) -> Integr
         strike_y=rec.strike_y[:nk].copy(),
         strike_modes=rec.strike_modes[:nk].copy(),
         contact_log=rec.log[:nl].copy(),
-        rhs_evals=int(rec.istate[RHS_EVALS]),
-        accepted_steps=int(rec.istate[ACCEPTED]),
-        rejected_steps=int(rec.istate[REJECTED]),
-        events=int(rec.istate[N_EVENTS]),
+        rhs_evals=int(st.rhs_evals),
+        accepted_steps=int(st.accepted),
+        rejected_steps=int(st.rejected),
+        events=int(st.n_events),
         sample_dt=interval,
     )

@@ -5,7 +5,7 @@ velocities): explicit methods are then limited by stability, not accuracy, and t
 smaller than the accuracy needs. The Jacobian is a compiled forward-difference Jacobian. Contact
 events are scipy terminal events on the same event functions as the explicit loop; at each event
 the integration restarts after the discrete update, and the same compiled bookkeeping
-(:func:`~biped_sim.integrate.explicit._apply_events`) logs touchdowns and heel strikes.
+(:func:`~biped_sim.integrate.recorder.apply_events`) logs touchdowns and heel strikes.
 :func:`integrate_scipy` is that event-restart driver for any solve_ivp method; the benchmark's
 baseline runs it with RK45 over plain-Python functions.
 """
@@ -20,30 +20,19 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from biped_sim.config import IntegratorConfig
-from biped_sim.integrate.explicit import (
-    ACCEPTED,
+from biped_sim.contact.response import ContactBuffers
+from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
-    FALL_TIME,
     FELL,
-    N_EVENTS,
-    N_SAMPLES,
-    RHS_EVALS,
     RUNNING,
-    STATUS,
-    TIME,
     Recorder,
-    _apply_events,
-    _record_sample,
-    make_scratch,
+    apply_events,
+    record_sample,
+    with_room,
 )
-from biped_sim.multibody.dispatch import (
-    event_count,
-    make_workspace,
-    system_event_functions,
-    system_has_fallen,
-    system_rhs,
-)
+from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system_has_fallen, system_rhs
+from biped_sim.multibody.events import event_count, system_event_functions
 
 EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
 
@@ -75,8 +64,8 @@ def integrate_stiff(
     interval: float,
     max_strikes: int,
     progress: Callable[[float], None] | None,
-) -> None:
-    """Integrate with scipy's Radau or BDF, restarting at every contact event."""
+) -> Recorder:
+    """Integrate with scipy's Radau or BDF, restarting at every contact event; returns the (enlarged) recorder."""
     ny = y.shape[0]
     work = make_workspace(system)
     counts = {"jac": 0}
@@ -94,11 +83,12 @@ def integrate_stiff(
         return out
 
     method = "Radau" if integrator.method == "radau" else "BDF"
-    nfev = integrate_scipy(
-        system, rec, y, modes, work, method, integrator.rtol, integrator.atol, integrator.max_step, t_end, interval,
-        max_strikes, progress, fun, jac=jac,
+    rec = integrate_scipy(
+        system, rec, y, modes, contact_buffers(system), method, integrator.rtol, integrator.atol, integrator.max_step,
+        t_end, interval, max_strikes, progress, fun, jac=jac,
     )  # fmt: skip
-    rec.istate[RHS_EVALS] = nfev + counts["jac"] * (ny + 1)
+    rec.state[0].rhs_evals += counts["jac"] * (ny + 1)
+    return rec
 
 
 def integrate_scipy(
@@ -106,7 +96,7 @@ def integrate_scipy(
     rec: Recorder,
     y: np.ndarray,
     modes: np.ndarray,
-    work: tuple,
+    contact: ContactBuffers,
     method: str,
     rtol: float,
     atol: float,
@@ -119,17 +109,19 @@ def integrate_scipy(
     *,
     jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
     event_values: Callable[[np.ndarray, tuple, np.ndarray], None] = system_event_functions,
-    apply_events: Callable[..., bool] = _apply_events,
-) -> int:
-    """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events; returns its RHS count.
+    apply_events: Callable[..., bool] = apply_events,
+) -> Recorder:
+    """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events; returns the recorder.
 
     Each event stops the integration; the discrete update (``apply_events``) then runs on the
     state just past the event and the integration restarts. ``fun`` reads ``modes``, which the
     update changes in place. The stiff methods pass the compiled kernels; the benchmark's
     baseline passes plain-Python ones (``event_values`` and ``apply_events`` as ``.py_func``).
+    The returned recorder is ``rec`` or, when its contact log or strike buffers had to grow, its
+    enlarged copy; its rhs_evals is solve_ivp's count of ``fun`` calls.
     """
-    ny, nf = y.shape[0], modes.shape[0]
-    scratch = make_scratch(ny, nf, event_count(system))
+    nf = modes.shape[0]
+    touching_before = np.zeros(nf)
     g = np.empty(event_count(system))
 
     def make_event(j: int) -> Callable[[float, np.ndarray], float]:
@@ -143,44 +135,46 @@ def integrate_scipy(
     events = [make_event(j) for j in range(event_count(system))]
     options = {"jac": jac} if jac is not None else {}
     t = 0.0
-    _record_sample(rec, t, y, modes)
+    record_sample(rec, t, y, modes)
+    st = rec.state[0]
     nfev = 0
-    while rec.istate[STATUS] == RUNNING:
+    while st.status == RUNNING:
         if t >= t_end:
-            rec.istate[STATUS] = COMPLETED
+            st.status = COMPLETED
             break
         sol = solve_ivp(
             fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=events,
             dense_output=True, **options,
         )  # fmt: skip
         nfev += sol.nfev
-        rec.istate[ACCEPTED] += len(sol.t) - 1
+        st.accepted += len(sol.t) - 1
         t_stop = float(sol.t[-1])
         if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
-            rec.istate[STATUS] = DIVERGED
-            rec.fstate[FALL_TIME] = t_stop
+            st.status = DIVERGED
+            st.stop_time = t_stop
             t = t_stop
             break
         hit_event = sol.status == 1
         if hit_event:
             t_stop = min(t_stop + EVENT_NUDGE, t_end)
-        while rec.istate[N_SAMPLES] < rec.sample_t.shape[0] and rec.istate[N_SAMPLES] * interval <= t_stop:
-            ts = rec.istate[N_SAMPLES] * interval
+        while st.n_samples < rec.sample_t.shape[0] and st.n_samples * interval <= t_stop:
+            ts = st.n_samples * interval
             if ts > t:
-                _record_sample(rec, ts, sol.sol(ts), modes)
+                record_sample(rec, ts, sol.sol(ts), modes)
             else:
-                _record_sample(rec, ts, y, modes)
+                record_sample(rec, ts, y, modes)
         y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1]
         t = t_stop
-        if hit_event and apply_events(t, y, system, modes, work, rec, scratch, max_strikes):
-            rec.istate[N_EVENTS] += 1
+        rec = with_room(rec, nf)
+        if hit_event and apply_events(t, y, system, modes, contact, rec, touching_before, max_strikes):
+            st.n_events += 1
         if system_has_fallen(y, system):
-            rec.istate[STATUS] = FELL
-            rec.fstate[FALL_TIME] = t
+            st.status = FELL
+            st.stop_time = t
         if progress is not None:
             progress(t)
         if not math.isfinite(t):
-            rec.istate[STATUS] = DIVERGED
-    rec.istate[RHS_EVALS] = nfev
-    rec.fstate[TIME] = t
-    return nfev
+            st.status = DIVERGED
+    st.rhs_evals = nfev
+    st.time = t
+    return rec

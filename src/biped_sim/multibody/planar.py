@@ -10,11 +10,14 @@ ground, index -1, with s_b a fixed point). Forward dynamics solves the augmented
 by its Schur complement (M is diagonal): (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs,
 solved with an in-place Cholesky factorisation, then qdd = M^-1 (Q - Phi_q^T lambda).
 
-The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction]:
-the dissipated work is integrated with the motion, so that the energy balance
-E(t) - E(0) + W(t) = 0 is an independent check of the integration.
+The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction]
+(named offsets: ``FORMULATION.layout_of(system)``): the dissipated work is integrated with the
+motion, so that the energy balance E(t) - E(0) + W(t) = 0 is an independent check of the
+integration. The feet are arcs against the slope line; what the ground does with them (normal
+force, dissipation, scuffing guard) is :mod:`biped_sim.contact.response`.
 
-Everything here is allocation-free: buffers live in :class:`Workspace`.
+Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
+with the Python-side measurements and the formulation record :data:`FORMULATION`.
 """
 
 from __future__ import annotations
@@ -26,15 +29,18 @@ import numpy as np
 from numba import njit
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
-from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
-
-# columns of the per-foot discrete mode table
-ARMED, TOUCHING, IMPACT_SPEED = 0, 1, 2
-N_MODE_COLUMNS = 3
-# switches
-NORMAL_MODEL, FRICTION_MODEL, SCUFFING_GUARD = 0, 1, 2
-# limits
-IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE = 0, 1, 2
+from biped_sim.contact.response import (
+    FALL_HIP_HEIGHT,
+    FALL_LEG_ANGLE,
+    FRICTION_MODEL,
+    IMPACT_FLOOR,
+    NORMAL_MODEL,
+    is_loaded,
+    normal_response,
+    stored_energy,
+)
+from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures
+from biped_sim.multibody.linalg import cholesky_solve
 
 
 class PlanarSystem(NamedTuple):
@@ -64,22 +70,13 @@ class Workspace(NamedTuple):
     rhs: np.ndarray  # (m,)
     lam: np.ndarray  # (m,)
     force: np.ndarray  # (n,) generalized applied forces Q
-    onset: np.ndarray  # (nf,) int64: set by update_modes when a foot touches down
 
 
 def make_workspace(system: PlanarSystem) -> Workspace:
     """Allocate the buffers of ``system`` (once per simulation, not per step)."""
     n = 3 * system.body_mass.shape[0]
     m = 2 * system.joint_bodies.shape[0]
-    nf = system.foot_body.shape[0]
-    return Workspace(
-        np.zeros((m, n)), np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n), np.zeros(nf, dtype=np.int64)
-    )
-
-
-def state_size(system: PlanarSystem) -> int:
-    """Length of the ODE state vector."""
-    return 6 * system.body_mass.shape[0] + system.foot_body.shape[0] + 2
+    return Workspace(np.zeros((m, n)), np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n))
 
 
 @njit(cache=True)
@@ -106,39 +103,37 @@ def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float,
 
 
 @njit(cache=True)
+def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float, float, float]:
+    """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
+    delta, delta_dot, _, x_contact, _, _ = foot_kinematics(y, system, foot)
+    return delta, delta_dot, x_contact
+
+
+@njit(cache=True)
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float]:
     """Contact forces on foot i and their dissipation rates.
 
-    Returns (F_N, F_T, zdot, P_normal, P_friction, delta, delta_dot, slip, dx, dy) with
-    P_normal = (F_N - K delta^n) deltadot the power lost in the normal damping and P_friction =
-    -F_T v_t the power taken by friction (for LuGre this includes the small, load-dependent
-    bristle energy, which is not a potential). The force acts when the foot is armed and penetrates.
+    Returns (F_N, F_T, zdot, P_normal, P_friction, delta, delta_dot, slip, dx, dy) with F_N and the
+    power P_normal lost in the normal damping from :func:`~biped_sim.contact.response.normal_response`,
+    and P_friction = -F_T v_t the power taken by friction (for LuGre this includes the small,
+    load-dependent bristle energy, which is not a potential). The force acts when the foot is armed
+    and penetrates.
     """
     delta, delta_dot, slip, _, dx, dy = foot_kinematics(y, system, i)
-    f_n = 0.0
-    f_t = 0.0
-    z_dot = 0.0
-    p_normal = 0.0
-    p_friction = 0.0
-    if modes[i, ARMED] > 0.5 and delta > 0.0:
-        impact = modes[i, IMPACT_SPEED] if modes[i, TOUCHING] > 0.5 else delta_dot
-        floor = system.limits[IMPACT_FLOOR]
-        if impact < floor:
-            impact = floor
-        npar = system.normal_params
-        f_n = normal_force(system.switches[NORMAL_MODEL], delta, delta_dot, impact, npar)
-        p_normal = (f_n - elastic_force(delta, npar)) * delta_dot
+    f_n = f_t = z_dot = p_normal = p_friction = 0.0  # one return: numba then elides the reference counting
+    if is_loaded(modes, i, delta):
+        npar, floor = system.normal_params, system.limits[IMPACT_FLOOR]
+        f_n, p_normal = normal_response(system.switches[NORMAL_MODEL], npar, floor, modes, i, delta, delta_dot)
         fpar = system.friction_params
         if system.switches[FRICTION_MODEL] == LUGRE:
             z = y[6 * system.body_mass.shape[0] + i]
             z_dot = lugre_bristle_rate(slip, z, fpar)
             f_t = lugre_friction(slip, z, z_dot, f_n, fpar)
-            p_friction = -f_t * slip
         else:
             f_t = friction_force(system.switches[FRICTION_MODEL], slip, f_n, fpar)
-            p_friction = -f_t * slip
+        p_friction = -f_t * slip
     return f_n, f_t, z_dot, p_normal, p_friction, delta, delta_dot, slip, dx, dy
 
 
@@ -169,32 +164,6 @@ def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[f
     else:
         pbx, pby, vbx, vby = jp[2], jp[3], 0.0, 0.0
     return pax - pbx, pay - pby, vax - vbx, vay - vby
-
-
-@njit(cache=True)
-def cholesky_solve(a: np.ndarray, b: np.ndarray, m: int) -> None:
-    """Solve a x = b in place for a symmetric positive definite m x m matrix (x overwrites b)."""
-    for j in range(m):
-        d = a[j, j]
-        for k in range(j):
-            d -= a[j, k] * a[j, k]
-        d = math.sqrt(d)
-        a[j, j] = d
-        for i in range(j + 1, m):
-            v = a[i, j]
-            for k in range(j):
-                v -= a[i, k] * a[j, k]
-            a[i, j] = v / d
-    for i in range(m):
-        v = b[i]
-        for k in range(i):
-            v -= a[i, k] * b[k]
-        b[i] = v / a[i, i]
-    for i in range(m - 1, -1, -1):
-        v = b[i]
-        for k in range(i + 1, m):
-            v -= a[k, i] * b[k]
-        b[i] = v / a[i, i]
 
 
 @njit(cache=True)
@@ -300,9 +269,7 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         potential -= m * (system.gravity[0] * y[3 * b] + system.gravity[1] * y[3 * b + 1])
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        delta = foot_kinematics(y, system, i)[0]
-        if modes[i, ARMED] > 0.5 and delta > 0.0:
-            elastic += elastic_energy(delta, system.normal_params)
+        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
     return kinetic, potential, elastic
 
 
@@ -319,57 +286,6 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
 
 
 @njit(cache=True)
-def event_functions(y: np.ndarray, system: PlanarSystem, g: np.ndarray) -> None:
-    """Continuous functions whose zeros are the discrete events: per foot, delta and (x_foot - x_partner)."""
-    nf = system.foot_body.shape[0]
-    for i in range(nf):
-        delta, _, _, x_i, _, _ = foot_kinematics(y, system, i)
-        g[2 * i] = delta
-        partner = system.foot_partner[i]
-        g[2 * i + 1] = x_i - foot_kinematics(y, system, partner)[3] if partner >= 0 else 1.0
-
-
-@njit(cache=True)
-def update_modes(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace) -> bool:
-    """Apply the scuffing guard and contact onset/separation bookkeeping at an event (MODEL.md 3).
-
-    A foot is armed once it is ahead of its partner and above the ground, and disarmed when it is
-    in the air behind its partner (with the guard off every foot is always armed). A touchdown
-    remembers the approach velocity deltadot^-; LuGre bristles start relaxed at each touchdown.
-    Sets work.onset[i] for touchdowns.
-    Returns True when any mode changed (the right-hand side then changes too).
-    """
-    nb = system.body_mass.shape[0]
-    nf = system.foot_body.shape[0]
-    changed = False
-    lugre = system.switches[FRICTION_MODEL] == LUGRE
-    for i in range(nf):
-        work.onset[i] = 0
-        delta, delta_dot, _, x_i, _, _ = foot_kinematics(y, system, i)
-        partner = system.foot_partner[i]
-        ahead = x_i - foot_kinematics(y, system, partner)[3] if partner >= 0 else 1.0
-        armed = modes[i, ARMED] > 0.5
-        if system.switches[SCUFFING_GUARD] == 0:
-            new_armed = True
-        elif armed:
-            new_armed = not (delta <= 0.0 and ahead <= 0.0)
-        else:
-            new_armed = delta < 0.0 and ahead > 0.0
-        touching = new_armed and delta > 0.0
-        was_touching = modes[i, TOUCHING] > 0.5
-        if touching and not was_touching:
-            modes[i, IMPACT_SPEED] = delta_dot
-            work.onset[i] = 1
-        if touching != was_touching or new_armed != armed:
-            changed = True
-            if lugre and touching and not was_touching:
-                y[6 * nb + i] = 0.0
-        modes[i, ARMED] = 1.0 if new_armed else 0.0
-        modes[i, TOUCHING] = 1.0 if touching else 0.0
-    return changed
-
-
-@njit(cache=True)
 def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
     """Fall: hip (joint 0) below the height limit, or any body rotated past the leg-angle limit."""
     if system.joint_bodies.shape[0] > 0:
@@ -381,3 +297,53 @@ def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
         if abs(y[3 * b + 2]) > system.limits[FALL_LEG_ANGLE]:
             return True
     return False
+
+
+# ---------------------------------------------------------------- post-processing (Python side)
+
+
+def pitch(y: np.ndarray, system: PlanarSystem, body: int) -> tuple[float, float]:
+    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
+    nb = system.body_mass.shape[0]
+    return float(y[3 * body + 2]), float(y[3 * nb + 3 * body + 2])
+
+
+def contact_channels(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
+    """(penetration, normal force, friction force, slip velocity) of a foot."""
+    f_n, f_t, _, _, _, delta, _, slip, _, _ = foot_forces(y, system, modes, foot)
+    return delta, f_n, f_t, slip
+
+
+def hip_position(y: np.ndarray, system: PlanarSystem) -> tuple[float, ...]:
+    """Position of the hip (joint 0's point on its first body) in the slope frame."""
+    b = int(system.joint_bodies[0, 0])
+    sx, sy = system.joint_points[0, 0], system.joint_points[0, 1]
+    c, s = math.cos(y[3 * b + 2]), math.sin(y[3 * b + 2])
+    return y[3 * b] + c * sx - s * sy, y[3 * b + 1] + s * sx + c * sy
+
+
+CONTACT_NAMES = ("penetration", "normal_force", "friction_force", "slip_velocity")
+
+FORMULATION = Formulation(
+    name="planar",
+    system_type=PlanarSystem,
+    rhs=rhs,
+    foot_contact=foot_contact,
+    has_fallen=has_fallen,
+    make_workspace=make_workspace,
+    measures=Measures(
+        contact_x=lambda y, system, foot: foot_contact(y, system, foot)[2],
+        pitch=pitch,
+        mechanical_energy=mechanical_energy,
+        violation=constraint_violation,
+        violation_names=("position", "velocity"),
+        contact=contact_channels,
+        contact_names=CONTACT_NAMES,
+        hip=hip_position,
+        attitude=None,
+    ),
+    coordinates=("x", "y", "phi"),
+    rates=("vx", "vy", "omega"),
+    bristles=("z",),
+    capabilities=frozenset({COMPLIANT_LIMIT_CYCLE}),
+)

@@ -16,15 +16,8 @@ import numpy as np
 
 from biped_sim.contact import friction as friction_laws
 from biped_sim.contact import normal as normal_laws
-from biped_sim.multibody.planar import (
-    ARMED,
-    FRICTION_MODEL,
-    IMPACT_FLOOR,
-    IMPACT_SPEED,
-    NORMAL_MODEL,
-    TOUCHING,
-    PlanarSystem,
-)
+from biped_sim.contact.response import ARMED, FRICTION_MODEL, IMPACT_FLOOR, IMPACT_SPEED, NORMAL_MODEL, TOUCHING
+from biped_sim.multibody.planar import PlanarSystem
 
 
 def _rotation(phi: float) -> np.ndarray:

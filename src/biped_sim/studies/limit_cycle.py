@@ -22,9 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import integrate_model
-from biped_sim.multibody.planar import IMPACT_SPEED, N_MODE_COLUMNS, PlanarSystem, foot_kinematics, state_size
+from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE
+from biped_sim.multibody.planar import foot_kinematics
 from biped_sim.rigid.limit_cycle import (
     SETTLE_STEPS,
     LimitCycle,
@@ -95,7 +98,7 @@ class TouchdownSection:
     def __init__(self, config: Config, model: BuiltModel) -> None:
         system = model.system
         if not (
-            isinstance(system, PlanarSystem)
+            formulation_of(system).supports(COMPLIANT_LIMIT_CYCLE)
             and system.body_mass.shape[0] == 2
             and system.joint_bodies.tolist() == [[0, 1]]
             and system.foot_body.tolist() == [0, 1]
@@ -107,6 +110,7 @@ class TouchdownSection:
                 "walker.kind", "the compliant limit cycle needs the planar compass walker (two identical legs)"
             )
         self.system = system
+        self.layout = formulation_of(system).layout_of(system)
         self.hip_in_body = system.joint_points[0, :2].copy()
         self.centre_from_hip = system.foot_center[0] - self.hip_in_body
         self.radius = float(system.foot_radius[0])
@@ -130,15 +134,14 @@ class TouchdownSection:
         """(y, modes) of the section point z; foot 0 (body 0) is the striking foot, the hip at x = 0."""
         angles, rates, hip_velocity = z[0:2], z[2:4], z[4:6]
         hip = np.array([0.0, self.radius - _rotate(angles[0], self.centre_from_hip)[1]])
-        y = np.zeros(state_size(self.system))
+        layout = self.layout
+        y = np.zeros(layout.size)
         for body in (0, 1):
             arm = _rotate(angles[body], self.hip_in_body)  # centre of mass -> hip
-            y[3 * body : 3 * body + 2] = hip - arm
-            y[3 * body + 2] = angles[body]
-            y[6 + 3 * body : 6 + 3 * body + 2] = hip_velocity - _cross(rates[body], arm)
-            y[6 + 3 * body + 2] = rates[body]
+            y[layout.position(body)] = (*(hip - arm), angles[body])
+            y[layout.velocity(body)] = (*(hip_velocity - _cross(rates[body], arm)), rates[body])
         if self.lugre:
-            y[13] = z[7]
+            y[layout.bristle(1)] = z[7]
         modes = np.zeros((2, N_MODE_COLUMNS))
         modes[0] = (1.0, 1.0, foot_kinematics(y, self.system, 0)[1])
         trailing_down = foot_kinematics(y, self.system, 1)[0] > 0.0
@@ -148,16 +151,17 @@ class TouchdownSection:
     def project(self, y: np.ndarray, modes: np.ndarray, striking_foot: int) -> np.ndarray:
         """Section coordinates of a heel-strike state (y, modes) whose striking foot is ``striking_foot``."""
         legs = (striking_foot, 1 - striking_foot)
-        angles = [y[3 * b + 2] for b in legs]
-        rates = [y[6 + 3 * b + 2] for b in legs]
+        layout = self.layout
+        angles = [y[layout.coordinate(b, "phi")] for b in legs]
+        rates = [y[layout.rate(b, "omega")] for b in legs]
         hip_velocity = np.mean(
             [
-                y[6 + 3 * b : 6 + 3 * b + 2] + _cross(y[6 + 3 * b + 2], _rotate(y[3 * b + 2], self.hip_in_body))
-                for b in legs
+                y[layout.velocity(b)][:2] + _cross(rate, _rotate(angle, self.hip_in_body))
+                for b, angle, rate in zip(legs, angles, rates, strict=True)
             ],
             axis=0,
         )
-        bristle = [y[12 + legs[1]]] if self.lugre else []
+        bristle = [*y[layout.bristle(legs[1])]] if self.lugre else []
         return np.array([*angles, *rates, *hip_velocity, modes[legs[1], IMPACT_SPEED], *bristle])
 
     def step(self, z: np.ndarray) -> CompliantStep:

@@ -15,8 +15,11 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.contact.response import ARMED, IMPACT_SPEED, TOUCHING
 from biped_sim.errors import ConfigError
-from biped_sim.multibody.planar import ARMED, IMPACT_SPEED, TOUCHING, PlanarSystem, make_workspace, update_modes
+from biped_sim.multibody.dispatch import contact_buffers
+from biped_sim.multibody.events import system_update_modes as update_modes
+from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.walkers.model import (
     BuiltModel,
     contact_arrays,
@@ -117,7 +120,7 @@ def build_compass(config: Config, initial: InitialState) -> BuiltModel:
     modes0[0, TOUCHING] = 1.0
     # the stance foot "just struck": remember an approach velocity of the scale of the hip speed
     modes0[0, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
-    update_modes(y0, system, modes0, make_workspace(system))  # arms the swing foot if ahead and airborne
+    update_modes(y0, system, modes0, contact_buffers(system))  # arms the swing foot if ahead and airborne
     return BuiltModel(
         system=system,
         y0=y0,

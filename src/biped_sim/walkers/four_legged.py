@@ -26,8 +26,11 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.contact.response import ARMED, IMPACT_SPEED, TOUCHING
 from biped_sim.errors import ConfigError
-from biped_sim.multibody.spatial import ARMED, IMPACT_SPEED, TOUCHING, SpatialSystem, make_workspace, update_modes
+from biped_sim.multibody.dispatch import contact_buffers
+from biped_sim.multibody.events import system_update_modes as update_modes
+from biped_sim.multibody.spatial import SpatialSystem
 from biped_sim.walkers.compass import sagittal_initial_state
 from biped_sim.walkers.model import (
     BuiltModel,
@@ -113,7 +116,7 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
         modes0[foot, ARMED] = 1.0
         modes0[foot, TOUCHING] = 1.0
         modes0[foot, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
-    update_modes(y0, system, modes0, make_workspace(system))  # arms the inner feet if ahead and airborne
+    update_modes(y0, system, modes0, contact_buffers(system))  # arms the inner feet if ahead and airborne
     return BuiltModel(
         system=system,
         y0=y0,

@@ -10,6 +10,7 @@ import numpy as np
 from biped_sim.config import Config, MaterialsConfig
 from biped_sim.contact.friction import FRICTION_LAWS, friction_parameters
 from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
 
@@ -37,20 +38,8 @@ class BuiltModel:
         return int(self.system.foot_body.shape[0])
 
     def state_names(self) -> list[str]:
-        """Names of the ODE state entries, in order."""
-        if isinstance(self.system, SpatialSystem):  # (r, p) and (rdot, pdot) per body, 2D bristles per foot
-            coords = [f"{axis}_{body}" for body in self.body_names for axis in ("x", "y", "z", "e0", "e1", "e2", "e3")]
-            rates = [
-                f"{axis}_{body}"
-                for body in self.body_names
-                for axis in ("vx", "vy", "vz", "e0dot", "e1dot", "e2dot", "e3dot")
-            ]
-            bristles = [f"z{axis}_{foot}" for foot in self.foot_names for axis in ("x", "z")]
-            return coords + rates + bristles + ["W_normal", "W_friction"]
-        coords = [f"{axis}_{body}" for body in self.body_names for axis in ("x", "y", "phi")]
-        rates = [f"{axis}_{body}" for body in self.body_names for axis in ("vx", "vy", "omega")]
-        bristles = [f"z_{foot}" for foot in self.foot_names]
-        return coords + rates + bristles + ["W_normal", "W_friction"]
+        """Names of the ODE state entries, in order (the formulation's state layout)."""
+        return formulation_of(self.system).state_names(self.body_names, self.foot_names)
 
 
 def contact_stiffness(config: Config) -> float:

@@ -1,0 +1,120 @@
+"""Dense output of the last explicit step and the location of events inside it (compiled).
+
+An adaptive step that changes the sign of an event function (a foot's penetration, its lead over
+its partner) is cut at the event: the earliest sign change is located on the method's dense output
+by the Illinois variant of regula falsi to EVENT_TIME_TOL, so that no touchdown is stepped over.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from biped_sim.integrate.stepper import Scratch
+from biped_sim.integrate.tableaus import DOPRI5, Tableau
+from biped_sim.multibody.dispatch import system_rhs
+from biped_sim.multibody.events import system_event_functions
+
+EVENT_TIME_TOL = 1e-12  # [s] width of the bracket that locates an event
+
+
+@njit(cache=True)
+def prepare_dense(
+    tab: Tableau, t: float, h: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, sc: Scratch, st
+) -> None:
+    """Dense-output coefficients of the last step (dop853 needs three extra stages).
+
+    dopri5: Shampine's quartic, y(t + theta h) = y + h sum_j (sum_s k[s] p[s, j]) theta^(j+1);
+    dop853: Hairer's degree-7 interpolant from the 12 stages, the FSAL stage and three extra ones.
+    ``st`` is the recorder's loop-state record (it counts the evaluations).
+    """
+    ny = y.shape[0]
+    k = sc.k
+    if tab.kind == DOPRI5:
+        for j in range(4):
+            for i in range(ny):
+                v = 0.0
+                for s in range(tab.stages + 1):
+                    v += k[s, i] * tab.p[s, j]
+                sc.dense[j, i] = v
+    else:
+        n_st = 12
+        for e in range(3):
+            s_idx = n_st + 1 + e
+            for i in range(ny):
+                v = 0.0
+                for s in range(s_idx):
+                    v += k[s, i] * tab.a_extra[e, s]
+                sc.y_stage[i] = y[i] + h * v
+            system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[s_idx])
+            st.rhs_evals += 1
+        for i in range(ny):
+            dy = sc.y_new[i] - y[i]
+            sc.dense[0, i] = dy
+            sc.dense[1, i] = h * k[0, i] - dy
+            sc.dense[2, i] = 2.0 * dy - h * (k[n_st, i] + k[0, i])
+            for r in range(4):
+                v = 0.0
+                for s in range(16):
+                    v += tab.d[r, s] * k[s, i]
+                sc.dense[3 + r, i] = h * v
+
+
+@njit(cache=True)
+def dense_eval(tab: Tableau, theta: float, h: float, y: np.ndarray, sc: Scratch, out: np.ndarray) -> None:
+    """out = the interpolated state at t + theta h of the last step (from y at t)."""
+    ny = y.shape[0]
+    if tab.kind == DOPRI5:
+        for i in range(ny):
+            v = 0.0
+            power = theta
+            for j in range(4):
+                v += sc.dense[j, i] * power
+                power *= theta
+            out[i] = y[i] + h * v
+    else:
+        for i in range(ny):
+            v = 0.0
+            for r in range(6, -1, -1):
+                v += sc.dense[r, i]
+                v *= theta if (6 - r) % 2 == 0 else 1.0 - theta
+            out[i] = y[i] + v
+
+
+@njit(cache=True)
+def locate_event(tab: Tableau, h: float, y: np.ndarray, system: tuple, sc: Scratch) -> float:
+    """Earliest sign change of the event functions inside the step, as theta in (0, 1].
+
+    Returns the right end of the final bracket (the side where the function has its new sign),
+    so that the event is not found again when the integration restarts there.
+    """
+    m = sc.g_old.shape[0]
+    theta_event = 2.0
+    for j in range(m):
+        if (sc.g_old[j] > 0.0) == (sc.g_new[j] > 0.0):
+            continue
+        lo, hi = 0.0, 1.0
+        g_lo, g_hi = sc.g_old[j], sc.g_new[j]
+        side = 0
+        for _ in range(100):
+            if (hi - lo) * h <= EVENT_TIME_TOL:
+                break
+            denom = g_hi - g_lo
+            mid = lo - g_lo * (hi - lo) / denom if denom != 0.0 else 0.5 * (lo + hi)
+            if not (lo < mid < hi):
+                mid = 0.5 * (lo + hi)
+            dense_eval(tab, mid, h, y, sc, sc.y_dense)
+            system_event_functions(sc.y_dense, system, sc.g_mid)
+            g = sc.g_mid[j]
+            if (g > 0.0) == (g_lo > 0.0):
+                lo, g_lo = mid, g
+                if side == -1:
+                    g_hi *= 0.5
+                side = -1
+            else:
+                hi, g_hi = mid, g
+                if side == 1:
+                    g_lo *= 0.5
+                side = 1
+        theta_event = min(theta_event, hi)
+    return theta_event

@@ -1,0 +1,178 @@
+"""What an integration records, and the bookkeeping every integrator driver shares.
+
+A :class:`Recorder` holds the resumable loop state (``state[0]``: a record of named counters and
+flags, ``LOOP_STATE``) and the output buffers: samples, heel strikes and the contact log. The
+compiled explicit loop, the scipy event-restart driver and the benchmark's plain-Python baseline
+(``.py_func``) all record through :func:`record_sample` and :func:`apply_events`.
+
+The loop state is one numpy record rather than a NamedTuple of 1-element arrays: compiled code reads
+and writes its fields in place (``st = rec.state[0]; st.n_samples += 1``), and a record, unlike an
+array, costs no reference counting each time the loop hands it to a function.
+
+The sample buffers are sized for the whole run. The contact log and the strike buffers grow: a
+driver checks :func:`has_room` before every event (the compiled loop stops when it is false, with
+its state saved in the recorder), enlarges them with :func:`with_room` and resumes, which does not
+change a bit of the result.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from biped_sim.contact.response import TOUCHDOWN, TOUCHING, ContactBuffers
+from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
+
+# status codes
+RUNNING, COMPLETED, FELL, DIVERGED = 0, 1, 2, 3
+LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)
+LOG_COLUMNS = 4  # time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
+LOOP_STATE = np.dtype(
+    [
+        ("time", np.float64),  # [s] where the integration stands
+        ("step", np.float64),  # [s] next step size of an adaptive method (0: not chosen yet)
+        ("stop_time", np.float64),  # [s] time of the fall or divergence
+        ("status", np.int64),  # RUNNING, COMPLETED, FELL or DIVERGED
+        ("n_samples", np.int64),  # samples recorded
+        ("n_strikes", np.int64),  # heel strikes recorded
+        ("n_log", np.int64),  # contact-log rows recorded
+        ("rhs_evals", np.int64),  # right-hand-side evaluations
+        ("accepted", np.int64),  # accepted steps
+        ("rejected", np.int64),  # steps rejected by error control
+        ("forced", np.int64),  # tiny steps accepted whatever their error (explicit loop)
+        ("n_events", np.int64),  # event updates that changed a contact mode
+        ("last_strike_foot", np.int64),  # foot of the last heel strike (bounces of it are not strikes)
+        ("fsal_valid", np.int64),  # 1 when the stored first stage f(t, y) is current (explicit loop)
+    ]
+)
+
+
+class Recorder(NamedTuple):
+    """Loop state and output buffers (allocated by :func:`make_recorder`)."""
+
+    state: np.ndarray  # (1,) LOOP_STATE record array: the loop's resumable state, state[0].time etc.
+    sample_t: np.ndarray  # (ns,)
+    sample_y: np.ndarray  # (ns, ny)
+    sample_modes: np.ndarray  # (ns, nf, 3)
+    strike_t: np.ndarray  # (nk,)
+    strike_foot: np.ndarray  # (nk,) int64
+    strike_y: np.ndarray  # (nk, ny)
+    strike_modes: np.ndarray  # (nk, nf, 3)
+    log: np.ndarray  # (nl, LOG_COLUMNS): time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
+
+
+def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stance_foot: int) -> Recorder:
+    """Allocate output buffers and the loop state (the strike and log buffers grow when needed)."""
+    state = np.zeros(1, dtype=LOOP_STATE).view(np.recarray)
+    state[0].status = RUNNING
+    state[0].last_strike_foot = initial_stance_foot
+    return Recorder(
+        state=state,
+        sample_t=np.zeros(n_samples),
+        sample_y=np.zeros((n_samples, ny)),
+        sample_modes=np.zeros((n_samples, nf, 3)),
+        strike_t=np.zeros(n_strikes),
+        strike_foot=np.zeros(n_strikes, dtype=np.int64),
+        strike_y=np.zeros((n_strikes, ny)),
+        strike_modes=np.zeros((n_strikes, nf, 3)),
+        log=np.zeros((LOG_CAPACITY, LOG_COLUMNS)),
+    )
+
+
+@njit(cache=True)
+def has_room(rec: Recorder, nf: int) -> bool:
+    """Whether one more event fits: it logs at most one row and makes at most one heel strike per foot."""
+    st = rec.state[0]
+    return st.n_log + nf <= rec.log.shape[0] and st.n_strikes + nf <= rec.strike_t.shape[0]
+
+
+def _enlarged(buffer: np.ndarray, rows: int) -> np.ndarray:
+    """``buffer`` with at least ``rows`` rows: twice as many, its contents first."""
+    out = np.zeros((max(rows, 2 * buffer.shape[0]), *buffer.shape[1:]), dtype=buffer.dtype)
+    out[: buffer.shape[0]] = buffer
+    return out
+
+
+def with_room(rec: Recorder, nf: int) -> Recorder:
+    """``rec``, or a copy with larger contact-log and strike buffers (same loop state) if an event might not fit."""
+    if has_room(rec, nf):
+        return rec
+    st = rec.state[0]
+    log_rows, strike_rows = int(st.n_log) + nf, int(st.n_strikes) + nf
+    return rec._replace(
+        log=_enlarged(rec.log, log_rows),
+        strike_t=_enlarged(rec.strike_t, strike_rows),
+        strike_foot=_enlarged(rec.strike_foot, strike_rows),
+        strike_y=_enlarged(rec.strike_y, strike_rows),
+        strike_modes=_enlarged(rec.strike_modes, strike_rows),
+    )
+
+
+@njit(cache=True)
+def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> None:
+    """Store the sample (t, y, modes) if the sample buffer has room (it is sized for the whole run)."""
+    st = rec.state[0]
+    k = st.n_samples
+    if k < rec.sample_t.shape[0]:
+        rec.sample_t[k] = t
+        rec.sample_y[k, :] = y
+        rec.sample_modes[k, :, :] = modes
+        st.n_samples = k + 1
+
+
+@njit(cache=True)
+def _log_contact_changes(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, rec: Recorder, touching_before: np.ndarray
+) -> None:
+    """One contact-log row per foot whose TOUCHING mode changed: (t, foot, +1 / -1, approach velocity)."""
+    for i in range(modes.shape[0]):
+        now = modes[i, TOUCHING]
+        if now != touching_before[i]:
+            st = rec.state[0]
+            n = st.n_log
+            rec.log[n, 0] = t
+            rec.log[n, 1] = i
+            rec.log[n, 2] = 1.0 if now > 0.5 else -1.0
+            rec.log[n, 3] = system_approach_velocity(y, system, i)
+            st.n_log = n + 1
+
+
+@njit(cache=True)
+def apply_events(
+    t: float,
+    y: np.ndarray,
+    system: tuple,
+    modes: np.ndarray,
+    contact: ContactBuffers,
+    rec: Recorder,
+    touching_before: np.ndarray,
+    max_strikes: int,
+) -> bool:
+    """Update contact modes at an event; log touchdowns/lift-offs and heel strikes (the caller keeps has_room).
+
+    A heel strike is the touchdown (``contact.onset`` = TOUCHDOWN) of a foot that is ahead of its
+    partner and is not the foot of the previous strike: bounces of the same foot after touchdown
+    belong to that strike. Reaching ``max_strikes`` (> 0) strikes completes the run.
+    ``touching_before`` is a scratch buffer of one entry per foot. Returns True when a mode changed.
+    """
+    nf = modes.shape[0]
+    for i in range(nf):
+        touching_before[i] = modes[i, TOUCHING]
+    if not system_update_modes(y, system, modes, contact):
+        return False
+    _log_contact_changes(t, y, system, modes, rec, touching_before)
+    st = rec.state[0]
+    for i in range(nf):
+        if contact.onset[i] == TOUCHDOWN and i != st.last_strike_foot and system_is_leading(y, system, i):
+            k = st.n_strikes
+            rec.strike_t[k] = t
+            rec.strike_foot[k] = i
+            rec.strike_y[k, :] = y
+            rec.strike_modes[k, :, :] = modes
+            st.n_strikes = k + 1
+            st.last_strike_foot = i
+            if max_strikes > 0 and k + 1 >= max_strikes:
+                st.status = COMPLETED
+    return True

@@ -1,0 +1,58 @@
+"""Contact events of every formulation, written once over its ``foot_contact`` kernel (compiled).
+
+A walker's discrete events are the sign changes of two functions per foot i (MODEL.md 3): its
+penetration delta_i (touchdown, lift-off) and its lead x_i - x_partner over its partner foot along
+the slope (the scuffing guard arms a foot once it is ahead). At an event the integrators call
+:func:`system_update_modes`, which evaluates the feet and hands them to
+:func:`~biped_sim.contact.response.update_contact_modes`; a touchdown of a foot that
+:func:`system_is_leading` is a heel strike, logged with :func:`system_approach_velocity`. All of
+it reads a formulation only through ``system_foot_contact`` (penetration, approach velocity,
+contact point), so a new formulation gets its events for free.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from biped_sim.contact.response import ContactBuffers, update_contact_modes
+from biped_sim.multibody.dispatch import system_foot_contact
+
+
+def event_count(system: tuple) -> int:
+    """Number of event functions of ``system``: two per foot."""
+    return 2 * int(system.foot_body.shape[0])
+
+
+@njit(cache=True)
+def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
+    """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner)."""
+    for i in range(system.foot_body.shape[0]):
+        delta, _, x_i = system_foot_contact(y, system, i)
+        g[2 * i] = delta
+        partner = system.foot_partner[i]
+        g[2 * i + 1] = x_i - system_foot_contact(y, system, partner)[2] if partner >= 0 else 1.0
+
+
+@njit(cache=True)
+def system_approach_velocity(y: np.ndarray, system: tuple, foot: int) -> float:
+    """Normal approach velocity deltadot of a foot."""
+    return system_foot_contact(y, system, foot)[1]
+
+
+@njit(cache=True)
+def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
+    """Whether a foot's contact point is downhill of its partner's (a foot without a partner always leads)."""
+    partner = system.foot_partner[foot]
+    if partner < 0:
+        return True
+    return system_foot_contact(y, system, foot)[2] > system_foot_contact(y, system, partner)[2]
+
+
+@njit(cache=True)
+def system_update_modes(y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
+    """Scuffing guard and contact bookkeeping at an event; sets contact.onset; True when a mode changed."""
+    system_event_functions(y, system, contact.gates)
+    for i in range(system.foot_body.shape[0]):
+        contact.approach[i] = system_approach_velocity(y, system, i)
+    return update_contact_modes(y, system, modes, contact)

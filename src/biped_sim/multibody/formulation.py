@@ -1,0 +1,164 @@
+"""The formulation record: what the engine and post-processing take from one multibody formulation.
+
+A formulation (planar absolute coordinates, spatial Euler parameters, ...) is one frozen
+:class:`Formulation`: its system NamedTuple type, its compiled kernels (signatures in
+``KERNEL_SIGNATURES``), its workspace, its post-processing :class:`Measures`, the names and
+:class:`StateLayout` of its ODE state and its capabilities. Each formulation module builds its
+record; :mod:`biped_sim.multibody.dispatch` registers it (one line) and generates the compiled
+dispatch from the registry. What is the same for every formulation (the event functions, the
+contact-mode update, heel-strike tests) is written once over the ``foot_contact`` kernel in
+:mod:`biped_sim.multibody.events`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+# capability: TouchdownSection (the compliant limit cycle) can lift and project this formulation's states
+COMPLIANT_LIMIT_CYCLE = "compliant_limit_cycle"
+
+# the compiled kernels of a formulation and their parameters (all allocation-free):
+KERNEL_SIGNATURES: dict[str, tuple[str, ...]] = {
+    # ydot = f(t, y) for the current contact modes; work is the formulation's workspace
+    "rhs": ("t", "y", "system", "modes", "work", "ydot"),
+    # (penetration delta [m], approach velocity deltadot [m/s], contact point along the slope [m]) of a foot
+    "foot_contact": ("y", "system", "foot"),
+    # whether the walker fell (stops the integration)
+    "has_fallen": ("y", "system"),
+}
+
+
+class Measures(NamedTuple):
+    """What post-processing measures of one state ``y`` of a formulation (Python side, per sample).
+
+    Every callable takes ``(y, system, ...)``; the compiled functions behind them are the ones the
+    right-hand side uses (one source per equation).
+    """
+
+    contact_x: Callable[..., float]  # (y, system, foot): contact point along the slope [m]
+    pitch: Callable[..., tuple[float, float]]  # (y, system, body): sagittal leg angle [rad] and rate [rad/s]
+    mechanical_energy: Callable[..., tuple[float, float, float]]  # (y, system, modes): kinetic, potential, elastic
+    violation: Callable[..., tuple[float, ...]]  # (y, system): one norm per entry of violation_names
+    violation_names: tuple[str, ...]
+    contact: Callable[..., tuple[float, ...]]  # (y, system, modes, foot): one value per entry of contact_names
+    contact_names: tuple[str, ...]
+    hip: Callable[..., tuple[float, ...]]  # (y, system): position of the hip (joint 0) in the slope frame
+    attitude: Callable[..., tuple[float, float, float, float]] | None  # (y, system, body): pitch, roll, yaw, omega_z
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Where each quantity of an ODE state y = [q | qd | z | W_normal | W_friction] sits.
+
+    q holds ``len(coordinates)`` entries per body, qd as many rates per body (in the same order), z
+    ``len(bristles)`` friction states per foot, then the work dissipated by normal damping and by
+    friction (integrated with the motion: the energy balance E(t) - E(0) + W(t) = 0 checks the run).
+    """
+
+    coordinates: tuple[str, ...]  # one body's coordinates, e.g. ("x", "y", "phi")
+    rates: tuple[str, ...]  # one body's velocities, e.g. ("vx", "vy", "omega")
+    bristles: tuple[str, ...]  # one foot's friction states, e.g. ("z",)
+    n_bodies: int
+    n_feet: int
+
+    def __post_init__(self) -> None:
+        if len(self.rates) != len(self.coordinates):
+            raise ValueError("a body needs one rate per coordinate")
+
+    def position(self, body: int) -> slice:
+        """Body ``body``'s coordinates in y."""
+        width = len(self.coordinates)
+        return slice(width * body, width * (body + 1))
+
+    def velocity(self, body: int) -> slice:
+        """Body ``body``'s velocities in y."""
+        width = len(self.rates)
+        start = width * self.n_bodies + width * body
+        return slice(start, start + width)
+
+    def coordinate(self, body: int, name: str) -> int:
+        """Index in y of one named coordinate of a body (e.g. ``"phi"``)."""
+        return self.position(body).start + self.coordinates.index(name)
+
+    def rate(self, body: int, name: str) -> int:
+        """Index in y of one named velocity of a body (e.g. ``"omega"``)."""
+        return self.velocity(body).start + self.rates.index(name)
+
+    @property
+    def first_bristle(self) -> int:
+        """Index in y of foot 0's first friction state."""
+        return 2 * len(self.coordinates) * self.n_bodies
+
+    def bristle(self, foot: int) -> slice:
+        """Foot ``foot``'s friction states in y."""
+        width = len(self.bristles)
+        start = self.first_bristle + width * foot
+        return slice(start, start + width)
+
+    def bristle_index(self) -> np.ndarray:
+        """(n_feet, len(bristles)) int64: the indices in y of each foot's friction states."""
+        rows = [range(self.bristle(foot).start, self.bristle(foot).stop) for foot in range(self.n_feet)]
+        return np.array(rows, dtype=np.int64).reshape(self.n_feet, len(self.bristles))
+
+    @property
+    def work_normal(self) -> int:
+        """Index in y of the work dissipated by normal damping."""
+        return self.first_bristle + len(self.bristles) * self.n_feet
+
+    @property
+    def work_friction(self) -> int:
+        """Index in y of the work dissipated by friction."""
+        return self.work_normal + 1
+
+    @property
+    def size(self) -> int:
+        """Length of y."""
+        return self.work_friction + 1
+
+    def names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
+        """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``)."""
+        coords = [f"{axis}_{body}" for body in body_names for axis in self.coordinates]
+        rates = [f"{axis}_{body}" for body in body_names for axis in self.rates]
+        bristles = [f"{state}_{foot}" for foot in foot_names for state in self.bristles]
+        return coords + rates + bristles + ["W_normal", "W_friction"]
+
+
+@dataclass(frozen=True)
+class Formulation:
+    """One multibody formulation, as the engine interface and post-processing see it.
+
+    The kernel fields are compiled functions with the parameters in ``KERNEL_SIGNATURES``; numba
+    dispatches the loops' ``system_*`` calls to them by the type of ``system`` (``system_type``).
+    """
+
+    name: str
+    system_type: type
+    rhs: Callable[..., None]
+    foot_contact: Callable[..., tuple[float, float, float]]
+    has_fallen: Callable[..., bool]
+    make_workspace: Callable[[Any], tuple]  # (system) -> the right-hand side's buffers (a NamedTuple of arrays)
+    measures: Measures
+    coordinates: tuple[str, ...]  # see StateLayout
+    rates: tuple[str, ...]
+    bristles: tuple[str, ...]
+    capabilities: frozenset[str] = frozenset()
+
+    def layout(self, n_bodies: int, n_feet: int) -> StateLayout:
+        """The state layout of a system of this formulation with ``n_bodies`` bodies and ``n_feet`` feet."""
+        return StateLayout(self.coordinates, self.rates, self.bristles, n_bodies, n_feet)
+
+    def layout_of(self, system: Any) -> StateLayout:
+        """The state layout of ``system``."""
+        return self.layout(int(system.body_mass.shape[0]), int(system.foot_body.shape[0]))
+
+    def state_names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
+        """Names of the ODE state entries of a walker with these bodies and feet, in order."""
+        return self.layout(len(body_names), len(foot_names)).names(body_names, foot_names)
+
+    def supports(self, capability: str) -> bool:
+        """Whether this formulation has ``capability`` (e.g. ``COMPLIANT_LIMIT_CYCLE``)."""
+        return capability in self.capabilities
