@@ -13,7 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, fail, load, user_errors
-from biped_sim.config import parse_yaml
+from biped_sim.config import config_from_dict, parse_yaml
 from biped_sim.errors import ConfigError
 
 GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
@@ -29,9 +29,13 @@ def _parse_guess(text: str | None) -> dict[str, float] | None:
     if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
         raise ConfigError("--guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
     try:
-        return {k: float(value[k]) for k in GUESS_KEYS}
+        guess = {k: float(value[k]) for k in GUESS_KEYS}
     except (TypeError, ValueError):
         raise ConfigError("--guess", "values must be numbers") from None
+    bad = [k for k, v in guess.items() if not math.isfinite(v) or isinstance(value[k], bool)]
+    if bad:
+        raise ConfigError("--guess", f"{bad[0]} must be a finite number")
+    return guess
 
 
 @app.command("limit-cycle")
@@ -148,6 +152,13 @@ def bifurcation_command(
     config = load(config_path, set_)
     if config.dynamics != "rigid":
         raise ConfigError("dynamics", "bifurcation runs the rigid model: use --set dynamics=rigid")
+    for option, value in (("--from", start), ("--to", stop)):
+        data = config.model_dump(mode="json")
+        data["ground"]["slope"] = value
+        try:
+            config_from_dict(data)
+        except ConfigError as exc:
+            raise ConfigError(option, f"slope {value}: {exc.reason}") from None
     t0 = time.perf_counter()
     diagram = bifurcation_diagram(config, start, stop, n)
     write_bifurcation(diagram, out)

@@ -71,6 +71,7 @@ def summary_line(result: RunResult) -> str:
     s = result.summary
     seconds = result.unit("s")
     status = s["status"] + (f" at t={_quantity(s['stop_time'], 3, seconds)}" if s["stop_time"] is not None else "")
+    status += f" ({s['status_reason']})" if s.get("status_reason") else ""
     period = s["mean_step_period"]
     gait = (
         f"mean period {_quantity(period, 5, seconds)}, speed {_quantity(s['mean_speed'], 4, result.unit('m/s'))}, "
