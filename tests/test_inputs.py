@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 from pathlib import Path
@@ -150,3 +151,66 @@ def test_a_rigid_run_past_its_wall_time_budget_ends_with_status_timeout() -> Non
     assert result.status == "timeout"
     assert result.summary["stop_time"] is not None and math.isfinite(result.summary["t_end"])
     assert "max_wall_time" in result.summary["status_reason"]
+
+
+def test_run_on_a_full_disk_is_one_line_exit_1_and_leaves_no_run(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import errno
+
+    def no_space(self: Path, data: bytes) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_bytes", no_space)
+    out = tmp_path / "run"
+    result = CliRunner().invoke(
+        app, ["run", str(DEFAULT_CONFIG), "--set", "simulation.t_end=0.2", "--out", str(out), "-q"]
+    )
+    assert result.exit_code == 1
+    assert "trajectory.h5: No space left on device" in result.output and "Traceback" not in result.output
+    assert not (out / "summary.json").exists() and not list(out.glob(".*tmp"))
+
+
+@pytest.mark.parametrize("command", ["run", "validate", "bifurcation"])
+def test_an_output_location_under_a_file_is_refused_before_computing(tmp_path: Path, command: str, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    module, name = {
+        "run": ("biped_sim.cli.run_commands", "prepare_model"),
+        "validate": ("biped_sim.studies.validation", "run_validation"),
+        "bifurcation": ("biped_sim.studies.bifurcation", "bifurcation_diagram"),
+    }[command]
+    monkeypatch.setattr(importlib.import_module(module), name, lambda *a, **k: pytest.fail("computed first"))
+    config = str(
+        DEFAULT_CONFIG.parent / ("simplest_walker.yaml" if command == "bifurcation" else "round_foot_walker.yaml")
+    )
+    args = {"run": ["run", config], "validate": ["validate"], "bifurcation": ["bifurcation", config]}[command]
+    result = CliRunner().invoke(app, [*args, "--out", str(blocker / "out")])
+    assert result.exit_code == 2 and "a_file is a file" in result.output
+
+
+def test_a_rewritten_run_directory_says_what_it_replaced_and_drops_old_figures(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    base = ["run", str(DEFAULT_CONFIG), "--out", str(out), "-q", "--set", "simulation.t_end=0.2"]
+    assert CliRunner().invoke(app, base).exit_code == 0
+    (out / "figures").mkdir()
+    (out / "figures" / "old.png").write_bytes(b"old")
+    result = CliRunner().invoke(app, [*base, "--set", "ground.slope=0.018"])
+    assert result.exit_code == 0 and "replaced the run of config" in result.output
+    assert not (out / "figures").exists()
+
+
+def test_a_reference_file_that_lists_itself_is_one_line(tmp_path: Path) -> None:
+    ref = tmp_path / "ref.yaml"
+    ref.write_text(
+        "experiment: x\ncitation: {authors: [A B], title: T, year: 2000}\nsource: {kind: table}\n"
+        "quantity: {name: step_period, unit: s}\nvalues: [0.5, 0.5]\npublished_errors: [ref.yaml]\n"
+    )
+    from biped_sim.io.references import load_reference
+
+    with pytest.raises(ConfigError, match="a cycle"):
+        load_reference(ref)
+
+
+@pytest.mark.parametrize(("option", "value"), [("--fps", "nan"), ("--speed", "0"), ("--end", "-1")])
+def test_animation_options_must_be_finite(tmp_path: Path, option: str, value: str) -> None:
+    result = CliRunner().invoke(app, ["animate", str(tmp_path), "--out", str(tmp_path / "a.gif"), option, value])
+    assert result.exit_code == 2 and option in result.output

@@ -15,6 +15,7 @@ from rich.table import Table
 from biped_sim.cli.common import ConfigArgument, SetOption, app, fail, load, user_errors
 from biped_sim.config import config_from_dict, parse_yaml
 from biped_sim.errors import ConfigError
+from biped_sim.io.output import check_writable_dir
 
 GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
 
@@ -149,6 +150,7 @@ def bifurcation_command(
 
     if param != "ground.slope":
         raise ConfigError("--param", "only ground.slope is supported")
+    check_writable_dir(out)
     config = load(config_path, set_)
     if config.dynamics != "rigid":
         raise ConfigError("dynamics", "bifurcation runs the rigid model: use --set dynamics=rigid")
@@ -180,6 +182,7 @@ def validate_command(
     """Every physics check against published or analytic numbers; writes report.md; exit 1 on any failure."""
     from biped_sim.studies.validation import run_validation
 
+    check_writable_dir(out)
     console = Console()
     checks, extras = run_validation(out, progress=lambda stage: console.print(f"checking: {stage}", highlight=False))
     failed = [c for c in checks if not c.passed]

@@ -12,6 +12,7 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.channels import (
@@ -25,7 +26,7 @@ from biped_sim.measure.channels import (
 )
 from biped_sim.measure.energy import EnergyAudit, energy_audit
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
-from biped_sim.simulate.result import RunResult, json_safe
+from biped_sim.simulate.result import RunResult
 from biped_sim.walkers import BuiltModel
 
 CHANNEL_UNITS = {

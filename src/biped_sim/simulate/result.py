@@ -19,17 +19,6 @@ from biped_sim.io.run_files import TrajectoryFile, write_run_directory
 from biped_sim.measure.steps import StepAccess, StepTable, steps_csv
 
 
-def json_safe(value: Any) -> Any:
-    """``value`` with every non-finite float replaced by None, so that summary.json is valid JSON (null, not NaN)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {key: json_safe(item) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_safe(item) for item in value]
-    return value
-
-
 def wall_deadline(config: Config) -> float:
     """``time.monotonic()`` past which a run ends with status 'timeout' (inf without simulation.max_wall_time)."""
     budget = config.simulation.max_wall_time

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
@@ -52,7 +53,7 @@ from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import rigid_step
-from biped_sim.simulate.result import RunResult, json_safe, wall_deadline
+from biped_sim.simulate.result import RunResult, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "residual")
 
