@@ -38,7 +38,7 @@ set:
   simulation.t_end: 1.0
 zip:
   integrator.method: [dopri5, rk4, euler]
-  integrator.dt: [1.0e-4, 1.0e-4, 5.0e-3]   # euler at 5 ms is unstable: the walker falls
+  integrator.dt: [1.0e-4, 1.0e-4, 5.0e-3]   # euler at 5 ms is unstable: the integration diverges
 """
 
 
@@ -61,7 +61,7 @@ def local_sweep(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_parallel_sweep_writes_every_run_and_the_table(local_sweep: Path) -> None:
     table = pd.read_csv(local_sweep / "sweep.csv")
     assert list(table["integrator.method"]) == ["dopri5", "rk4", "euler"]  # run order, not completion order
-    assert list(table["status"]) == ["walking", "walking", "fell"]
+    assert list(table["status"]) == ["walking", "walking", "diverged"]
     for column in ("run", "config_hash", "integrator.dt", *SETTING_COLUMNS, "step_control", *METRIC_COLUMNS):
         assert column in table.columns
     assert list(table["step_control"]) == ["rtol = 1e-08, atol = 1e-10", "dt = 1e-04 s", "dt = 5e-03 s"]
@@ -81,8 +81,8 @@ def test_parallel_sweep_writes_every_run_and_the_table(local_sweep: Path) -> Non
     walking = table[table["status"] == "walking"]
     assert (walking["n_steps"] >= 2).all() and (walking["mean_period_s"] > 0.3).all()
     assert (walking["rhs_evals"] > walking["accepted_steps"]).all()
-    fell = table[table["status"] == "fell"].iloc[0]
-    assert fell["stop_time_s"] < 1.0
+    diverged = table[table["status"] == "diverged"].iloc[0]
+    assert diverged["stop_time_s"] < 1.0
 
 
 def test_failing_run_is_recorded_and_the_sweep_goes_on(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
