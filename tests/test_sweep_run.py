@@ -117,7 +117,7 @@ def test_summary_of_another_config_is_not_a_finished_run(tmp_path: Path) -> None
 
 def test_resume_after_kill_skips_finished_runs_and_ignores_partial_files(tmp_path: Path) -> None:
     """kill -9 the whole sweep (a real process group) mid-way; the restart reruns exactly the unfinished runs."""
-    n_runs = 4
+    n_runs = 6  # 0.1 s each: the kill, 20-40 ms after the first finished, comes well before the last
     path = write_sweep(
         tmp_path,
         "killed",
