@@ -1,4 +1,4 @@
-"""`biped-sim plot` and `biped-sim animate` on a run directory."""
+"""`biped-sim plot` and `biped-sim animate` on the shared short run directory (2 s of the default walker)."""
 
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ def test_plot_writes_every_single_run_figure(short_run_dir: Path) -> None:
         with Image.open(short_run_dir / "figures" / f"{name}.png") as image:
             assert round(image.info["dpi"][0]) == 200 and image.size[0] == 700
         assert "<svg" in (short_run_dir / "figures" / f"{name}.svg").read_text()
-    assert sorted(p.suffix for p in (short_run_dir / "figures").iterdir()) == [".png"] * 6 + [".svg"] * 6
+    n = len(RUN_FIGURES)
+    assert sorted(p.suffix for p in (short_run_dir / "figures").iterdir()) == [".png"] * n + [".svg"] * n
 
 
 def test_animate_writes_a_gif_with_one_frame_per_interval(short_run_dir: Path, tmp_path: Path) -> None:
