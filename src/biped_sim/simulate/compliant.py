@@ -112,15 +112,16 @@ def divergence(result: CompliantRunResult) -> tuple[float, str] | None:
     """(time, reason) of the first sample where the run's own checks say the integration blew up, or None.
 
     The energy residual E(t) - E(0) + W(t) is pure integration error (about 1e-9 m g l for an accurate
-    run), so it tells a blow-up from a physical fall: the residual passes ``DIVERGED_ENERGY`` m g l, or grows
-    by ``DIVERGED_ENERGY_JUMP`` m g l within one sample interval (a step too large for the contact makes a
-    foot rebound faster than it landed; the fixed-step runs that walk change it by at most 0.005 per
-    millisecond), or a joint drifts apart by ``DIVERGED_DRIFT`` leg lengths. Non-finite samples count.
+    run), so it tells a blow-up from a physical fall: the residual passes ``DIVERGED_ENERGY`` m g l, or a
+    joint drifts apart by ``DIVERGED_DRIFT`` leg lengths, or a run that fell had first made an energy error of
+    ``DIVERGED_ENERGY_JUMP`` m g l within one sample interval (a step too large for the contact throws a foot
+    off the ground faster than it landed; fixed-step runs that walk change the residual by at most 0.005 m g l
+    per millisecond). Non-finite samples count.
     """
     residual = result.energy.residual / energy_scale(result.model, result.config)
     drift = result.violation[:, 0] / result.model.leg_length
     jump = np.zeros_like(residual)
-    if result.run.sample_dt <= MAX_JUMP_INTERVAL:
+    if result.run.status == "fell" and result.run.sample_dt <= MAX_JUMP_INTERVAL:
         jump[1:] = np.abs(np.diff(residual))
     checks = (
         (~(np.abs(residual) <= DIVERGED_ENERGY), "energy residual {:.2g} m g l", np.abs(residual)),
