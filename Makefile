@@ -21,11 +21,12 @@ setup-bench: $(STAMP)      ## also install MuJoCo for the benchmark comparison
 run: $(STAMP)              ## simulate the default walker; print its step table and where its files went
 	$(BIN)/biped-sim run $(CONFIG)
 
-test: $(STAMP)             ## the fast test suite
+test: $(STAMP)             ## the fast test tier (pytest's default: -m 'not slow'; about a minute)
 	$(BIN)/python -m pytest -q
 
-validate: $(STAMP)         ## long physics checks against analytic and published numbers
+validate: $(STAMP)         ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
+	$(BIN)/python -m pytest -q -m slow
 
 bench: $(STAMP)            ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench

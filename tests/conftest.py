@@ -1,20 +1,104 @@
-"""Shared fixtures: paths to the bundled configs and one simulation of the default walker."""
+"""Shared fixtures and helpers: the bundled configs, runs and a sweep simulated once per session, the CLI.
+
+The fast tier (``make test``) shares one short run (:func:`short_run`, 2 s of the default walker)
+and one tiny sweep (:func:`tiny_sweep_dir`, 8 runs of 1.3 s) among the tests that only read them;
+:func:`default_run` (the full 15 s) is for the slow tier (``make validate``), whose tests are marked
+``@pytest.mark.slow``.
+
+CLI tests call the typer app in-process (:func:`invoke`, milliseconds); :func:`run_cli` starts a fresh
+interpreter (about a second) and is kept for where the process boundary is the point: the exit code
+and stderr of the real entry point, worker processes, a kill -9.
+"""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+from click.testing import Result
+from typer.testing import CliRunner
 
+import biped_sim
 from biped_sim import load_config, simulate
+from biped_sim.cli import app
 from biped_sim.simulate import RunResult
+from biped_sim.testing import default_walker, write_tiny_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"
 DEFAULT_CONFIG = CONFIGS / "round_foot_walker.yaml"
+CLI = [sys.executable, "-m", "biped_sim.cli"]
+
+
+def child_env() -> dict[str, str]:
+    """This environment with the directory this session imports biped_sim from first on PYTHONPATH.
+
+    A child started in another directory then runs the same code as the tests in this process: with a
+    relative PYTHONPATH (``PYTHONPATH=src``) it would import the editable install instead, possibly
+    another tree, and compile that tree's kernels (40 s) on the way.
+    """
+    here = str(Path(biped_sim.__file__).resolve().parents[1])
+    paths = [here, *(p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p)]
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(paths)}
+
+
+def run_cli(*args: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    """``biped-sim ARGS`` in a fresh interpreter (the real entry point: exit code, stdout, stderr)."""
+    return subprocess.run([*CLI, *args], cwd=cwd, env=child_env(), capture_output=True, text=True, timeout=timeout)
+
+
+def invoke(*args: str) -> Result:
+    """``biped-sim ARGS`` in this process (typer's CliRunner): exit code, stdout and stderr apart."""
+    return CliRunner().invoke(app, list(args))
+
+
+def one_line_error(stderr: str) -> str:
+    """The single line of a user error on stderr (asserts there is exactly one, and no traceback)."""
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), stderr
+    assert "Traceback" not in stderr
+    return lines[0]
 
 
 @pytest.fixture(scope="session")
 def default_run() -> RunResult:
-    """The default walker, as `make run` simulates it (15 s)."""
+    """The default walker, as `make run` simulates it (15 s, 34 steps): for the slow tier's settled-gait checks."""
     return simulate(load_config(DEFAULT_CONFIG))
+
+
+@pytest.fixture(scope="session")
+def short_run() -> RunResult:
+    """The default walker for 2 s (four heel strikes): read-only, shared by every test that needs some walking."""
+    return simulate(default_walker())
+
+
+@pytest.fixture(scope="session")
+def short_run_dir(short_run: RunResult, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """:func:`short_run` written as a run directory; shared by the plot, animate and compare tests.
+
+    Tests may add outputs below it (``figures/``) but must not change the run's own files.
+    """
+    out = tmp_path_factory.mktemp("short_run") / "run"
+    short_run.write(out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def tiny_sweep_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The tiny sweep (biped_sim.testing.write_tiny_sweep), run once by ``biped-sim sweep --jobs 2``.
+
+    Two worker processes: the runs finish out of order and the table must not.
+    Shared (read-only) by the sweep runner, report and compare tests, which write below it only into
+    directories of their own.
+    """
+    root = tmp_path_factory.mktemp("tiny_sweep")
+    path = write_tiny_sweep(root)
+    result = invoke("sweep", str(path), "--jobs", "2", "--out", str(root / "sweep"))
+    assert result.exit_code == 0, result.output
+    assert "8 runs: 0 already finished, 8 to run" in result.stdout
+    # not a terminal: no live display but one progress line per run
+    assert sum(line.startswith("[") for line in result.stdout.splitlines()) == 8
+    return root / "sweep"

@@ -5,26 +5,46 @@ from __future__ import annotations
 import importlib.util
 import math
 import re
+from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from biped_sim.bench.report import markdown, summary_line, targets
-from biped_sim.bench.runner import CASES, HEADLINE, BenchSettings, run_bench
+from biped_sim.bench.runner import (
+    BASELINE,
+    CASES,
+    HEADLINE,
+    PERIOD_TOLERANCE,
+    SLOW_RUN_S,
+    BenchSettings,
+    Row,
+    case_config,
+    environment,
+    integrate,
+    run_bench,
+)
+from biped_sim.walkers import build_model
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "round_foot_walker.yaml"
 
 
 @pytest.fixture(scope="module")
 def short_bench() -> dict:
-    """The benchmark on 1 s of walking (two heel strikes), one repeat, no start-up/sweep/compile/MuJoCo runs."""
+    """The benchmark on 1 s of walking (two heel strikes), one repeat, no start-up/sweep/compile/MuJoCo runs.
+
+    About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
+    their step size. Slow tier only.
+    """
     settings = BenchSettings(
         CONFIG, t_end=1.0, repeats=1, slow_repeats=1, sweep_runs=0, compile_time=False, mujoco=False
     )
     return run_bench(settings)
 
 
+@pytest.mark.slow
 def test_baseline_step_periods_match_dopri5_at_the_same_tolerance(short_bench: dict) -> None:
     rows = {row["label"]: row for row in short_bench["rows"]}
     baseline = next(row for row in short_bench["rows"] if row["method"] == "baseline")
@@ -34,6 +54,7 @@ def test_baseline_step_periods_match_dopri5_at_the_same_tolerance(short_bench: d
     assert baseline["period_error"] < 1e-5
 
 
+@pytest.mark.slow
 def test_bench_table_has_every_case_and_ends_with_the_summary_line(short_bench: dict) -> None:
     text = markdown(short_bench)
     lines = text.rstrip("\n").splitlines()
@@ -44,6 +65,81 @@ def test_bench_table_has_every_case_and_ends_with_the_summary_line(short_bench: 
     head = next(row for row in short_bench["rows"] if row["label"] == HEADLINE)
     assert head["ratio_vs_baseline"] > 1.0 and math.isfinite(head["rtf"])
     assert all(met is not None for _, _, met in targets(short_bench))
+
+
+def test_baseline_strikes_when_the_compiled_dopri5_does_at_the_same_tolerance() -> None:
+    """0.45 s, the first heel strike (2 s of pure Python): the same walker, events and all (1 s: slow tier)."""
+    settings = BenchSettings(CONFIG, t_end=0.45)
+    baseline_case = next(case for case in CASES if case.method == BASELINE)
+    headline_case = next(case for case in CASES if case.label == HEADLINE)
+    config = case_config(settings, baseline_case)
+    assert config == case_config(settings, headline_case)  # same walker, method and tolerances
+    model = build_model(config)
+    baseline, compiled = integrate(model, config, BASELINE), integrate(model, config, "dopri5")
+    assert baseline.status == compiled.status == "walking"
+    assert len(baseline.strike_t) == len(compiled.strike_t) == 1
+    assert abs(baseline.strike_t[0] - compiled.strike_t[0]) < 1e-6
+    np.testing.assert_allclose(baseline.y[-1], compiled.y[-1], rtol=0, atol=1e-4)
+
+
+def made_up_result() -> dict[str, Any]:
+    """A bench.json of made-up numbers in the shape run_bench returns: every case, the baseline fell-free.
+
+    The formatting needs no measurement; the measured result is checked in the slow tier above.
+    """
+    rows = []
+    for k, case in enumerate(CASES):
+        fixed = case.rtol is None
+        wall = 8.0 if case.method == BASELINE else 0.2 + 0.1 * k
+        row = Row(
+            label=case.label,
+            method=case.method,
+            rtol=None if fixed else case.rtol,
+            atol=None if fixed else 1e-3 * case.rtol,
+            dt=1e-5 if fixed else None,
+            status="walking",
+            wall_s=wall,
+            walls_s=[wall],
+            rhs_evals=50_000,
+            accepted_steps=8_000,
+            n_strikes=2,
+            us_per_eval=wall / 50_000 * 1e6,
+            rtf=1.0 / wall,
+            period_error=math.inf if case.method == "euler" else 1e-6,
+            ratio_vs_baseline=8.0 / wall,
+        )
+        rows.append(asdict(row))
+    return {
+        "quick": False,
+        "config": str(CONFIG),
+        "t_end": 1.0,
+        "repeats": 1,
+        "slow_repeats": 1,
+        "slow_run_s": SLOW_RUN_S,
+        "period_tolerance": PERIOD_TOLERANCE,
+        "reference": {"method": "dop853", "rtol": 1e-12, "atol": 1e-15, "n_strikes": 2, "periods": [0.3954]},
+        "rows": rows,
+        "headline": HEADLINE,
+        "rhs_alone_us": 1.5,
+        "loop_overhead": 0.4,
+        "baseline_vs_headline_max_period_difference_s": 2e-8,
+        "startup": {"cached": {"import_s": 0.3, "build_s": 0.2, "first_integration_s": 0.02, "to_first_step_s": 0.6}},
+        "environment": environment(),
+    }
+
+
+def test_bench_markdown_has_a_row_per_case_targets_and_the_summary_line_last() -> None:
+    result = made_up_result()
+    lines = markdown(result).rstrip("\n").splitlines()
+    assert lines[0].startswith("biped-sim bench: Python ")
+    for case in CASES:
+        assert sum(line.startswith(f"| {case.label} |") for line in lines) == 1, case.label
+    euler = next(line for line in lines if line.startswith("| euler |"))
+    assert "| fell |" in euler  # an infinite period error is a fall, not a number
+    assert lines[-1] == summary_line(result) == "ratio_vs_baseline=26.7 rtf=3.33 rhs_us=6.000"  # the headline row
+    met = {name: ok for name, _, ok in targets(result)}
+    assert met["RHS evaluation < 2 us"] and not met["loop overhead < 25 %"] and met["cached start-up < 1.5 s"]
+    assert "Targets: " in "\n".join(lines)
 
 
 @pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="MuJoCo is the optional extra 'bench'")

@@ -3,21 +3,13 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from .conftest import DEFAULT_CONFIG
-
-CLI = [sys.executable, "-m", "biped_sim.cli"]
-
-
-def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CLI, *args], cwd=cwd, capture_output=True, text=True, timeout=300)
+from .conftest import DEFAULT_CONFIG, invoke, one_line_error, run_cli
 
 
 @pytest.mark.parametrize(
@@ -36,25 +28,33 @@ def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
         (["run", "default.yaml", "--set", "novalue"], "--set: expected KEY=VALUE"),
     ],
 )
-def test_bad_input_is_one_line_exit_2_and_leaves_nothing(tmp_path: Path, args: list[str], expected: str) -> None:
+def test_bad_input_is_one_line_exit_2_and_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, args: list[str], expected: str
+) -> None:
     (tmp_path / "default.yaml").write_text(DEFAULT_CONFIG.read_text())
     (tmp_path / "bad.yaml").write_text("walker: {leg_length: 0.5\n")
+    monkeypatch.chdir(tmp_path)  # relative paths, and the default results/ directory, are here
     out = tmp_path / "out"
-    result = run_cli(*args, "--out", str(out), cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("error: ")
-    assert expected in lines[0]
-    assert "Traceback" not in result.stderr
+    result = invoke(*args, "--out", str(out))
+    assert result.exit_code == 2, result.output
+    assert expected in one_line_error(result.stderr)
     assert not out.exists()
     assert not (tmp_path / "results").exists()
 
 
+def test_console_entry_point_reports_bad_input_in_one_line_with_exit_2(tmp_path: Path) -> None:
+    """The real process: exit status 2 and one stderr line, no traceback (the in-process tests cannot see these)."""
+    result = run_cli("run", "missing.yaml", "--set", "ground.slope=0.01", cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert one_line_error(result.stderr) == "error: missing.yaml: no such config file"
+    assert result.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_run_writes_trajectory_summary_and_steps(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    result = run_cli("run", str(DEFAULT_CONFIG), "--set", "simulation.t_end=2", "--out", str(out), cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
+    result = invoke("run", str(DEFAULT_CONFIG), "--set", "simulation.t_end=2", "--out", str(out))
+    assert result.exit_code == 0, result.output
     assert "walking" in result.stdout and str(out) in result.stdout
     assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "steps.csv", "summary.json", "trajectory.h5"]
     summary = json.loads((out / "summary.json").read_text())

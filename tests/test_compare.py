@@ -2,45 +2,27 @@
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
-import subprocess
-import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
 from biped_sim.io.references import load_reference
 from biped_sim.studies.compare import compare_periods, model_step_periods, stats_table, step_table
-from biped_sim.sweep import load_sweep, run_sweep
+from biped_sim.testing import TINY_SWEEP_RUNS, write_reference
 
-from .conftest import CONFIGS, DEFAULT_CONFIG
+from .conftest import CONFIGS, DEFAULT_CONFIG, invoke, one_line_error
 
-CLI = [sys.executable, "-m", "biped_sim.cli"]
 CORRAL = CONFIGS / "references" / "corral2020_liu_errors.yaml"
 
 
 def fictitious_reference(tmp_path: Path, values: list[float], **extra: object) -> Path:
-    """A step-period reference file with FICTITIOUS numbers (test data, not a measurement)."""
-    data = {
-        "experiment": "liu_round_foot_walker",
-        "description": "FICTITIOUS step periods for tests; not a measurement",
-        "citation": {"authors": ["A. Tester"], "title": "Test data", "year": 2024},
-        "source": {"kind": "table", "label": "Table 0"},
-        "quantity": {"name": "step_period", "unit": "s", "statistic": "mean", "n_trials": 3},
-        "values": values,
-        **extra,
-    }
-    path = tmp_path / "reference.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
-    return path
-
-
-def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CLI, *args], cwd=cwd, capture_output=True, text=True, timeout=300)
+    """A step-period reference file in ``tmp_path`` with FICTITIOUS numbers (test data, not a measurement)."""
+    return write_reference(tmp_path / "reference.yaml", values, **extra)
 
 
 def test_error_table_arithmetic_by_hand(tmp_path: Path) -> None:
@@ -92,20 +74,21 @@ def test_published_errors_are_shown_step_by_step_beside_ours(tmp_path: Path) -> 
     assert "mean_abs" not in published  # no periods published: no errors in seconds
 
 
-def test_compare_without_reference_says_so_in_one_line(tmp_path: Path) -> None:
-    result = run_cli("compare", str(DEFAULT_CONFIG), cwd=tmp_path)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: --reference: not given")
-    assert "Liu's are not bundled" in lines[0] and "docs/experiments.md" in lines[0]
+def test_compare_without_reference_says_so_in_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)  # where the default results/ directory would go
+    result = invoke("compare", str(DEFAULT_CONFIG))
+    assert result.exit_code == 2
+    line = one_line_error(result.stderr)
+    assert line.startswith("error: --reference: not given")
+    assert "Liu's are not bundled" in line and "docs/experiments.md" in line
     assert list(tmp_path.iterdir()) == []
 
 
-def test_compare_refuses_published_errors_as_a_reference(tmp_path: Path) -> None:
-    result = run_cli("compare", str(DEFAULT_CONFIG), "--reference", str(CORRAL), cwd=tmp_path)
-    assert result.returncode == 2
-    assert "holds published relative errors, not measured step periods" in result.stderr
-    assert len(result.stderr.strip().splitlines()) == 1
+def test_compare_refuses_published_errors_as_a_reference(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    result = invoke("compare", str(DEFAULT_CONFIG), "--reference", str(CORRAL))
+    assert result.exit_code == 2
+    assert "holds published relative errors, not measured step periods" in one_line_error(result.stderr)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -115,11 +98,10 @@ def test_compare_a_config_writes_tables_and_figure(tmp_path: Path) -> None:
         tmp_path, [0.40, 0.41, 0.42, 0.43], std=[0.01] * 4, published_errors=["corral.yaml"]
     )
     out = tmp_path / "cmp"
-    result = run_cli(
-        "compare", str(DEFAULT_CONFIG), "--reference", str(reference), "--set", "simulation.t_end=2.5",
-        "--out", str(out), cwd=tmp_path,
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
+    result = invoke(
+        "compare", str(DEFAULT_CONFIG), "--reference", str(reference), "--set", "simulation.t_end=2", "--out", str(out)
+    )
+    assert result.exit_code == 0, result.output
     assert "| step |" in result.stdout and "Corral et al. 2020 (published)" in result.stdout
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted(
@@ -139,20 +121,32 @@ def test_compare_a_config_writes_tables_and_figure(tmp_path: Path) -> None:
     assert r"\toprule" in (out / "compare_steps.tex").read_text()
 
 
-def test_compare_a_sweep_directory(tmp_path: Path) -> None:
-    (tmp_path / "s.yaml").write_text(
-        f"name: s\nbase: {DEFAULT_CONFIG}\nset: {{simulation.t_end: 1.3}}\ngrid:\n  ground.slope: [0.015, 0.02]\n"
-    )
-    with ThreadPoolExecutor(max_workers=1) as executor:
-        run_sweep(load_sweep(tmp_path / "s.yaml"), tmp_path / "sweep", executor)
+def test_compare_a_run_directory_reads_its_step_times(short_run_dir: Path, tmp_path: Path) -> None:
     reference = fictitious_reference(tmp_path, [0.40, 0.41, 0.42])
-    result = run_cli("compare", str(tmp_path / "sweep"), "--reference", str(reference), cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
-    steps = pd.read_csv(tmp_path / "sweep" / "compare" / "compare_steps.csv")
-    assert list(steps["series"]) == ["slope=0.015"] * 3 + ["slope=0.02"] * 3
-    stats = pd.read_csv(tmp_path / "sweep" / "compare" / "compare_stats.csv")
-    assert list(stats["series"]) == ["slope=0.015", "slope=0.02"]
-    assert (tmp_path / "sweep" / "compare" / "compare.png").is_file()
+    result = invoke("compare", str(short_run_dir), "--reference", str(reference), "--out", str(tmp_path / "cmp"))
+    assert result.exit_code == 0, result.output
+    steps = pd.read_csv(tmp_path / "cmp" / "compare_steps.csv")
+    assert list(steps["step"]) == [1, 2, 3] and "series" not in steps.columns  # one series: no series column
+    times = json.loads((short_run_dir / "summary.json").read_text())["step_times"]
+    np.testing.assert_allclose(steps["model period [s]"], np.diff([0.0, *times])[:3], rtol=1e-6)
 
-    bad = run_cli("compare", str(tmp_path / "sweep"), "--reference", str(reference), "--set", "a.b=1", cwd=tmp_path)
-    assert bad.returncode == 2 and "--set: only applies when comparing a config file" in bad.stderr
+
+def test_compare_a_sweep_directory(tiny_sweep_dir: Path, tmp_path: Path) -> None:
+    """One series per run of the sweep, written below the sweep directory by default."""
+    reference = fictitious_reference(tmp_path, [0.40, 0.41, 0.42])
+    result = invoke("compare", str(tiny_sweep_dir), "--reference", str(reference))
+    assert result.exit_code == 0, result.output
+    out = tiny_sweep_dir / "compare"
+    steps = pd.read_csv(out / "compare_steps.csv")
+    runs = pd.read_csv(tiny_sweep_dir / "sweep.csv")
+    labels = list(dict.fromkeys(steps["series"]))  # in order of first appearance
+    assert len(labels) == TINY_SWEEP_RUNS == len(runs)
+    assert list(steps["series"]) == [label for label in labels for _ in range(3)]
+    assert labels[0].startswith("slope=0.015, ") and labels[-1].startswith("slope=0.02, ")
+    assert steps["model period [s]"].between(0.3, 0.6).all()
+    stats = pd.read_csv(out / "compare_stats.csv")
+    assert list(stats["series"]) == labels
+    assert (out / "compare.png").is_file()
+
+    bad = invoke("compare", str(tiny_sweep_dir), "--reference", str(reference), "--set", "a.b=1")
+    assert bad.exit_code == 2 and "--set: only applies when comparing a config file" in one_line_error(bad.stderr)

@@ -13,10 +13,22 @@ from biped_sim.errors import ConfigError
 
 from .conftest import CONFIGS, DEFAULT_CONFIG
 
+# Each bundled config file: (dynamics, walker kind, formulation) it declares.
+BUNDLED = {
+    "compass_goswami": ("compliant", "compass", "planar"),
+    "four_legged_walker": ("compliant", "four_legged", "spatial"),
+    "rimless_wheel": ("rigid", "rimless_wheel", "planar"),
+    "round_foot_walker": ("compliant", "compass", "planar"),
+    "simplest_walker": ("rigid", "simplest", "planar"),
+}
 
-def test_bundled_configs_load() -> None:
-    for path in CONFIGS.glob("*.yaml"):
-        load_config(path)
+
+def test_every_bundled_config_loads_as_the_model_it_names() -> None:
+    paths = sorted(CONFIGS.glob("*.yaml"))
+    assert [path.stem for path in paths] == sorted(BUNDLED)  # a new or renamed config is listed here too
+    for path in paths:
+        config = load_config(path)
+        assert (config.dynamics, config.walker.kind, config.formulation.kind) == BUNDLED[path.stem], path.name
 
 
 def test_schema_defaults_are_the_default_walker() -> None:

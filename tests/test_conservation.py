@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from biped_sim import config_from_dict, simulate
-from biped_sim.simulate import RunResult
 
 
 def test_energy_balance_over_10s_dopri5_tight() -> None:
@@ -20,6 +19,7 @@ def test_energy_balance_over_10s_dopri5_tight() -> None:
     assert result.summary["energy_dissipated"]["friction"] > 0.0
 
 
+@pytest.mark.slow  # the stiff friction laws: ~20 s in all; 0.5 s of each law is in test_walking's fast tier
 @pytest.mark.parametrize(
     "overrides",
     [
@@ -48,7 +48,7 @@ def test_hertz_without_friction_conserves_mechanical_energy() -> None:
     assert np.ptp(total) < 1e-7 * result.model.total_mass * 9.81 * 0.5
 
 
-def test_baumgarte_bounds_constraint_drift_standard_method_does_not(default_run: RunResult) -> None:
+def test_baumgarte_bounds_constraint_drift_standard_method_does_not() -> None:
     baumgarte = simulate(config_from_dict({}, ["simulation.t_end=10", "integrator.rtol=1e-6", "integrator.atol=1e-8"]))
     standard = simulate(
         config_from_dict(

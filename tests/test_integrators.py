@@ -7,34 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from biped_sim import config_from_dict, simulate
+from biped_sim import simulate
 from biped_sim.config import IntegratorConfig
 from biped_sim.integrate.driver import integrate_model
-from biped_sim.multibody.planar import PlanarSystem
-
-
-def pendulum(amplitude: float) -> tuple[PlanarSystem, np.ndarray]:
-    """A uniform rod (1 kg, 1 m) hinged to the ground at its end, released at rest: smooth, no contact."""
-    length, mass = 1.0, 1.0
-    system = PlanarSystem(
-        body_mass=np.array([mass]),
-        body_inertia=np.array([mass * length**2 / 12.0]),
-        joint_bodies=np.array([[0, -1]], dtype=np.int64),
-        joint_points=np.array([[0.0, 0.5 * length, 0.0, 0.0]]),
-        foot_body=np.zeros(0, dtype=np.int64),
-        foot_center=np.zeros((0, 2)),
-        foot_radius=np.zeros(0),
-        foot_partner=np.zeros(0, dtype=np.int64),
-        gravity=np.array([0.0, -9.81]),
-        baumgarte=np.array([10.0, 10.0]),
-        normal_params=np.zeros(4),
-        friction_params=np.zeros(10),
-        switches=np.zeros(3, dtype=np.int64),
-        limits=np.array([1e-3, -math.inf, math.inf]),
-    )
-    centre = 0.5 * length * np.array([math.sin(amplitude), -math.cos(amplitude)])
-    y0 = np.array([*centre, amplitude, 0.0, 0.0, 0.0, 0.0, 0.0])
-    return system, y0
+from biped_sim.simulate import RunResult
+from biped_sim.testing import default_walker, pendulum
 
 
 def final_state(method: str, n_steps: int, t_end: float, amplitude: float = 0.1) -> np.ndarray:
@@ -72,23 +49,24 @@ def test_convergence_order_on_smooth_problem(method: str, order: int, t_end: flo
 def test_adaptive_methods_agree_on_the_walker() -> None:
     periods = {}
     for method in ("dopri5", "dop853", "radau"):
-        result = simulate(config_from_dict({}, [f"integrator.method={method}", "simulation.t_end=2"]))
+        result = simulate(default_walker(f"integrator.method={method}"))
         periods[method] = result.step_periods
     np.testing.assert_allclose(periods["dop853"], periods["dopri5"], rtol=1e-6)
     np.testing.assert_allclose(periods["radau"], periods["dopri5"], rtol=1e-4)
 
 
-def test_same_config_same_bits() -> None:
-    config = config_from_dict({}, ["simulation.t_end=2"])
-    first, second = simulate(config), simulate(config)
-    assert np.array_equal(first.run.y, second.run.y)
-    assert np.array_equal(first.run.strike_t, second.run.strike_t)
-    assert first.summary["config_hash"] == second.summary["config_hash"]
+def test_same_config_same_bits(short_run: RunResult) -> None:
+    again = simulate(short_run.config)
+    assert np.array_equal(again.run.y, short_run.run.y)
+    assert np.array_equal(again.run.strike_t, short_run.run.strike_t)
+    assert again.summary["config_hash"] == short_run.summary["config_hash"]
 
 
 def test_progress_chunking_does_not_change_results() -> None:
-    config = config_from_dict({}, ["simulation.t_end=2"])
+    """3 s of dopri5: 24,000 steps, so two compiled calls (at most 20,000 steps each) with a progress update
+    between them, and the step-size control carried across. (2 s, 16,000 steps, would be one call: no test.)"""
+    config = default_walker(t_end=3.0)
     times: list[float] = []
     with_progress = simulate(config, progress=times.append)
-    assert times and times[-1] == pytest.approx(2.0)
+    assert len(times) >= 2 and times == sorted(times) and times[-1] == pytest.approx(3.0)
     assert np.array_equal(with_progress.run.y, simulate(config).run.y)

@@ -16,10 +16,12 @@ from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.planar import constraint_violation, foot_kinematics
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker
+from biped_sim.simulate import RunResult
 from biped_sim.studies.continuation import simplest_variational_jacobian
 from biped_sim.studies.limit_cycle import TouchdownSection, compliant_limit_cycle
 from biped_sim.walkers import build_model
-from tests.conftest import CONFIGS, DEFAULT_CONFIG
+
+from .conftest import CONFIGS, DEFAULT_CONFIG
 
 SIMPLEST = CONFIGS / "simplest_walker.yaml"
 
@@ -118,7 +120,10 @@ def test_lift_is_exact_on_the_constraints_and_the_section_and_project_inverts_it
     assert np.array_equal(section.project(swapped, modes[::-1], 1), section.project(y, modes, 0))
 
 
-def test_compliant_newton_converges_on_the_default_walker_gait(default_compliant: LimitCycle, default_run) -> None:
+@pytest.mark.slow  # Newton on the compliant step map at rtol 1e-13 and a 15 s settling run: ~15 s
+def test_compliant_newton_converges_on_the_default_walker_gait(
+    default_compliant: LimitCycle, default_run: RunResult
+) -> None:
     cycle = default_compliant
     assert cycle.converged and cycle.residual <= 1e-10 and cycle.stable
     assert cycle.step_period == pytest.approx(0.43508, abs=1e-5)
@@ -130,6 +135,7 @@ def test_compliant_newton_converges_on_the_default_walker_gait(default_compliant
     assert np.sum(np.abs(cycle.multipliers) < 1e-6) == 3
 
 
+@pytest.mark.slow  # needs the default walker's compliant fixed point (~10 s of Newton)
 def test_a_run_started_on_the_compliant_fixed_point_stays_there_and_settles_at_the_newton_rate(
     default_compliant: LimitCycle,
 ) -> None:
@@ -166,6 +172,7 @@ def test_rigid_cli_finds_the_unstable_goswami_cycle_without_settling() -> None:
     assert doc["max_multiplier_modulus"] == pytest.approx(4.288, abs=1e-3)
 
 
+@pytest.mark.slow  # Newton on the compliant step map at rtol 1e-13: ~10 s
 def test_compliant_newton_finds_the_unstable_goswami_short_step_gait() -> None:
     cycle = compliant_limit_cycle(load_config(GOSWAMI), GOSWAMI_SHORT_STEP, settle_steps=0)
     assert cycle.converged and not cycle.stable

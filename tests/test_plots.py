@@ -1,9 +1,7 @@
-"""`biped-sim plot` and `biped-sim animate` on a run directory."""
+"""`biped-sim plot` and `biped-sim animate` on the shared short run directory (2 s of the default walker)."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,42 +11,29 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
 
-from biped_sim import load_config, run
 from biped_sim.animate import WalkerDrawing, frame_indices
 from biped_sim.io.trajectory import load_run
 from biped_sim.plots import RUN_FIGURES
 
-from .conftest import DEFAULT_CONFIG
-
-CLI = [sys.executable, "-m", "biped_sim.cli"]
+from .conftest import invoke, one_line_error
 
 
-def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*CLI, *args], cwd=cwd, capture_output=True, text=True, timeout=300)
-
-
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("plots") / "run"
-    run(load_config(DEFAULT_CONFIG, ["simulation.t_end=2.5"]), out)
-    return out
-
-
-def test_plot_writes_every_single_run_figure(run_dir: Path) -> None:
-    result = run_cli("plot", str(run_dir), cwd=run_dir)
-    assert result.returncode == 0, result.stderr
+def test_plot_writes_every_single_run_figure(short_run_dir: Path) -> None:
+    result = invoke("plot", str(short_run_dir))
+    assert result.exit_code == 0, result.output
     assert f"{len(RUN_FIGURES)} figures" in result.stdout
     for name in RUN_FIGURES:
-        with Image.open(run_dir / "figures" / f"{name}.png") as image:
+        with Image.open(short_run_dir / "figures" / f"{name}.png") as image:
             assert round(image.info["dpi"][0]) == 200 and image.size[0] == 700
-        assert "<svg" in (run_dir / "figures" / f"{name}.svg").read_text()
-    assert sorted(p.suffix for p in (run_dir / "figures").iterdir()) == [".png"] * 6 + [".svg"] * 6
+        assert "<svg" in (short_run_dir / "figures" / f"{name}.svg").read_text()
+    n = len(RUN_FIGURES)
+    assert sorted(p.suffix for p in (short_run_dir / "figures").iterdir()) == [".png"] * n + [".svg"] * n
 
 
-def test_animate_writes_a_gif_with_one_frame_per_interval(run_dir: Path, tmp_path: Path) -> None:
+def test_animate_writes_a_gif_with_one_frame_per_interval(short_run_dir: Path, tmp_path: Path) -> None:
     out = tmp_path / "walk.gif"
-    result = run_cli("animate", str(run_dir), "--out", str(out), "--fps", "10", "--end", "0.5", cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
+    result = invoke("animate", str(short_run_dir), "--out", str(out), "--fps", "10", "--end", "0.5")
+    assert result.exit_code == 0, result.output
     assert "6 frames" in result.stdout
     with Image.open(out) as image:
         assert image.format == "GIF" and image.n_frames == 6 and image.size == (400, 320)
@@ -61,8 +46,8 @@ def test_frame_indices_decimate_to_the_frame_rate() -> None:
     assert list(frame_indices(time, fps=10, speed=2.0, t_start=0.5, t_end=None)) == [500, 700, 900]
 
 
-def test_walker_drawing_puts_the_stance_foot_on_the_ground(run_dir: Path) -> None:
-    data = load_run(run_dir)
+def test_walker_drawing_puts_the_stance_foot_on_the_ground(short_run_dir: Path) -> None:
+    data = load_run(short_run_dir)
     fig = Figure()
     FigureCanvasAgg(fig)
     drawing = WalkerDrawing(data, fig)
@@ -88,18 +73,17 @@ def test_walker_drawing_puts_the_stance_foot_on_the_ground(run_dir: Path) -> Non
         ("walk.mp4", "--out: .mp4 needs ffmpeg on the PATH"),
     ],
 )
-def test_animate_bad_output_is_one_line_exit_2(run_dir: Path, tmp_path: Path, out: str, expected: str) -> None:
+def test_animate_bad_output_is_one_line_exit_2(short_run_dir: Path, tmp_path: Path, out: str, expected: str) -> None:
     if out.endswith(".mp4") and animation.writers.is_available("ffmpeg"):
         pytest.skip("ffmpeg is installed: .mp4 is supported here")
-    result = run_cli("animate", str(run_dir), "--out", str(tmp_path / out), cwd=tmp_path)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"error: {expected}"), result.stderr
+    result = invoke("animate", str(short_run_dir), "--out", str(tmp_path / out))
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr).startswith(f"error: {expected}")
     assert list(tmp_path.iterdir()) == []
 
 
 def test_plot_on_a_directory_without_a_run(tmp_path: Path) -> None:
-    result = run_cli("plot", str(tmp_path), cwd=tmp_path)
-    assert result.returncode == 2
+    result = invoke("plot", str(tmp_path))
+    assert result.exit_code == 2
     assert result.stderr.strip() == f"error: {tmp_path}: not a finished run directory (no summary.json)"
     assert list(tmp_path.iterdir()) == []

@@ -1,10 +1,7 @@
-"""`biped-sim report`: every comparison table (Markdown, CSV, LaTeX) and every figure from a small sweep."""
+"""`biped-sim report`: every comparison table (Markdown, CSV, LaTeX) and every figure from the tiny sweep."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pandas as pd
@@ -12,30 +9,9 @@ import pytest
 from PIL import Image
 
 from biped_sim.io.tables import Column, Table
-from biped_sim.report import build_report
-from biped_sim.sweep import load_sweep, run_sweep
+from biped_sim.testing import TINY_SWEEP_RUNS
 
-from .conftest import DEFAULT_CONFIG
-
-CLI = [sys.executable, "-m", "biped_sim.cli"]
-
-# Every comparison axis varies: integrators (grid), and contact law, friction law and Baumgarte
-# gains together (zip), over two slopes (grid): 8 short runs.
-SMALL_SWEEP = f"""
-name: small
-description: every axis of the report at once
-base: {DEFAULT_CONFIG}
-set:
-  simulation.t_end: 1.3
-grid:
-  ground.slope: [0.015, 0.02]
-  integrator.method: [dopri5, rk2]
-zip:
-  contact.model: [flores, hunt_crossley]
-  friction.model: [ambrosio, coulomb]
-  formulation.baumgarte.alpha: [10.0, 0.0]
-  formulation.baumgarte.beta: [10.0, 0.0]
-"""
+from .conftest import invoke, one_line_error
 
 TABLES = ("runs", "by_integrator", "by_normal_model", "by_friction_model", "baumgarte")
 FIGURES = (
@@ -50,25 +26,17 @@ FIGURES = (
     "slip",
     "phase_portrait",
 )
+HALF = TINY_SWEEP_RUNS // 2
 
 
 @pytest.fixture(scope="module")
-def sweep_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    root = tmp_path_factory.mktemp("report")
-    (root / "small.yaml").write_text(SMALL_SWEEP)
-    sweep = load_sweep(root / "small.yaml")
-    with ThreadPoolExecutor(max_workers=1) as executor:
-        outcome = run_sweep(sweep, root / "sweep", executor)
-    assert outcome.progress.done == 8
-    return root / "sweep"
-
-
-@pytest.fixture(scope="module")
-def report_dir(sweep_dir: Path) -> Path:
-    result = subprocess.run([*CLI, "report", str(sweep_dir)], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr
+def report_dir(tiny_sweep_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The report of the tiny sweep (every axis varies: integrators, contact and friction laws, Baumgarte gains)."""
+    out = tmp_path_factory.mktemp("report") / "report"
+    result = invoke("report", str(tiny_sweep_dir), "--out", str(out))
+    assert result.exit_code == 0, result.output
     assert "5 tables" in result.stdout and f"{len(FIGURES)} figures" in result.stdout
-    return sweep_dir / "report"
+    return out
 
 
 def test_every_table_is_written_three_ways(report_dir: Path) -> None:
@@ -76,16 +44,16 @@ def test_every_table_is_written_three_ways(report_dir: Path) -> None:
         for suffix in (".md", ".csv", ".tex"):
             assert (report_dir / "tables" / f"{name}{suffix}").is_file(), f"{name}{suffix}"
         rows = pd.read_csv(report_dir / "tables" / f"{name}.csv")
-        assert len(rows) == 8, name
+        assert len(rows) == TINY_SWEEP_RUNS, name
         latex = (report_dir / "tables" / f"{name}.tex").read_text()
-        assert r"\begin{tabular}" in latex and r"\toprule" in latex and latex.count(r"\\") >= 9
+        assert r"\begin{tabular}" in latex and r"\toprule" in latex and latex.count(r"\\") >= TINY_SWEEP_RUNS + 1
         assert "_" not in latex.replace(r"\_", "").split(r"\begin{tabular}")[1].split(r"\end{tabular}")[0]
 
 
 def test_integrator_table_states_step_sizes_and_accuracy(report_dir: Path) -> None:
     table = pd.read_csv(report_dir / "tables" / "by_integrator.csv")
-    assert list(table["integrator"]) == ["dopri5"] * 4 + ["rk2"] * 4  # grouped by integrator
-    assert set(table["step size / tolerances"]) == {"rtol = 1e-08, atol = 1e-10", "dt = 1e-04 s"}
+    assert list(table["integrator"]) == ["dopri5"] * HALF + ["rk2"] * HALF  # grouped by integrator
+    assert set(table["step size / tolerances"]) == {"rtol = 1e-08, atol = 1e-10", "dt = 5e-05 s"}
     deviation = table["max |dT| vs ref. [s]"]
     assert (deviation[table["integrator"] == "dopri5"] == 0).all()  # dopri5 is each group's reference
     assert (deviation[table["integrator"] == "rk2"] > 0).all()
@@ -96,13 +64,13 @@ def test_integrator_table_states_step_sizes_and_accuracy(report_dir: Path) -> No
 
 def test_model_and_baumgarte_tables_group_their_axis(report_dir: Path) -> None:
     normal = pd.read_csv(report_dir / "tables" / "by_normal_model.csv")
-    assert list(normal["normal force model"]) == ["flores"] * 4 + ["hunt_crossley"] * 4
+    assert list(normal["normal force model"]) == ["flores"] * HALF + ["hunt_crossley"] * HALF
     assert (normal["max penetration [m]"] > 0).all() and (normal["peak normal force [N]"] > 0).all()
     friction = pd.read_csv(report_dir / "tables" / "by_friction_model.csv")
-    assert list(friction["friction model"]) == ["ambrosio"] * 4 + ["coulomb"] * 4
+    assert list(friction["friction model"]) == ["ambrosio"] * HALF + ["lugre"] * HALF
     baumgarte = pd.read_csv(report_dir / "tables" / "baumgarte.csv")
-    assert list(baumgarte["stabilisation"]) == ["Baumgarte"] * 4 + ["standard"] * 4
-    assert list(baumgarte["alpha [1/s]"]) == [10.0] * 4 + [0.0] * 4
+    assert list(baumgarte["stabilisation"]) == ["Baumgarte"] * HALF + ["standard"] * HALF
+    assert list(baumgarte["alpha [1/s]"]) == [10.0] * HALF + [0.0] * HALF
 
 
 def test_every_figure_is_png_at_200_dpi_and_svg(report_dir: Path) -> None:
@@ -118,8 +86,8 @@ def test_every_figure_is_png_at_200_dpi_and_svg(report_dir: Path) -> None:
 
 def test_report_markdown_links_tables_and_figures(report_dir: Path) -> None:
     text = (report_dir / "report.md").read_text()
-    assert text.startswith("# Sweep report: small")
-    assert "Runs: 8 (" in text
+    assert text.startswith("# Sweep report: tiny")
+    assert f"Runs: {TINY_SWEEP_RUNS} (" in text
     for name in FIGURES:
         assert f"](figures/{name}.png)" in text
     assert text.count("\n## ") == len(TABLES) + 1
@@ -127,17 +95,16 @@ def test_report_markdown_links_tables_and_figures(report_dir: Path) -> None:
 
 
 def test_report_on_a_directory_that_is_not_a_sweep(tmp_path: Path) -> None:
-    result = subprocess.run([*CLI, "report", str(tmp_path)], capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2
-    assert result.stderr.strip() == f"error: {tmp_path}: not a sweep directory (no sweep.json and sweep.csv)"
+    result = invoke("report", str(tmp_path))
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr) == f"error: {tmp_path}: not a sweep directory (no sweep.json and sweep.csv)"
     assert list(tmp_path.iterdir()) == []
 
 
-def test_report_out_option_and_python_api(sweep_dir: Path, tmp_path: Path) -> None:
-    report = build_report(sweep_dir, tmp_path / "elsewhere")
-    assert report.markdown_path == tmp_path / "elsewhere" / "report.md"
-    assert [t.name for t in report.tables] == list(TABLES)
-    assert set(report.figures) == set(FIGURES)
+def test_report_goes_where_out_says_with_every_table_and_figure(report_dir: Path, tiny_sweep_dir: Path) -> None:
+    assert sorted(p.stem for p in (report_dir / "tables").glob("*.csv")) == sorted(TABLES)
+    assert {p.stem for p in (report_dir / "figures").glob("*.png")} == set(FIGURES)
+    assert not (tiny_sweep_dir / "report").exists()  # --out given: nothing in the default place
 
 
 def test_table_formats_numbers_units_and_missing_values() -> None:

@@ -11,7 +11,8 @@ from biped_sim import config_from_dict, load_config
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.models import CompassChain, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
-from tests.conftest import CONFIGS
+
+from .conftest import CONFIGS
 
 
 @pytest.fixture(scope="module")

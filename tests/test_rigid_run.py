@@ -21,8 +21,9 @@ from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.start import INTEGRATOR
 from biped_sim.simulate.rigid import RigidRunResult
 from biped_sim.sweep import check_buildable, load_sweep, run_sweep
-from tests.conftest import CONFIGS
-from tests.test_compare import fictitious_reference
+from biped_sim.testing import write_reference, write_sweep
+
+from .conftest import CONFIGS
 
 SIMPLEST = CONFIGS / "simplest_walker.yaml"
 RIMLESS = CONFIGS / "rimless_wheel.yaml"
@@ -167,7 +168,7 @@ def test_plot_refuses_a_rigid_run_and_compare_reads_its_periods(tmp_path: Path) 
     assert code == 0, stderr
     code, _, stderr = invoke("plot", str(run_dir))
     assert code == 2 and len(stderr.strip().splitlines()) == 1 and "a rigid run" in stderr
-    reference = fictitious_reference(tmp_path, [0.6, 0.7, 0.7])
+    reference = write_reference(tmp_path / "reference.yaml", [0.6, 0.7, 0.7])
     code, _, stderr = invoke("compare", str(run_dir), "--reference", str(reference), "--out", str(tmp_path / "cmp"))
     assert code == 0, stderr
     times = json.loads((run_dir / "summary.json").read_text())["step_times"]
@@ -176,11 +177,14 @@ def test_plot_refuses_a_rigid_run_and_compare_reads_its_periods(tmp_path: Path) 
 
 
 def test_sweep_over_the_simplest_walkers_slope(tmp_path: Path) -> None:
-    (tmp_path / "s.yaml").write_text(
-        f"name: s\nbase: {SIMPLEST}\nset: {{simulation.t_end: 20.0, output.sample_rate: 10.0}}\n"
-        "grid:\n  ground.slope: [0.006, 0.009]\n"
+    path = write_sweep(
+        tmp_path,
+        "s",
+        base=SIMPLEST,
+        set_={"simulation.t_end": 20.0, "output.sample_rate": 10.0},
+        grid={"ground.slope": [0.006, 0.009]},
     )
-    sweep = load_sweep(tmp_path / "s.yaml")
+    sweep = load_sweep(path)
     check_buildable(sweep)
     with ThreadPoolExecutor(max_workers=1) as executor:
         outcome = run_sweep(sweep, tmp_path / "sweep", executor)
@@ -193,8 +197,6 @@ def test_sweep_over_the_simplest_walkers_slope(tmp_path: Path) -> None:
     assert "period_vs_slope" in report.figures and "contact_forces" not in report.figures
     assert (report.out_dir / "figures" / "period_vs_slope.png").is_file()
 
-    (tmp_path / "bad.yaml").write_text(
-        f"name: bad\nbase: {SIMPLEST}\ngrid:\n  simulation.initial.stance_angle: [0.2, -0.1]\n"
-    )
+    bad = write_sweep(tmp_path, "bad", base=SIMPLEST, grid={"simulation.initial.stance_angle": [0.2, -0.1]})
     with pytest.raises(ConfigError, match=r"run 2 .*simulation.initial.stance_angle"):
-        check_buildable(load_sweep(tmp_path / "bad.yaml"))
+        check_buildable(load_sweep(bad))

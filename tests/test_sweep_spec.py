@@ -97,7 +97,15 @@ def test_short_keys_use_the_last_component_unless_it_clashes() -> None:
 
 
 def test_every_bundled_sweep_expands_and_builds() -> None:
-    for path in sorted((CONFIGS / "sweeps").glob("*.yaml")):
+    paths = sorted((CONFIGS / "sweeps").glob("*.yaml"))
+    assert [path.stem for path in paths] == [
+        "baumgarte",
+        "constraint_violation",
+        "contact_models",
+        "friction_models",
+        "slopes_integrators",
+    ]
+    for path in paths:
         sweep = load_sweep(path)
         assert len(sweep.runs) >= 4, path
         check_buildable(sweep)

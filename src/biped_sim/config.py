@@ -14,6 +14,8 @@ import hashlib
 import json
 import math
 import re
+import types
+import typing
 from pathlib import Path
 from typing import Any, Literal
 
@@ -25,10 +27,30 @@ from biped_sim.contact.normal import NORMAL_LAWS
 from biped_sim.errors import ConfigError
 
 
-class _Strict(BaseModel):
-    """Base for every section: unknown keys are rejected."""
+def _is_number(annotation: Any) -> bool:
+    """Whether a field's type is a number (float, int, or one of them or None)."""
+    if annotation in (float, int):
+        return True
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        return any(_is_number(arg) for arg in typing.get_args(annotation))
+    return False
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+class _Strict(BaseModel):
+    """Base for every section: unknown keys are rejected, numbers are finite and never true/false."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _booleans_are_not_numbers(cls, data: Any) -> Any:
+        # YAML reads `true` as a boolean and pydantic would take it as 1.0 for a mass or a time
+        if isinstance(data, dict):
+            for name, value in data.items():
+                field = cls.model_fields.get(name)
+                if isinstance(value, bool) and field is not None and _is_number(field.annotation):
+                    raise ValueError(f"{name}: expected a number, got {str(value).lower()}")
+        return data
 
 
 class WalkerConfig(_Strict):
@@ -180,12 +202,21 @@ class FormulationConfig(_Strict):
     baumgarte: BaumgarteConfig = Field(default_factory=BaumgarteConfig)
 
 
+MIN_RTOL = 100 * 2.220446049250313e-16  # as scipy's solve_ivp: tighter is below round-off
+
+
 class IntegratorConfig(_Strict):
     """Time integrator (MODEL.md 6)."""
 
     method: IntegratorName = Field("dopri5", description="Integration method.")
     dt: float = Field(1e-4, gt=0, description="Fixed step [s] (euler, rk2, rk4).")
-    rtol: float = Field(1e-8, gt=0, description="Relative tolerance (adaptive methods).")
+    rtol: float = Field(
+        1e-8,
+        ge=MIN_RTOL,
+        le=1.0,
+        description="Relative tolerance (adaptive methods), from 100 machine epsilons (below, the step control "
+        "cannot reach it) to 1.",
+    )
     atol: float = Field(1e-10, gt=0, description="Absolute tolerance (adaptive methods).")
     max_step: float = Field(1e-2, gt=0, description="Largest step [s] (adaptive methods).")
     adaptive: bool = Field(True, description="Step-size control; false runs dopri5/dop853 at fixed dt (order tests).")
@@ -215,6 +246,12 @@ class SimulationConfig(_Strict):
     fall_leg_angle: float = Field(
         1.4, gt=0, description="Fall when a leg is further than this from the slope normal [rad]."
     )
+    max_wall_time: float | None = Field(
+        None,
+        gt=0,
+        description="Wall-clock budget of one run [s]: a run still going then ends with status 'timeout' "
+        "(none = no limit). Keeps a sweep from ever blocking on one run.",
+    )
 
 
 class OutputConfig(_Strict):
@@ -231,7 +268,9 @@ class Config(_Strict):
         "compliant", description="'compliant' = penalty contact (the paper); 'rigid' = hybrid impulsive model."
     )
     walker: WalkerConfig = Field(default_factory=WalkerConfig)
-    gravity: float = Field(9.81, gt=0, description="Gravitational acceleration g [m/s^2].")
+    gravity: float = Field(
+        9.81, gt=0, le=1000.0, description="Gravitational acceleration g [m/s^2] (at most 1000: a walker, not a star)."
+    )
     ground: GroundConfig = Field(default_factory=GroundConfig)
     contact: ContactConfig = Field(default_factory=ContactConfig)
     friction: FrictionConfig = Field(default_factory=FrictionConfig)
@@ -330,10 +369,14 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
     node[parts[-1]] = value
 
 
+_UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\])$")
+
+
 def _format_validation_error(exc: ValidationError) -> ConfigError:
     """Turn pydantic's first error into one line: dotted field and reason."""
     err = exc.errors()[0]
-    loc = ".".join(str(part) for part in err["loc"])
+    # a union (simulation.initial) tags its members' errors with the member type: not part of the key
+    loc = ".".join(str(part) for part in err["loc"] if not _UNION_TAG.match(str(part)))
     message = err["msg"]
     if message.startswith("Value error, "):
         message = message[len("Value error, ") :]
@@ -365,12 +408,24 @@ def config_from_dict(data: Any, overrides: list[str] | tuple[str, ...] = ()) -> 
         raise _format_validation_error(exc) from None
 
 
+def read_text_file(path: str | Path, what: str = "config file") -> str:
+    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory or not text."""
+    path = Path(path)
+    if path.is_dir():
+        raise ConfigError(str(path), f"is a directory, not a {what}")
+    if not path.is_file():
+        raise ConfigError(str(path), f"no such {what}")
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(str(path), f"not a UTF-8 text file (byte {exc.start}): is it a {what}?") from None
+    except OSError as exc:
+        raise ConfigError(str(path), f"cannot read: {exc.strerror}") from None
+
+
 def load_config(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Config:
     """Read and validate a YAML config file; raises ConfigError with a one-line reason."""
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(str(path), "no such config file")
-    text = path.read_text()
+    text = read_text_file(path)
     return config_from_dict(parse_yaml(text, source=str(path)), overrides)
 
 

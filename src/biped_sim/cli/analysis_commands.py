@@ -13,8 +13,9 @@ from rich.console import Console
 from rich.table import Table
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, fail, load, user_errors
-from biped_sim.config import parse_yaml
+from biped_sim.config import config_from_dict, parse_yaml
 from biped_sim.errors import ConfigError
+from biped_sim.io.output import check_writable_dir
 
 GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
 
@@ -29,9 +30,13 @@ def _parse_guess(text: str | None) -> dict[str, float] | None:
     if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
         raise ConfigError("--guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
     try:
-        return {k: float(value[k]) for k in GUESS_KEYS}
+        guess = {k: float(value[k]) for k in GUESS_KEYS}
     except (TypeError, ValueError):
         raise ConfigError("--guess", "values must be numbers") from None
+    bad = [k for k, v in guess.items() if not math.isfinite(v) or isinstance(value[k], bool)]
+    if bad:
+        raise ConfigError("--guess", f"{bad[0]} must be a finite number")
+    return guess
 
 
 @app.command("limit-cycle")
@@ -145,9 +150,17 @@ def bifurcation_command(
 
     if param != "ground.slope":
         raise ConfigError("--param", "only ground.slope is supported")
+    check_writable_dir(out)
     config = load(config_path, set_)
     if config.dynamics != "rigid":
         raise ConfigError("dynamics", "bifurcation runs the rigid model: use --set dynamics=rigid")
+    for option, value in (("--from", start), ("--to", stop)):
+        data = config.model_dump(mode="json")
+        data["ground"]["slope"] = value
+        try:
+            config_from_dict(data)
+        except ConfigError as exc:
+            raise ConfigError(option, f"slope {value}: {exc.reason}") from None
     t0 = time.perf_counter()
     diagram = bifurcation_diagram(config, start, stop, n)
     write_bifurcation(diagram, out)
@@ -169,6 +182,7 @@ def validate_command(
     """Every physics check against published or analytic numbers; writes report.md; exit 1 on any failure."""
     from biped_sim.studies.validation import run_validation
 
+    check_writable_dir(out)
     console = Console()
     checks, extras = run_validation(out, progress=lambda stage: console.print(f"checking: {stage}", highlight=False))
     failed = [c for c in checks if not c.passed]

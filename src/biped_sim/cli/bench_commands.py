@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from biped_sim.cli.common import app, user_errors
+from biped_sim.io.output import check_writable_dir
 
 DEFAULT_CONFIG = Path("configs/round_foot_walker.yaml")
 DEFAULT_OUT = Path("results/bench")
@@ -29,6 +30,7 @@ def bench(
     from biped_sim.config import load_config
 
     load_config(config)  # bad input fails here, in one line
+    check_writable_dir(out)
     settings = BenchSettings.quick_run(config) if quick else BenchSettings(config)
     result = run_bench(settings, log=lambda line: typer.echo(line, err=True) if verbose else None)
     md_path, json_path = write_report(result, out)

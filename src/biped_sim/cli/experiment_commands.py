@@ -7,6 +7,7 @@ exit codes).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -198,6 +199,13 @@ def animate_command(
     from biped_sim.animate import animate_run, check_output
     from biped_sim.io.trajectory import load_run
 
+    for option, value in (("--fps", fps), ("--speed", speed)):
+        if not (math.isfinite(value) and value > 0):
+            raise ConfigError(option, f"must be a finite number > 0, got {value}")
+    if not (math.isfinite(start) and start >= 0):
+        raise ConfigError("--start", f"must be a finite time >= 0, got {start}")
+    if end is not None and not (math.isfinite(end) and end > start):
+        raise ConfigError("--end", f"must be a finite time after --start, got {end}")
     check_output(out)
     run = load_run(run_dir)
     frames = animate_run(run, out, fps=fps, speed=speed, t_start=start, t_end=end)

@@ -16,6 +16,8 @@ from rich.table import Table
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
 from biped_sim.config import default_output_dir
 from biped_sim.errors import ConfigError
+from biped_sim.io.output import check_writable_dir
+from biped_sim.io.run_files import previous_run
 from biped_sim.rigid.start import NONDIMENSIONAL
 from biped_sim.simulate import RunResult, prepare_model, simulate
 
@@ -71,6 +73,7 @@ def summary_line(result: RunResult) -> str:
     s = result.summary
     seconds = result.unit("s")
     status = s["status"] + (f" at t={_quantity(s['stop_time'], 3, seconds)}" if s["stop_time"] is not None else "")
+    status += f" ({s['status_reason']})" if s.get("status_reason") else ""
     period = s["mean_step_period"]
     gait = (
         f"mean period {_quantity(period, 5, seconds)}, speed {_quantity(s['mean_speed'], 4, result.unit('m/s'))}, "
@@ -99,6 +102,8 @@ def run_command(
     """Simulate one walker and write trajectory.h5, summary.json and steps.csv."""
     config = load(config_path, set_)
     out_dir = out or default_output_dir(config, config_path)
+    check_writable_dir(out_dir)  # before any computation
+    replaced = previous_run(out_dir)
     model = prepare_model(config)  # validates geometry and the initial state before anything is written
     console = Console(stderr=False)
     show_progress = not quiet and sys.stdout.isatty()
@@ -121,6 +126,8 @@ def run_command(
         console.print(step_table_rich(result))
     console.print(summary_line(result), highlight=False, soft_wrap=True)
     console.print(f"files: {out_dir}/ (trajectory.h5, summary.json, steps.csv, config.yaml)", highlight=False)
+    if replaced:
+        console.print(f"replaced {replaced} (and its figures)", highlight=False)
 
 
 @app.command("drop-test")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import secrets
 import shutil
@@ -56,6 +57,10 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     try:
         yield tmp_path
         os.replace(tmp_path, target)
+    except OSError as exc:
+        if exc.filename is None:  # a failed write names no file: name the one being written
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        raise
     finally:
         tmp_path.unlink(missing_ok=True)
 
@@ -66,9 +71,20 @@ def write_text_atomic(target: str | Path, text: str) -> None:
         tmp.write_text(text)
 
 
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float replaced by None, so that summary.json is valid JSON (null, not NaN)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: json_safe(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(item) for item in value]
+    return value
+
+
 def write_json_atomic(target: str | Path, data: Any) -> None:
-    """Write JSON (indented, keys in insertion order) atomically."""
-    write_text_atomic(target, json.dumps(data, indent=2, allow_nan=True) + "\n")
+    """Write JSON (indented, keys in insertion order) atomically; NaN and infinities are written as null."""
+    write_text_atomic(target, json.dumps(json_safe(data), indent=2, allow_nan=False) + "\n")
 
 
 def write_with(target: str | Path, writer: Callable[[Path], None]) -> None:

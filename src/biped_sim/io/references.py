@@ -26,7 +26,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from biped_sim.config import parse_yaml
+from biped_sim.config import parse_yaml, read_text_file
 from biped_sim.errors import ConfigError
 
 QUANTITY_UNITS = {"step_period": "s", "step_period_relative_error": "percent"}
@@ -170,13 +170,15 @@ def _spec_error(path: Path, exc: ValidationError) -> ConfigError:
     return ConfigError(f"{path}: {where or 'reference'}", reason)
 
 
-def load_reference(path: str | Path, *, linked_from: Path | None = None) -> Reference:
+def load_reference(path: str | Path, *, linked_from: Path | None = None, _chain: tuple[Path, ...] = ()) -> Reference:
     """Read and validate a reference file (and the published-error files it links); ConfigError on any fault."""
     path = Path(path)
+    where = f"{linked_from}: published_errors" if linked_from else str(path)
     if not path.is_file():
-        where = f"{linked_from}: published_errors" if linked_from else str(path)
         raise ConfigError(where, f"no such reference file {path}")
-    data = parse_yaml(path.read_text(), source=str(path))
+    if path.resolve() in _chain:
+        raise ConfigError(where, f"{path} links back to a file that lists it (a cycle)")
+    data = parse_yaml(read_text_file(path, "reference file"), source=str(path))
     if not isinstance(data, dict):
         raise ConfigError(str(path), "a reference file must be a mapping (experiment, citation, source, ...)")
     try:
@@ -185,7 +187,7 @@ def load_reference(path: str | Path, *, linked_from: Path | None = None) -> Refe
         raise _spec_error(path, exc) from None
     reference = Reference(path=path, spec=spec)
     for entry in spec.published_errors:
-        linked = load_reference(path.parent / entry, linked_from=path)
+        linked = load_reference(path.parent / entry, linked_from=path, _chain=(*_chain, path.resolve()))
         if linked.spec.quantity.name != "step_period_relative_error":
             raise ConfigError(f"{path}: published_errors", f"{entry} does not hold step_period_relative_error values")
         if linked.spec.experiment != spec.experiment:

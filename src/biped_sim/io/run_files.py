@@ -45,6 +45,9 @@ and energies), and the rimless wheel's energies, in J per kg of hub mass ("J/kg"
 
 from __future__ import annotations
 
+import io
+import json
+import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +58,8 @@ import numpy as np
 
 from biped_sim.io.atomic import remove_stale_temporaries, write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
+
+DERIVED_DIR = "figures"  # what `biped-sim plot` draws from a run, beside its files
 
 
 @dataclass(frozen=True)
@@ -103,37 +108,45 @@ def _group(f: h5py.File, path: str) -> tuple[h5py.Group, str]:
     return f[parent], name
 
 
+def trajectory_image(trajectory: TrajectoryFile, config_yaml: str, config_hash: str, status: str) -> bytes:
+    """The bytes of trajectory.h5: provenance and config as root attributes, ``time`` as dimension scale.
+
+    The file is built in memory: HDF5 itself never writes to the disk, so that a full disk or a failing
+    device is one Python OSError at :func:`write_trajectory`, not a crash inside the HDF5 library.
+    """
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w", track_order=True) as f:
+        for key, value in provenance().items():
+            f.attrs[key] = value
+        f.attrs["config"] = config_yaml
+        f.attrs["config_hash"] = config_hash
+        f.attrs["status"] = status
+        for key, value in trajectory.root_attrs.items():
+            f.attrs[key] = value
+        time_ds = f.create_dataset("time", data=trajectory.time, track_times=False)
+        time_ds.attrs["units"] = trajectory.time_units
+        time_ds.make_scale("time")
+        _dataset(f, "state", trajectory.state, trajectory.state_units, time_ds)
+        names = np.array(list(trajectory.state_names), dtype=h5py.string_dtype())
+        f.create_dataset("state_names", data=names, track_times=False).attrs["units"] = "none (names)"
+        for channel in trajectory.channels:
+            group, name = _group(f, channel.path)
+            _dataset(group, name, channel.data, channel.units, time_ds if channel.per_sample else None)
+        for group_name, attrs in trajectory.group_attrs.items():
+            for key, value in attrs.items():
+                f[group_name].attrs[key] = value
+    return buffer.getvalue()
+
+
 def write_trajectory(path: Path, trajectory: TrajectoryFile, config_yaml: str, config_hash: str, status: str) -> None:
-    """Write trajectory.h5 (atomically): provenance and config as root attributes, ``time`` as dimension scale."""
-
-    def writer(tmp: Path) -> None:
-        with h5py.File(tmp, "w", track_order=True) as f:
-            for key, value in provenance().items():
-                f.attrs[key] = value
-            f.attrs["config"] = config_yaml
-            f.attrs["config_hash"] = config_hash
-            f.attrs["status"] = status
-            for key, value in trajectory.root_attrs.items():
-                f.attrs[key] = value
-            time_ds = f.create_dataset("time", data=trajectory.time, track_times=False)
-            time_ds.attrs["units"] = trajectory.time_units
-            time_ds.make_scale("time")
-            _dataset(f, "state", trajectory.state, trajectory.state_units, time_ds)
-            names = np.array(list(trajectory.state_names), dtype=h5py.string_dtype())
-            f.create_dataset("state_names", data=names, track_times=False).attrs["units"] = "none (names)"
-            for channel in trajectory.channels:
-                group, name = _group(f, channel.path)
-                _dataset(group, name, channel.data, channel.units, time_ds if channel.per_sample else None)
-            for group_name, attrs in trajectory.group_attrs.items():
-                for key, value in attrs.items():
-                    f[group_name].attrs[key] = value
-
-    write_with(path, writer)
+    """Write trajectory.h5 atomically (the file built in memory by :func:`trajectory_image`)."""
+    image = trajectory_image(trajectory, config_yaml, config_hash, status)
+    write_with(path, lambda tmp: tmp.write_bytes(image))
 
 
 def start_run_directory(out_dir: Path) -> None:
     """Make ``out_dir`` ready for a new write: create it, remove the completion marker (summary.json) first, then
-    the temporary files a killed write left.
+    the temporary files a killed write left and the figures drawn from the old run (``figures/``).
 
     From then until summary.json is written again the directory reads as unfinished, so a write that dies
     half-way never leaves an old summary beside new data files.
@@ -141,6 +154,16 @@ def start_run_directory(out_dir: Path) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").unlink(missing_ok=True)
     remove_stale_temporaries(out_dir)
+    shutil.rmtree(out_dir / DERIVED_DIR, ignore_errors=True)  # figures of the old run
+
+
+def previous_run(out_dir: Path) -> str | None:
+    """'the run of config 1a2b..., status walking' when ``out_dir`` holds a finished run (None otherwise)."""
+    try:
+        summary = json.loads((out_dir / "summary.json").read_text())
+        return f"the run of config {summary['config_hash']}, status {summary['status']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def write_run_directory(

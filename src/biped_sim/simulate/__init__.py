@@ -19,6 +19,7 @@ from pathlib import Path
 from biped_sim.config import Config, InitialState
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
 from biped_sim.rigid.start import RigidStart, rigid_start
+from biped_sim.simulate.budget import check_run_size
 from biped_sim.simulate.compliant import CompliantRunResult, simulate_compliant
 from biped_sim.simulate.result import RunResult
 from biped_sim.simulate.rigid import RigidRunResult, simulate_rigid
@@ -48,8 +49,12 @@ def prepare_model(config: Config) -> BuiltModel | RigidStart:
     """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
     for ``dynamics: rigid`` the rigid walker and its resolved initial state."""
     if config.dynamics == "rigid":
-        return rigid_start(config)
-    return build_model(config, initial_state(config))
+        start = rigid_start(config)
+        check_run_size(config, 2 * len(start.state) + 4)  # state, hip, energy terms
+        return start
+    model = build_model(config, initial_state(config))
+    check_run_size(config, 2 * len(model.y0) + 12 * model.n_feet + 16)  # state, modes, channels, energy
+    return model
 
 
 def simulate(

@@ -8,6 +8,8 @@ file and the figures never compute them twice.
 
 from __future__ import annotations
 
+import math
+import time
 from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Any
@@ -17,12 +19,18 @@ from biped_sim.io.run_files import TrajectoryFile, write_run_directory
 from biped_sim.measure.steps import StepAccess, StepTable, steps_csv
 
 
+def wall_deadline(config: Config) -> float:
+    """``time.monotonic()`` past which a run ends with status 'timeout' (inf without simulation.max_wall_time)."""
+    budget = config.simulation.max_wall_time
+    return math.inf if budget is None else time.monotonic() + budget
+
+
 class RunResult(StepAccess, ABC):
     """A simulated run and what it measured (see :class:`~biped_sim.simulate.compliant.CompliantRunResult`
     and :class:`~biped_sim.simulate.rigid.RigidRunResult`)."""
 
     config: Config
-    status: str  # 'walking', 'fell' or 'diverged'
+    status: str  # 'walking', 'fell', 'diverged' or 'timeout'
     steps: StepTable
     wall_time_s: float
     summary: dict[str, Any]

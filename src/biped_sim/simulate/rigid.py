@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
@@ -52,7 +53,7 @@ from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import rigid_step
-from biped_sim.simulate.result import RunResult
+from biped_sim.simulate.result import RunResult, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "residual")
 
@@ -63,7 +64,7 @@ class RigidRunResult(RunResult):
 
     config: Config
     walker: RigidWalker
-    status: str  # 'walking' or 'fell' (a stall counts as a fall)
+    status: str  # 'walking', 'fell' (a stall counts as a fall) or 'timeout' (simulation.max_wall_time)
     stop_time: float | None  # end of the step that fell or stalled
     t_final: float  # last simulated time: t_end, the last strike (max_steps), or the fall
     time: np.ndarray  # (ns,)
@@ -123,17 +124,20 @@ class RigidRunResult(RunResult):
 def _walk(
     config: Config, start: RigidStart, progress: Callable[[float], None] | None
 ) -> tuple[RigidTrace, str, float | None, float, int, int]:
-    """Step from the start until t_end, max_steps or a fall; (trace, status, stop_time, t_final, evals, steps)."""
+    """Step from the start until t_end, max_steps, a fall or the wall-time budget;
+    (trace, status, stop_time, t_final, evals, steps)."""
     walker = start.walker
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
+    deadline = wall_deadline(config)
     trace = RigidTrace()
     t0, x = 0.0, start.state
     evals = accepted = 0
     while True:
         step_index = len(trace.strike_time)
-        if t0 >= t_end or (max_steps is not None and step_index >= max_steps):
+        finished = t0 >= t_end or (max_steps is not None and step_index >= max_steps)
+        if finished or time.monotonic() > deadline:
             trace.add_samples(np.array([t0]), x, step_index)  # the state the run ends on, just after a strike
-            return trace, "walking", None, t0, evals, accepted
+            return trace, "walking" if finished else "timeout", None if finished else t0, t0, evals, accepted
         step = rigid_step(walker, x, rate)
         evals += step.rhs_evals
         accepted += step.accepted_steps
@@ -169,6 +173,7 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
+        "status_reason": "simulation.max_wall_time reached" if result.status == "timeout" else None,
         "stop_time": result.stop_time,
         "t_end": result.t_final,
         **result.step_summary(),
@@ -224,5 +229,5 @@ def simulate_rigid(
         accepted_steps=accepted,
         wall_time_s=wall,
     )
-    result.summary = summarize_rigid(result)
+    result.summary = json_safe(summarize_rigid(result))
     return result

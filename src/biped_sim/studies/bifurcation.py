@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, config_from_dict
 from biped_sim.io.atomic import write_text_atomic
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import rigid_walker
@@ -41,7 +41,7 @@ class BifurcationDiagram:
 def _brute_force(config: Config, slope: float, start: np.ndarray) -> list[float]:
     data = config.model_dump(mode="json")
     data["ground"]["slope"] = slope
-    walker = rigid_walker(Config.model_validate(data))
+    walker = rigid_walker(config_from_dict(data))
     x = walker.from_section(start + PERTURBATION)
     periods = []
     for _ in range(BRUTE_STEPS):
@@ -58,7 +58,7 @@ def bifurcation_diagram(config: Config, start: float, stop: float, n: int) -> Bi
     slopes = np.linspace(start, stop, n)
     first = config.model_dump(mode="json")
     first["ground"]["slope"] = float(start)
-    cycle: LimitCycle | None = rigid_limit_cycle(Config.model_validate(first))
+    cycle: LimitCycle | None = rigid_limit_cycle(config_from_dict(first))
     cycles: list[LimitCycle | None] = []
     brute = []
     flip_bracket: tuple[LimitCycle, LimitCycle] | None = None

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, config_from_dict
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.simulate import simulate
 from biped_sim.studies.limit_cycle import TOUCHDOWN_KEYS
@@ -61,7 +61,7 @@ def converge(
             model="lugre", mu_kinetic=1.0, mu_static=1.2, sigma0=sigma0, sigma1=20.0 * math.sqrt(sigma0 / 1e4)
         )
         data["simulation"].update(initial=rigid.fixed_point, max_steps=steps, t_end=max(200.0, config.simulation.t_end))
-        result = simulate(Config.model_validate(data))
+        result = simulate(config_from_dict(data))
         states = result.heel_strike_states
         if result.status != "walking" or len(states) < 3:
             rows.append(

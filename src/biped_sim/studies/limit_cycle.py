@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, config_from_dict
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import integrate_model
@@ -199,7 +199,7 @@ def touchdown_guesses(
     data["simulation"]["t_end"] = (settle + 2) * section.horizon
     if guess is not None:
         data["simulation"]["initial"] = dict(guess)
-    run = simulate(Config.model_validate(data)).run
+    run = simulate(config_from_dict(data)).run
     if len(run.strike_t) == 0:
         raise ConfigError("simulation.initial", f"the compliant walker {run.status} before its first heel strike")
     touchdowns = [

@@ -10,6 +10,7 @@ import numpy as np
 from biped_sim.config import Config, MaterialsConfig
 from biped_sim.contact.friction import FRICTION_LAWS, friction_parameters
 from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
+from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
@@ -82,8 +83,22 @@ def contact_limits(config: Config) -> np.ndarray:
     )
 
 
+MAX_STATIC_SINKAGE = 0.05  # of the leg length: a contact softer than this does not carry the walker
+
+
 def static_contact_penetration(config: Config, load_mass: float, stiffness: float) -> float:
-    """Penetration [m] at which one foot carries ``load_mass`` on the slope: K delta^n = m g cos(gamma)."""
+    """Penetration [m] at which one foot carries ``load_mass`` on the slope: K delta^n = m g cos(gamma).
+
+    ConfigError when the contact cannot carry the walker (the foot would sink over ``MAX_STATIC_SINKAGE``
+    of the leg length): the stiffness, the masses or gravity are not those of a walker.
+    """
     exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
     weight = load_mass * config.gravity * math.cos(config.ground.slope)
-    return (weight / stiffness) ** (1.0 / exponent)
+    penetration = (weight / stiffness) ** (1.0 / exponent)
+    if not penetration < MAX_STATIC_SINKAGE * config.walker.leg_length:
+        raise ConfigError(
+            "contact.stiffness",
+            f"too soft for the walker's weight ({weight:.3g} N with walker masses and gravity): the stance foot "
+            f"would sink {penetration:.3g} m, over {MAX_STATIC_SINKAGE:.0%} of walker.leg_length",
+        )
+    return penetration
