@@ -104,6 +104,7 @@ def run_command(
     out_dir = out or default_output_dir(config, config_path)
     check_writable_dir(out_dir)  # before any computation
     replaced = previous_run(out_dir)
+    had_figures = (out_dir / "figures").is_dir()
     model = prepare_model(config)  # validates geometry and the initial state before anything is written
     console = Console(stderr=False)
     show_progress = not quiet and sys.stdout.isatty()
@@ -127,7 +128,7 @@ def run_command(
     console.print(summary_line(result), highlight=False, soft_wrap=True)
     console.print(f"files: {out_dir}/ (trajectory.h5, summary.json, steps.csv, config.yaml)", highlight=False)
     if replaced:
-        console.print(f"replaced {replaced} (and its figures)", highlight=False)
+        console.print(f"replaced {replaced}" + (" and its figures" if had_figures else ""), highlight=False)
 
 
 @app.command("drop-test")

@@ -17,7 +17,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import literal_unroll, njit
+
+from biped_sim.contact.registry import registered_functions
 
 MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2 = range(10)
 N_FRICTION_PARAMS = 10
@@ -112,22 +114,6 @@ def lugre_friction(v: float, z: float, z_dot: float, f_n: float, p: np.ndarray) 
     return -(f_n * (p[SIGMA0] * z + p[SIGMA1] * z_dot) + p[SIGMA2] * v)
 
 
-@njit(cache=True)
-def friction_force(model: int, v: float, f_n: float, p: np.ndarray) -> float:
-    """Dispatch to the stateless law numbered ``model`` (see FRICTION_LAWS)."""
-    if model == 1:
-        return coulomb_friction(v, f_n, p)
-    if model == 2:
-        return threlfall_friction(v, f_n, p)
-    if model == 3:
-        return ambrosio_friction(v, f_n, p)
-    if model == 4:
-        return bengisu_akay_friction(v, f_n, p)
-    if model == 5:
-        return brown_mcphee_friction(v, f_n, p)
-    return no_friction(v, f_n, p)
-
-
 @dataclass(frozen=True)
 class FrictionLaw:
     """A registered friction law: dispatch number, compiled function, and whether it carries state."""
@@ -137,7 +123,6 @@ class FrictionLaw:
     stateful: bool = False
 
 
-LUGRE = 6
 FRICTION_LAWS: dict[str, FrictionLaw] = {
     "none": FrictionLaw(0, no_friction),
     "coulomb": FrictionLaw(1, coulomb_friction),
@@ -145,8 +130,23 @@ FRICTION_LAWS: dict[str, FrictionLaw] = {
     "ambrosio": FrictionLaw(3, ambrosio_friction),
     "bengisu_akay": FrictionLaw(4, bengisu_akay_friction),
     "brown_mcphee": FrictionLaw(5, brown_mcphee_friction),
-    "lugre": FrictionLaw(LUGRE, lugre_friction, stateful=True),
+    "lugre": FrictionLaw(6, lugre_friction, stateful=True),
 }
+LUGRE = FRICTION_LAWS["lugre"].index  # the one law with state: the kernels call it with its bristles
+# the compiled dispatch below reads the registry: law number i is the i-th stateless function
+FRICTION_FUNCTIONS = registered_functions(FRICTION_LAWS, stateless_only=True)
+
+
+@njit(cache=True)
+def friction_force(model: int, v: float, f_n: float, p: np.ndarray) -> float:
+    """Dispatch to the stateless law numbered ``model`` (its index in FRICTION_LAWS); 0 for any other number."""
+    f = 0.0
+    index = 0
+    for law in literal_unroll(FRICTION_FUNCTIONS):  # unrolled at compile time: one direct call per law
+        if index == model:
+            f = law(v, f_n, p)
+        index += 1  # noqa: SIM113 (numba cannot enumerate a literal_unroll)
+    return f
 
 
 def friction_parameters(

@@ -18,7 +18,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import literal_unroll, njit
+
+from biped_sim.contact.registry import registered_functions
 
 K, N, CHI, D = 0, 1, 2, 3
 N_NORMAL_PARAMS = 4
@@ -55,18 +57,6 @@ def hunt_crossley_force(delta: float, delta_dot: float, impact_speed: float, p: 
 # (set in normal_parameters), so one compiled body serves the three laws.
 lankarani_nikravesh_force = hunt_crossley_force
 flores_force = hunt_crossley_force
-
-
-@njit(cache=True)
-def normal_force(model: int, delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
-    """Dispatch to the law numbered ``model`` (see NORMAL_LAWS) and clip at zero."""
-    if model == 0:
-        f = hertz_force(delta, delta_dot, impact_speed, p)
-    elif model == 1:
-        f = kelvin_voigt_force(delta, delta_dot, impact_speed, p)
-    else:
-        f = hunt_crossley_force(delta, delta_dot, impact_speed, p)
-    return f if f > 0.0 else 0.0
 
 
 @njit(cache=True)
@@ -112,6 +102,20 @@ NORMAL_LAWS: dict[str, NormalLaw] = {
     "lankarani_nikravesh": NormalLaw(3, lankarani_nikravesh_force, lankarani_nikravesh_chi),
     "flores": NormalLaw(4, flores_force, flores_chi),
 }
+# the compiled dispatch below reads the registry: law number i is the i-th function
+NORMAL_FUNCTIONS = registered_functions(NORMAL_LAWS)
+
+
+@njit(cache=True)
+def normal_force(model: int, delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
+    """Dispatch to the law numbered ``model`` (its index in NORMAL_LAWS) and clip at zero."""
+    f = 0.0
+    index = 0
+    for law in literal_unroll(NORMAL_FUNCTIONS):  # unrolled at compile time: one direct call per law
+        if index == model:
+            f = law(delta, delta_dot, impact_speed, p)
+        index += 1  # noqa: SIM113 (numba cannot enumerate a literal_unroll)
+    return f if f > 0.0 else 0.0
 
 
 def hertz_stiffness(e_foot: float, nu_foot: float, e_ground: float, nu_ground: float, radius: float) -> float:

@@ -9,6 +9,7 @@ the strike buffers when one more event might not fit (:func:`~biped_sim.integrat
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -16,13 +17,23 @@ import numpy as np
 
 from biped_sim.config import IntegratorConfig
 from biped_sim.integrate.explicit import Settings, advance
-from biped_sim.integrate.recorder import COMPLETED, DIVERGED, FELL, RUNNING, Recorder, make_recorder, with_room
+from biped_sim.integrate.recorder import (
+    COMPLETED,
+    DIVERGED,
+    DIVERGENCE_REASONS,
+    FELL,
+    RUNNING,
+    TIMEOUT,
+    Recorder,
+    make_recorder,
+    with_room,
+)
 from biped_sim.integrate.stepper import Loop, make_scratch
 from biped_sim.integrate.tableaus import FIXED, tableau
 from biped_sim.multibody.dispatch import contact_buffers, make_workspace
 from biped_sim.multibody.events import event_count
 
-STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged"}
+STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged", TIMEOUT: "timeout"}
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
 
 
@@ -32,7 +43,7 @@ class Integration:
 
     status: str
     t_final: float
-    stop_time: float | None  # time of the fall or divergence
+    stop_time: float | None  # time of the fall, divergence or timeout
     t: np.ndarray
     y: np.ndarray
     modes: np.ndarray
@@ -46,6 +57,7 @@ class Integration:
     rejected_steps: int
     events: int
     sample_dt: float
+    stop_reason: str | None = None  # why it diverged or timed out
 
 
 def sample_interval(integrator: IntegratorConfig, sample_rate: float) -> float:
@@ -82,8 +94,12 @@ def integrate_model(
     max_strikes: int | None = None,
     initial_stance_foot: int = 0,
     progress: Callable[[float], None] | None = None,
+    deadline: float = math.inf,
 ) -> Integration:
-    """Integrate ``system`` from (y0, modes0) at t = 0 to ``t_end`` or a stop condition."""
+    """Integrate ``system`` from (y0, modes0) at t = 0 to ``t_end`` or a stop condition.
+
+    ``deadline``: the ``time.monotonic()`` past which the run stops with status 'timeout'.
+    """
     y = np.array(y0, dtype=np.float64)
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
@@ -91,7 +107,9 @@ def integrate_model(
     if integrator.method in ("radau", "bdf"):
         from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
 
-        rec = integrate_stiff(system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress)
+        rec = integrate_stiff(
+            system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress, deadline
+        )  # fmt: skip
     else:
         tab = tableau(integrator.method)
         scratch = make_scratch(ny, nf, event_count(system))
@@ -106,6 +124,8 @@ def integrate_model(
             advance(loop, cfg, STEP_BUDGET)
             if progress is not None:
                 progress(float(loop.rec.state[0].time))
+            if loop.rec.state[0].status == RUNNING and time.monotonic() > deadline:
+                stop_for_time(loop.rec)
         rec = loop.rec
     return finish_integration(rec, interval, max_strikes)
 
@@ -123,7 +143,7 @@ def finish_integration(rec: Recorder, interval: float, max_strikes: int | None =
     return Integration(
         status=STATUS_NAMES[status],
         t_final=float(st.time),
-        stop_time=float(st.stop_time) if status in (FELL, DIVERGED) else None,
+        stop_time=float(st.stop_time) if status in (FELL, DIVERGED, TIMEOUT) else None,
         t=rec.sample_t[:ns].copy(),
         y=rec.sample_y[:ns].copy(),
         modes=rec.sample_modes[:ns].copy(),
@@ -137,4 +157,21 @@ def finish_integration(rec: Recorder, interval: float, max_strikes: int | None =
         rejected_steps=int(st.rejected),
         events=int(st.n_events),
         sample_dt=interval,
+        stop_reason=stop_reason(st),
     )
+
+
+def stop_for_time(rec: Recorder) -> None:
+    """End a running integration with status TIMEOUT where it stands."""
+    st = rec.state[0]
+    st.status = TIMEOUT
+    st.stop_time = st.time
+
+
+def stop_reason(st: np.record) -> str | None:
+    """Why the integration recorded in ``st`` diverged or timed out (None when it did neither)."""
+    if st.status == TIMEOUT:
+        return "simulation.max_wall_time reached"
+    if st.status == DIVERGED:
+        return DIVERGENCE_REASONS.get(int(st.reason), "the integration failed")
+    return None

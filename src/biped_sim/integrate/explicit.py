@@ -27,7 +27,19 @@ import numpy as np
 from numba import njit
 
 from biped_sim.integrate.dense import dense_eval, locate_event, prepare_dense
-from biped_sim.integrate.recorder import COMPLETED, DIVERGED, FELL, RUNNING, apply_events, has_room, record_sample
+from biped_sim.integrate.recorder import (
+    COMPLETED,
+    DIVERGED,
+    FELL,
+    MIN_STEP_REACHED,
+    NONFINITE,
+    RUNNING,
+    STEPS_COLLAPSED,
+    TOO_MANY_FORCED,
+    apply_events,
+    has_room,
+    record_sample,
+)
 from biped_sim.integrate.stepper import Loop, error_norm, initial_step, propagate, stage_input
 from biped_sim.integrate.tableaus import FIXED
 from biped_sim.multibody.dispatch import system_has_fallen, system_rhs
@@ -36,6 +48,8 @@ from biped_sim.multibody.events import system_event_functions
 MIN_STEP = 1e-13  # [s] a smaller step means the solution diverged
 FORCED_STEP = 1e-11  # [s] steps this small are accepted whatever their error estimate
 MAX_FORCED = 100_000  # more forced steps than this: the solution is diverging
+STALL_CHECK_STEPS = 200_000  # after this many accepted adaptive steps, ...
+MIN_MEAN_STEP = 1e-8  # [s] ... a mean step below this means the control is stuck (the walker's is ~1e-4 s)
 
 
 class Settings(NamedTuple):
@@ -52,10 +66,11 @@ class Settings(NamedTuple):
 
 
 @njit(cache=True)
-def _stop(st: np.record, status: int, t: float) -> None:
-    """End the integration with ``status`` (FELL or DIVERGED) at time t (``st``: the loop-state record)."""
+def _stop(st: np.record, status: int, t: float, reason: int = 0) -> None:
+    """End the integration with ``status`` (FELL or DIVERGED, and why) at time t (``st``: the loop-state record)."""
     st.status = status
     st.stop_time = t
+    st.reason = reason
 
 
 @njit(cache=True)
@@ -85,15 +100,15 @@ def _control(err: float, finite: bool, t: float, h: float, error_order: int, st:
         # resolved by shrinking the step: accept a tiny step across it
         st.forced += 1
         if st.forced > MAX_FORCED:
-            _stop(st, DIVERGED, t)
+            _stop(st, DIVERGED, t, TOO_MANY_FORCED)
             return False, h
         err = 1.0
     if not (err <= 1.0):
         st.rejected += 1
         factor = 0.2 if not math.isfinite(err) else max(0.2, 0.9 * err**q_exp)
         h *= factor
-        if h < MIN_STEP:
-            _stop(st, DIVERGED, t)
+        if not h >= MIN_STEP:  # a NaN step too
+            _stop(st, DIVERGED, t, MIN_STEP_REACHED if math.isfinite(h) else NONFINITE)
         return False, h
     return True, h * (10.0 if err == 0.0 else min(10.0, 0.9 * err**q_exp))
 
@@ -166,8 +181,9 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
     """Integrate from the recorder's time to t_end, a stop, ``step_budget`` steps or a full buffer (in place).
 
     Stops set the status: COMPLETED (t_end or max_strikes heel strikes), FELL, DIVERGED (non-finite
-    state, step below MIN_STEP). It returns RUNNING after ``step_budget`` steps or when one more event
-    might not fit in the recorder (:func:`~biped_sim.integrate.recorder.has_room`).
+    state or step, step below MIN_STEP, too many forced steps, steps collapsed: the record's ``reason``).
+    It returns RUNNING after ``step_budget`` steps or when one more event might not fit in the recorder
+    (:func:`~biped_sim.integrate.recorder.has_room`).
     """
     tab, system, work, _, y, modes, sc, rec = loop
     st = rec.state[0]
@@ -204,9 +220,12 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
                 h = h_next
                 continue
         elif not finite:
-            _stop(st, DIVERGED, t)
+            _stop(st, DIVERGED, t, NONFINITE)
             break
         st.accepted += 1
+        if cfg.control and st.accepted >= STALL_CHECK_STEPS and t < st.accepted * MIN_MEAN_STEP:
+            _stop(st, DIVERGED, t, STEPS_COLLAPSED)
+            break
         system_event_functions(sc.y_new, system, sc.g_new)
         crossed = _crossed(sc.g_old, sc.g_new)
         t_new, theta_end = t + h, 1.0

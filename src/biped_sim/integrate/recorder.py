@@ -26,7 +26,17 @@ from biped_sim.contact.response import TOUCHDOWN, TOUCHING, ContactBuffers
 from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
 
 # status codes
-RUNNING, COMPLETED, FELL, DIVERGED = 0, 1, 2, 3
+RUNNING, COMPLETED, FELL, DIVERGED, TIMEOUT = 0, 1, 2, 3, 4
+# why a run diverged (LOOP_STATE.reason)
+NONFINITE, MIN_STEP_REACHED, TOO_MANY_FORCED, STEPS_COLLAPSED, EVALUATION_BUDGET, SOLVER_FAILED = 1, 2, 3, 4, 5, 6
+DIVERGENCE_REASONS = {
+    NONFINITE: "non-finite state",
+    MIN_STEP_REACHED: "step size below 1e-13 s",
+    TOO_MANY_FORCED: "more than 100000 steps forced across force jumps",
+    STEPS_COLLAPSED: "steps averaging below 1e-8 s over 200000 steps: the step-size control is stuck",
+    EVALUATION_BUDGET: "right-hand-side evaluation budget exhausted",
+    SOLVER_FAILED: "the stiff solver failed (its step size fell below round-off)",
+}
 LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)
 LOG_COLUMNS = 4  # time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
 LOOP_STATE = np.dtype(
@@ -34,7 +44,8 @@ LOOP_STATE = np.dtype(
         ("time", np.float64),  # [s] where the integration stands
         ("step", np.float64),  # [s] next step size of an adaptive method (0: not chosen yet)
         ("stop_time", np.float64),  # [s] time of the fall or divergence
-        ("status", np.int64),  # RUNNING, COMPLETED, FELL or DIVERGED
+        ("status", np.int64),  # RUNNING, COMPLETED, FELL, DIVERGED or TIMEOUT
+        ("reason", np.int64),  # why it diverged (DIVERGENCE_REASONS), 0 otherwise
         ("n_samples", np.int64),  # samples recorded
         ("n_strikes", np.int64),  # heel strikes recorded
         ("n_log", np.int64),  # contact-log rows recorded

@@ -13,6 +13,7 @@ baseline runs it with RK45 over plain-Python functions.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -24,8 +25,12 @@ from biped_sim.contact.response import ContactBuffers
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
+    EVALUATION_BUDGET,
     FELL,
+    NONFINITE,
     RUNNING,
+    SOLVER_FAILED,
+    TIMEOUT,
     Recorder,
     apply_events,
     record_sample,
@@ -35,6 +40,16 @@ from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system
 from biped_sim.multibody.events import event_count, system_event_functions
 
 EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
+MAX_STIFF_EVALS = 20_000_000  # right-hand sides a stiff run may evaluate (about 10 minutes of scipy)
+
+
+class StoppedError(Exception):
+    """Raised by a right-hand side to end a scipy integration with a status (and a divergence reason)."""
+
+    def __init__(self, status: int, reason: int = 0) -> None:
+        super().__init__(status, reason)
+        self.status = status
+        self.reason = reason
 
 
 @njit(cache=True)
@@ -64,13 +79,23 @@ def integrate_stiff(
     interval: float,
     max_strikes: int,
     progress: Callable[[float], None] | None,
+    deadline: float = math.inf,
 ) -> Recorder:
-    """Integrate with scipy's Radau or BDF, restarting at every contact event; returns the (enlarged) recorder."""
+    """Integrate with scipy's Radau or BDF, restarting at every contact event; returns the (enlarged) recorder.
+
+    The run stops as 'timeout' past ``deadline`` (``time.monotonic()``) and as diverged after
+    ``MAX_STIFF_EVALS`` right-hand sides.
+    """
     ny = y.shape[0]
     work = make_workspace(system)
-    counts = {"jac": 0}
+    counts = {"jac": 0, "fun": 0}
 
     def fun(t: float, state: np.ndarray) -> np.ndarray:
+        counts["fun"] += 1
+        if counts["fun"] > MAX_STIFF_EVALS:
+            raise StoppedError(DIVERGED, EVALUATION_BUDGET)
+        if time.monotonic() > deadline:
+            raise StoppedError(TIMEOUT)
         out = np.empty(ny)
         system_rhs(t, state, system, modes, work, out)
         return out
@@ -142,15 +167,19 @@ def integrate_scipy(
         if t >= t_end:
             st.status = COMPLETED
             break
-        sol = solve_ivp(
-            fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=events,
-            dense_output=True, **options,
-        )  # fmt: skip
+        try:
+            sol = solve_ivp(
+                fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=events,
+                dense_output=True, **options,
+            )  # fmt: skip
+        except StoppedError as stop:
+            st.status, st.reason, st.stop_time = stop.status, stop.reason, t
+            break
         nfev += sol.nfev
         st.accepted += len(sol.t) - 1
         t_stop = float(sol.t[-1])
         if sol.status == -1 or not np.all(np.isfinite(sol.y[:, -1])):
-            st.status = DIVERGED
+            st.status, st.reason = DIVERGED, NONFINITE if sol.status != -1 else SOLVER_FAILED
             st.stop_time = t_stop
             t = t_stop
             break
@@ -174,7 +203,7 @@ def integrate_scipy(
         if progress is not None:
             progress(t)
         if not math.isfinite(t):
-            st.status = DIVERGED
+            st.status, st.reason = DIVERGED, NONFINITE
     st.rhs_evals = nfev
     st.time = t
     return rec

@@ -26,7 +26,7 @@ from biped_sim.measure.channels import (
 )
 from biped_sim.measure.energy import EnergyAudit, energy_audit
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
-from biped_sim.simulate.result import RunResult
+from biped_sim.simulate.result import RunResult, wall_deadline
 from biped_sim.walkers import BuiltModel
 
 CHANNEL_UNITS = {
@@ -181,6 +181,7 @@ def simulate_compliant(
         config.output.sample_rate,
         max_strikes=config.simulation.max_steps,
         progress=progress,
+        deadline=wall_deadline(config),
     )
     wall = time.perf_counter() - start
     result = CompliantRunResult(
@@ -192,6 +193,7 @@ def simulate_compliant(
         violation=constraint_drift(model, run),
         wall_time_s=wall,
         status=run.status,
+        status_reason=run.stop_reason,
         stop_time=run.stop_time,
     )
     blown_up = divergence(result)
