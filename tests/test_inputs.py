@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pydantic import BaseModel
 from typer.testing import CliRunner
@@ -214,3 +215,28 @@ def test_a_reference_file_that_lists_itself_is_one_line(tmp_path: Path) -> None:
 def test_animation_options_must_be_finite(tmp_path: Path, option: str, value: str) -> None:
     result = CliRunner().invoke(app, ["animate", str(tmp_path), "--out", str(tmp_path / "a.gif"), option, value])
     assert result.exit_code == 2 and option in result.output
+
+
+def test_a_nan_step_size_ends_the_run_as_diverged() -> None:
+    """A NaN never compares below the minimum step: the control must still stop (it once looped for ever)."""
+    from biped_sim.integrate.explicit import _control
+    from biped_sim.integrate.recorder import DIVERGED, DIVERGENCE_REASONS, LOOP_STATE, NONFINITE
+
+    state = np.zeros(1, dtype=LOOP_STATE).view(np.recarray)
+    accepted, _ = _control.py_func(math.inf, False, 0.25, math.nan, 4, state[0])
+    assert not accepted and state[0].status == DIVERGED and state[0].reason == NONFINITE
+    assert state[0].stop_time == 0.25 and DIVERGENCE_REASONS[NONFINITE] == "non-finite state"
+
+
+@pytest.mark.parametrize("method", ["dopri5", "radau"])
+def test_a_compliant_run_past_its_wall_time_budget_ends_with_status_timeout(method: str) -> None:
+    config = config_from_dict({}, [f"integrator.method={method}", "simulation.max_wall_time=0.05"])
+    result = simulate(config)
+    assert result.status == "timeout" and result.summary["status_reason"] == "simulation.max_wall_time reached"
+    assert result.summary["stop_time"] == result.summary["t_end"] < config.simulation.t_end
+
+
+@pytest.mark.slow  # 200000 tiny steps: about 5 s
+def test_a_step_size_control_that_cannot_make_progress_ends_as_diverged() -> None:
+    result = simulate(config_from_dict({}, ["integrator.atol=1e-300", "simulation.t_end=2"]))
+    assert result.status == "diverged" and "step-size control is stuck" in result.summary["status_reason"]

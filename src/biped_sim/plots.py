@@ -146,17 +146,22 @@ def completed_slips(run: RunData) -> np.ndarray:
     return run.steps["slip"][:-1] if len(run.steps["slip"]) else np.array([])
 
 
+def per_step_figure(series: Series, per_step: Callable[[RunData], np.ndarray], y_label: str) -> tuple[Figure, Axes]:
+    """A quantity of each completed step against step number, one line per run."""
+    fig, (ax,) = new_figure()
+    for i, (label, run) in enumerate(series):
+        values = per_step(run)
+        ax.plot(np.arange(1, len(values) + 1), values, marker="o", label=label, **style_of(i))
+    ax.set_xlabel("step number")
+    ax.set_ylabel(y_label)
+    add_legend(fig, ax, len(series))
+    return fig, ax
+
+
 @styled
 def step_period_figure(series: Series) -> Figure:
     """Step period against step number."""
-    fig, (ax,) = new_figure()
-    for i, (label, run) in enumerate(series):
-        periods = completed_periods(run)
-        ax.plot(np.arange(1, len(periods) + 1), periods, marker="o", label=label, **style_of(i))
-    ax.set_xlabel("step number")
-    ax.set_ylabel("step period [s]")
-    add_legend(fig, ax, len(series))
-    return fig
+    return per_step_figure(series, completed_periods, "step period [s]")[0]
 
 
 @styled
@@ -261,14 +266,8 @@ def energy_balance_figure(series: Series) -> Figure:
 @styled
 def slip_figure(series: Series) -> Figure:
     """Stance-foot slip per step [mm] against step number."""
-    fig, (ax,) = new_figure()
-    for i, (label, run) in enumerate(series):
-        slip = completed_slips(run) * 1e3
-        ax.plot(np.arange(1, len(slip) + 1), slip, marker="o", label=label, **style_of(i))
+    fig, ax = per_step_figure(series, lambda run: completed_slips(run) * 1e3, "stance-foot slip [mm]")
     ax.axhline(0.0, color="0.5", linewidth=0.6)
-    ax.set_xlabel("step number")
-    ax.set_ylabel("stance-foot slip [mm]")
-    add_legend(fig, ax, len(series))
     return fig
 
 

@@ -128,42 +128,35 @@ def integrator_table(view: SweepView) -> Table:
     return Table("by_integrator", "Integrators: accuracy, constraint violation and cost", columns, rows, notes)
 
 
+def _model_table(view: SweepView, key: str, header: str, name: str, title: str, measures: list[Column]) -> Table:
+    """Runs grouped by the law in ``key``: the law, the other swept values, status, gait, ``measures``, cost."""
+    columns = [Column(key, header), *view.param_columns((key,)), STATUS, STEPS, PERIOD, SPEED, *measures, WALL]
+    return Table(name, title, columns, _grouped(view.rows, lambda r: r[key]))
+
+
 def normal_model_table(view: SweepView) -> Table:
-    """Normal contact force laws compared."""
-    rows = _grouped(view.rows, lambda r: r["contact.model"])
-    columns = [
-        Column("contact.model", "normal force model"),
-        *view.param_columns(("contact.model",)),
-        STATUS,
-        STEPS,
-        PERIOD,
-        SPEED,
+    """Normal contact force laws compared: penetration, peak force, dissipation."""
+    measures = [
         Column("max_penetration_m", "max penetration", "m", ".2e"),
         Column("peak_normal_force_N", "peak normal force", "N", ".1f"),
         Column("energy_dissipated_normal_J", "dissipated (normal)", "J", ".3f"),
         Column("energy_dissipated_friction_J", "dissipated (friction)", "J", ".3f"),
-        WALL,
     ]
-    return Table("by_normal_model", "Normal contact force models", columns, rows)
+    return _model_table(
+        view, "contact.model", "normal force model", "by_normal_model", "Normal contact force models", measures
+    )
 
 
 def friction_model_table(view: SweepView) -> Table:
-    """Friction laws compared."""
-    rows = _grouped(view.rows, lambda r: r["friction.model"])
-    columns = [
-        Column("friction.model", "friction model"),
-        *view.param_columns(("friction.model",)),
-        STATUS,
-        STEPS,
-        PERIOD,
-        SPEED,
+    """Friction laws compared: slip per step, friction dissipation, cost in right-hand sides."""
+    measures = [
         Column("slip_mean_m", "mean |slip| per step", "m", ".2e"),
         Column("slip_max_m", "max |slip| per step", "m", ".2e"),
         Column("energy_dissipated_friction_J", "dissipated (friction)", "J", ".3f"),
-        WALL,
-        RHS,
     ]
-    return Table("by_friction_model", "Friction models", columns, rows)
+    table = _model_table(view, "friction.model", "friction model", "by_friction_model", "Friction models", measures)
+    table.columns.append(RHS)
+    return table
 
 
 def baumgarte_table(view: SweepView) -> Table:

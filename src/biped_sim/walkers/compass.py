@@ -15,16 +15,14 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, InitialState
-from biped_sim.contact.response import ARMED, IMPACT_SPEED, TOUCHING
 from biped_sim.errors import ConfigError
-from biped_sim.multibody.dispatch import contact_buffers
-from biped_sim.multibody.events import system_update_modes as update_modes
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.walkers.model import (
     BuiltModel,
     contact_arrays,
     contact_limits,
     contact_stiffness,
+    standing_start,
     static_contact_penetration,
 )
 
@@ -111,16 +109,8 @@ def build_compass(config: Config, initial: InitialState) -> BuiltModel:
 
     static_penetration = static_contact_penetration(config, total_mass, stiffness)
     coords, rates, hip_speed = sagittal_initial_state(config, initial, (d, d), static_penetration)
-    nf = 2
-    y0 = np.zeros(12 + nf + 2)
-    y0[0:6] = coords.ravel()
-    y0[6:12] = rates.ravel()
-    modes0 = np.zeros((nf, 3))
-    modes0[0, ARMED] = 1.0
-    modes0[0, TOUCHING] = 1.0
-    # the stance foot "just struck": remember an approach velocity of the scale of the hip speed
-    modes0[0, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
-    update_modes(y0, system, modes0, contact_buffers(system))  # arms the swing foot if ahead and airborne
+    # the stance foot "just struck": it remembers an approach velocity of the scale of the hip speed
+    y0, modes0 = standing_start(system, coords, rates, (0,), max(hip_speed, config.contact.impact_velocity_floor))
     return BuiltModel(
         system=system,
         y0=y0,

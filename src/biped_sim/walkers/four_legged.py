@@ -26,10 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.config import Config, InitialState
-from biped_sim.contact.response import ARMED, IMPACT_SPEED, TOUCHING
 from biped_sim.errors import ConfigError
-from biped_sim.multibody.dispatch import contact_buffers
-from biped_sim.multibody.events import system_update_modes as update_modes
 from biped_sim.multibody.spatial import SpatialSystem
 from biped_sim.walkers.compass import sagittal_initial_state
 from biped_sim.walkers.model import (
@@ -37,6 +34,7 @@ from biped_sim.walkers.model import (
     contact_arrays,
     contact_limits,
     contact_stiffness,
+    standing_start,
     static_contact_penetration,
 )
 from biped_sim.walkers.spatial_compass import (
@@ -107,16 +105,8 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     static_penetration = static_contact_penetration(config, 0.5 * total_mass, stiffness)
     coords, rates, hip_speed = sagittal_initial_state(config, initial, (offsets[0], offsets[1]), static_penetration)
     q, qd = sagittal_to_spatial(coords, rates)
-    nb, nf = 2, 4
-    y0 = np.zeros(14 * nb + 2 * nf + 2)
-    y0[: 7 * nb] = q.ravel()
-    y0[7 * nb : 14 * nb] = qd.ravel()
-    modes0 = np.zeros((nf, 3))
-    for foot in (0, 1):  # the outer pair "just struck"
-        modes0[foot, ARMED] = 1.0
-        modes0[foot, TOUCHING] = 1.0
-        modes0[foot, IMPACT_SPEED] = max(hip_speed, config.contact.impact_velocity_floor)
-    update_modes(y0, system, modes0, contact_buffers(system))  # arms the inner feet if ahead and airborne
+    # the outer pair "just struck"
+    y0, modes0 = standing_start(system, q, qd, (0, 1), max(hip_speed, config.contact.impact_velocity_floor))
     return BuiltModel(
         system=system,
         y0=y0,

@@ -10,8 +10,10 @@ import numpy as np
 from biped_sim.config import Config, MaterialsConfig
 from biped_sim.contact.friction import FRICTION_LAWS, friction_parameters
 from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
+from biped_sim.contact.response import ARMED, IMPACT_SPEED, N_MODE_COLUMNS, TOUCHING
 from biped_sim.errors import ConfigError
-from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.multibody.dispatch import contact_buffers, formulation_of
+from biped_sim.multibody.events import system_update_modes
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
 
@@ -102,3 +104,29 @@ def static_contact_penetration(config: Config, load_mass: float, stiffness: floa
             f"would sink {penetration:.3g} m, over {MAX_STATIC_SINKAGE:.0%} of walker.leg_length",
         )
     return penetration
+
+
+def standing_start(
+    system: PlanarSystem | SpatialSystem,
+    q: np.ndarray,
+    qd: np.ndarray,
+    stance_feet: tuple[int, ...],
+    impact_speed: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(y0, modes0) of a walker whose ``stance_feet`` "just struck": bodies at ``q`` with rates ``qd`` (one row
+    per body, the formulation's coordinates), bristles relaxed, no work dissipated yet.
+
+    The stance feet are armed and touching and remember ``impact_speed`` as their approach velocity; the mode
+    update then arms each other foot that is ahead of its partner and in the air.
+    """
+    layout = formulation_of(system).layout_of(system)
+    y0 = np.zeros(layout.size)
+    y0[layout.position(0).start : layout.position(layout.n_bodies - 1).stop] = np.ravel(q)
+    y0[layout.velocity(0).start : layout.velocity(layout.n_bodies - 1).stop] = np.ravel(qd)
+    modes0 = np.zeros((layout.n_feet, N_MODE_COLUMNS))
+    for foot in stance_feet:
+        modes0[foot, ARMED] = 1.0
+        modes0[foot, TOUCHING] = 1.0
+        modes0[foot, IMPACT_SPEED] = impact_speed
+    system_update_modes(y0, system, modes0, contact_buffers(system))
+    return y0, modes0

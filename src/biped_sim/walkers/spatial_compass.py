@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.model import BuiltModel
@@ -102,11 +103,17 @@ def build_spatial_compass(config: Config, initial: InitialState) -> BuiltModel:
         switches=ps.switches,
         limits=ps.limits.copy(),
     )
-    q, qd = sagittal_to_spatial(planar.y0[: 3 * nb].reshape(nb, 3), planar.y0[3 * nb : 6 * nb].reshape(nb, 3))
-    y0 = np.zeros(14 * nb + 2 * nf + 2)
-    y0[: 7 * nb] = q.ravel()
-    y0[7 * nb : 14 * nb] = qd.ravel()
-    y0[14 * nb : 14 * nb + 2 * nf : 2] = planar.y0[6 * nb : 6 * nb + nf]  # bristles along x
+    planar_layout, layout = (formulation_of(s).layout_of(s) for s in (ps, system))
+    q, qd = sagittal_to_spatial(
+        np.array([planar.y0[planar_layout.position(b)] for b in range(nb)]),
+        np.array([planar.y0[planar_layout.velocity(b)] for b in range(nb)]),
+    )
+    y0 = np.zeros(layout.size)
+    for b in range(nb):
+        y0[layout.position(b)] = q[b]
+        y0[layout.velocity(b)] = qd[b]
+    for foot in range(nf):  # the planar bristle runs along x
+        y0[layout.bristle(foot).start] = planar.y0[planar_layout.bristle(foot).start]
     return BuiltModel(
         system=system,
         y0=y0,
