@@ -66,6 +66,7 @@ def test_every_number_field_refuses_non_finite_values_and_booleans(key: str, val
         (["integrator.method=rk4", "integrator.dt=20"], "integrator.dt", "longer than simulation.t_end"),
         (["dynamics=rigid", "walker.kind=simplest", "simulation.t_end=1e9"], "output.sample_rate", "GiB"),
         (["contact.stiffness=10"], "contact.stiffness", "too soft"),
+        (["simulation.t_end=0.3", "output.sample_rate=0.1"], "output.sample_rate", "no sample after the start"),
         (["walker.leg_mass=1e7"], "contact.stiffness", "too soft"),
     ],
 )

@@ -212,7 +212,7 @@ class IntegratorConfig(_Strict):
     dt: float = Field(1e-4, gt=0, description="Fixed step [s] (euler, rk2, rk4).")
     rtol: float = Field(
         1e-8,
-        ge=MIN_RTOL,
+        gt=0,
         le=1.0,
         description="Relative tolerance (adaptive methods), from 100 machine epsilons (below, the step control "
         "cannot reach it) to 1.",
@@ -220,6 +220,12 @@ class IntegratorConfig(_Strict):
     atol: float = Field(1e-10, gt=0, description="Absolute tolerance (adaptive methods).")
     max_step: float = Field(1e-2, gt=0, description="Largest step [s] (adaptive methods).")
     adaptive: bool = Field(True, description="Step-size control; false runs dopri5/dop853 at fixed dt (order tests).")
+
+    @model_validator(mode="after")
+    def _reachable_tolerance(self) -> IntegratorConfig:
+        if self.rtol < MIN_RTOL:
+            raise ValueError(f"rtol: below 100 machine epsilons ({MIN_RTOL:.1e}), which the step control cannot reach")
+        return self
 
 
 class InitialState(_Strict):

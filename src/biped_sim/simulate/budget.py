@@ -21,6 +21,12 @@ FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 
 def check_run_size(config: Config, values_per_sample: int) -> None:
     """ConfigError when the trajectory would not fit in memory or the integration needs too many steps."""
+    if config.simulation.t_end * config.output.sample_rate < 1.0:
+        raise ConfigError(
+            "output.sample_rate",
+            "no sample after the start (simulation.t_end x output.sample_rate < 1): the run's energy balance and "
+            "constraints could not be measured",
+        )
     samples = config.simulation.t_end * config.output.sample_rate + 2
     need = samples * values_per_sample * 8 * MEASURE_COPIES
     if need > MEMORY_BUDGET_BYTES:
