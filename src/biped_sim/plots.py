@@ -114,7 +114,7 @@ def add_legend(fig: Figure, ax: Axes, count: int) -> None:
         fig.legend(handles, labels, loc="outside lower center", ncol=2, frameon=False)
 
 
-def _positive(values: np.ndarray) -> np.ndarray:
+def log_positive(values: np.ndarray) -> np.ndarray:
     """Values for a log axis: zeros and negatives become gaps."""
     values = np.asarray(values, dtype=float)
     return np.where(values > 0, values, np.nan)
@@ -169,8 +169,8 @@ def constraint_violation_figure(series: Series) -> Figure:
     """Position and velocity constraint violation ||Phi||, ||Phidot|| against time (log scale)."""
     fig, (top, bottom) = new_figure(2)
     for i, (label, run) in enumerate(series):
-        top.plot(run.time, _positive(run.violation_position), label=label, **style_of(i))
-        bottom.plot(run.time, _positive(run.violation_velocity), label=label, **style_of(i))
+        top.plot(run.time, log_positive(run.violation_position), label=label, **style_of(i))
+        bottom.plot(run.time, log_positive(run.violation_velocity), label=label, **style_of(i))
     log_scale(top)
     log_scale(bottom)
     top.set_ylabel(r"$\|\Phi\|$ [m]")
@@ -253,7 +253,7 @@ def energy_balance_figure(series: Series) -> Figure:
         e = run.energy
         axes[0].plot(run.time, e["dissipated_normal"] - e["dissipated_normal"][0], label=label, **style_of(i))
         axes[1].plot(run.time, e["dissipated_friction"] - e["dissipated_friction"][0], label=label, **style_of(i))
-        axes[2].plot(run.time, _positive(np.abs(e["residual"])), label=label, **style_of(i))
+        axes[2].plot(run.time, log_positive(np.abs(e["residual"])), label=label, **style_of(i))
     axes[0].set_ylabel("normal damping [J]")
     axes[1].set_ylabel("friction [J]")
     axes[2].set_ylabel("|energy residual| [J]")
@@ -331,7 +331,7 @@ def parameter_lines_figure(
     """A quantity against a swept parameter, one line per ``(label, x, y)``."""
     fig, (ax,) = new_figure()
     for i, (label, x, y) in enumerate(lines):
-        ax.plot(x, _positive(np.asarray(y, dtype=float)) if log_y else y, marker="o", label=label, **style_of(i))
+        ax.plot(x, log_positive(np.asarray(y, dtype=float)) if log_y else y, marker="o", label=label, **style_of(i))
     if log_y:
         log_scale(ax)
     ax.set_xlabel(x_label)
@@ -358,7 +358,7 @@ def accuracy_cost_figure(series: Sequence[tuple[str, Sequence[float], Sequence[f
     """Integrators: step-period deviation from the reference run against wall time (log-log), one marker set each."""
     fig, (ax,) = new_figure()
     for i, (label, wall, deviation) in enumerate(series):
-        ax.plot(wall, _positive(np.asarray(deviation, dtype=float)), marker="os^vD<>"[i % 7], linestyle="none",
+        ax.plot(wall, log_positive(np.asarray(deviation, dtype=float)), marker="os^vD<>"[i % 7], linestyle="none",
                 label=label, color=f"C{i % 10}")  # fmt: skip
     log_scale(ax, "x")
     log_scale(ax, "y")

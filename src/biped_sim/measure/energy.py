@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.integrate.driver import Integration
-from biped_sim.multibody.dispatch import measures
+from biped_sim.multibody.dispatch import formulation_of, measures
 from biped_sim.walkers.model import BuiltModel
 
 
@@ -32,8 +32,9 @@ def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     ns = len(run.t)
     energy = measures(model.system).mechanical_energy
     terms = np.array([energy(run.y[i], model.system, run.modes[i]) for i in range(ns)]).reshape(ns, 3)
-    w_normal = run.y[:, -2]
-    w_friction = run.y[:, -1]
+    layout = formulation_of(model.system).layout_of(model.system)
+    w_normal = run.y[:, layout.work_normal]
+    w_friction = run.y[:, layout.work_friction]
     total = terms.sum(axis=1)
     residual = total - total[0] + (w_normal - w_normal[0]) + (w_friction - w_friction[0])
     return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, residual)

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import RunData, load_run
-from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, log_scale, save_figure, style_of, styled
+from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, log_positive, log_scale, save_figure, style_of, styled
 
 FIGURE_NAME = "constraint_violation"
 INTEGRATOR_ORDER = ("euler", "rk2", "rk4", "dopri5", "dop853", "radau", "bdf")
@@ -60,11 +60,6 @@ def integrator_label(run: RunData) -> str:
     return f"{integ.method}, rtol = {integ.rtol:g}"
 
 
-def _positive(values: np.ndarray) -> np.ndarray:
-    """Zeros (exactly satisfied constraints) cannot be drawn on a log scale: leave gaps there."""
-    return np.where(values > 0, values, np.nan)
-
-
 @styled
 def constraint_study_figure(groups: dict[str, list[RunData]]) -> Figure:
     """Violation against time: rows position, velocity (and normalisation), one column per integrator."""
@@ -81,7 +76,7 @@ def constraint_study_figure(groups: dict[str, list[RunData]]) -> Figure:
             if spatial:
                 channels.append(run.violation_normalization)
             for row, values in enumerate(channels):
-                axes[row, col].plot(run.time, _positive(np.asarray(values)), label=gains_label(run), **style)
+                axes[row, col].plot(run.time, log_positive(np.asarray(values)), label=gains_label(run), **style)
         for row in range(rows):
             log_scale(axes[row, col])
         axes[-1, col].set_xlabel("time [s]")
