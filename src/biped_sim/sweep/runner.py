@@ -162,7 +162,13 @@ def warm_up(config: Config) -> None:
     family = "stiff" if config.integrator.method in STIFF_METHODS else "explicit"
     if family in _WARMED:
         return
-    simulate(config_from_dict(config.model_dump(mode="json"), [f"simulation.t_end={WARM_UP_TIME}"]))
+    # at least one step and one sample after the start, so that the short run passes the run's own checks
+    t_end = max(WARM_UP_TIME, config.integrator.dt)
+    simulate(
+        config_from_dict(
+            config.model_dump(mode="json"), [f"simulation.t_end={t_end!r}", f"output.sample_rate={1 / t_end!r}"]
+        )
+    )
     _WARMED.add(family)
 
 
