@@ -33,6 +33,9 @@ from biped_sim.integrate.tableaus import FIXED, tableau
 from biped_sim.multibody.dispatch import contact_buffers, make_workspace
 from biped_sim.multibody.events import event_count
 
+FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
+STIFF_METHODS = ("radau", "bdf")  # scipy's implicit methods over the compiled right-hand side
+TIMEOUT_REASON = "simulation.max_wall_time reached"
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged", TIMEOUT: "timeout"}
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
 
@@ -60,10 +63,15 @@ class Integration:
     stop_reason: str | None = None  # why it diverged or timed out
 
 
+def takes_fixed_steps(integrator: IntegratorConfig) -> bool:
+    """Whether the integrator steps at ``dt``: euler, rk2, rk4, or any method with step-size control off."""
+    return integrator.method in FIXED_STEP_METHODS or not integrator.adaptive
+
+
 def sample_interval(integrator: IntegratorConfig, sample_rate: float) -> float:
     """Sampling interval; for fixed-step methods a whole number of steps."""
     interval = 1.0 / sample_rate
-    if integrator.method in ("euler", "rk2", "rk4") or not integrator.adaptive:
+    if takes_fixed_steps(integrator):
         interval = max(1, round(interval / integrator.dt)) * integrator.dt
     return interval
 
@@ -104,7 +112,7 @@ def integrate_model(
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
     rec, interval = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
-    if integrator.method in ("radau", "bdf"):
+    if integrator.method in STIFF_METHODS:
         from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
 
         rec = integrate_stiff(
@@ -171,7 +179,7 @@ def stop_for_time(rec: Recorder) -> None:
 def stop_reason(st: np.record) -> str | None:
     """Why the integration recorded in ``st`` diverged or timed out (None when it did neither)."""
     if st.status == TIMEOUT:
-        return "simulation.max_wall_time reached"
+        return TIMEOUT_REASON
     if st.status == DIVERGED:
         return DIVERGENCE_REASONS.get(int(st.reason), "the integration failed")
     return None

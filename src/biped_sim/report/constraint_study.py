@@ -19,6 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from biped_sim.errors import ConfigError
+from biped_sim.integrate.driver import FIXED_STEP_METHODS
 from biped_sim.io.trajectory import RunData, load_run
 from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, log_positive, log_scale, save_figure, style_of, styled
 
@@ -55,7 +56,7 @@ def gains_label(run: RunData) -> str:
 def integrator_label(run: RunData) -> str:
     """Integrator name with its step or tolerances."""
     integ = run.config.integrator
-    if integ.method in ("euler", "rk2", "rk4"):
+    if integ.method in FIXED_STEP_METHODS:
         return f"{integ.method}, dt = {integ.dt:g} s"
     return f"{integ.method}, rtol = {integ.rtol:g}"
 

@@ -12,11 +12,11 @@ import math
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
+from biped_sim.integrate.driver import takes_fixed_steps
 
 MEMORY_BUDGET_BYTES = 4 * 2**30  # samples x channels x 8 bytes, with the copies measuring makes
 MAX_INTEGRATION_STEPS = 1e9  # about 20 minutes of the fastest compiled loop
 MEASURE_COPIES = 3  # the recorder, its trimmed copy and the measured channels
-FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 
 
 def check_run_size(config: Config, values_per_sample: int) -> None:
@@ -38,7 +38,7 @@ def check_run_size(config: Config, values_per_sample: int) -> None:
     if config.dynamics == "rigid":
         return
     integ = config.integrator
-    fixed = integ.method in FIXED_STEP_METHODS or not integ.adaptive
+    fixed = takes_fixed_steps(integ)
     field, step = ("integrator.dt", integ.dt) if fixed else ("integrator.max_step", integ.max_step)
     if fixed and integ.dt > config.simulation.t_end:
         raise ConfigError(

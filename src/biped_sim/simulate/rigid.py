@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.integrate.driver import TIMEOUT_REASON
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
@@ -173,7 +174,7 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
-        "status_reason": "simulation.max_wall_time reached" if result.status == "timeout" else None,
+        "status_reason": TIMEOUT_REASON if result.status == "timeout" else None,
         "stop_time": result.stop_time,
         "t_end": result.t_final,
         **result.step_summary(),

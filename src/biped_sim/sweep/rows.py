@@ -19,6 +19,7 @@ import pandas as pd
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
+from biped_sim.integrate.driver import takes_fixed_steps
 from biped_sim.io.atomic import write_text_atomic, write_with
 from biped_sim.rigid.start import INTEGRATOR
 
@@ -61,7 +62,6 @@ METRIC_COLUMNS = (
 )
 
 INTEGER_COLUMNS = ("n_steps", "rhs_evals", "accepted_steps", "rejected_steps")
-FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 
 
 def step_control(config: Config) -> str:
@@ -70,7 +70,7 @@ def step_control(config: Config) -> str:
     if config.dynamics == "rigid":
         return INTEGRATOR
     integ = config.integrator
-    if integ.method in FIXED_STEP_METHODS or not integ.adaptive:
+    if takes_fixed_steps(integ):
         return f"dt = {integ.dt:.0e} s"
     return f"rtol = {integ.rtol:.0e}, atol = {integ.atol:.0e}"
 

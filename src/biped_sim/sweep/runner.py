@@ -37,6 +37,7 @@ from typing import Any
 
 from biped_sim.config import Config, config_from_dict
 from biped_sim.errors import ConfigError
+from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.io.atomic import write_json_atomic
 from biped_sim.io.run_files import start_run_directory
 from biped_sim.io.trajectory import trajectory_problem
@@ -49,7 +50,6 @@ from biped_sim.sweep.spec import RunSpec, Sweep
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
 FAILED_STATUSES = ("error", "diverged")
-STIFF_METHODS = ("radau", "bdf")
 WARM_UP_TIME = 1e-3  # s of simulated time
 
 
