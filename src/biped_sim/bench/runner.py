@@ -48,7 +48,6 @@ ATOL_PER_RTOL = 1e-3  # atol = 1e-3 rtol for every adaptive row (state entries o
 WARM_UP_TIME = 0.05  # [s] simulated by the warm-up run of each row
 SLOW_RUN_S = 5.0  # [s] rows slower than this per run are repeated slow_repeats times (keeps make bench < 10 min)
 BASELINE = "baseline"
-FIXED_METHODS = ("euler", "rk2", "rk4")
 
 
 @dataclass(frozen=True)
