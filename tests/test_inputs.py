@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,8 @@ def number_fields(model: type[BaseModel], prefix: str = "") -> list[str]:
     keys = []
     for name, field in model.model_fields.items():
         annotation = field.annotation
+        if typing.get_origin(annotation) is list:  # simulation.pushes: a list of records, tests/test_pushes.py
+            continue
         sections = [arg for arg in getattr(annotation, "__args__", (annotation,)) if isinstance(arg, type)]
         sub = [arg for arg in sections if issubclass(arg, BaseModel)]
         if sub:

@@ -31,6 +31,8 @@ def _is_number(annotation: Any) -> bool:
     """Whether a field's type is a number (float, int, or one of them or None)."""
     if annotation in (float, int):
         return True
+    if typing.get_origin(annotation) is tuple:  # a vector of numbers (simulation.pushes' impulse)
+        return all(_is_number(arg) for arg in typing.get_args(annotation))
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         return any(_is_number(arg) for arg in typing.get_args(annotation))
     return False
@@ -48,7 +50,8 @@ class _Strict(BaseModel):
         if isinstance(data, dict):
             for name, value in data.items():
                 field = cls.model_fields.get(name)
-                if isinstance(value, bool) and field is not None and _is_number(field.annotation):
+                numbers = value if isinstance(value, list) else [value]
+                if field is not None and _is_number(field.annotation) and any(isinstance(v, bool) for v in numbers):
                     raise ValueError(f"{name}: expected a number, got {str(value).lower()}")
         return data
 
@@ -237,6 +240,13 @@ class InitialState(_Strict):
     swing_rate: float = Field(-0.5, description="Swing leg angular rate [rad/s].")
 
 
+class Push(_Strict):
+    """An impulse on the hip (joint 0's point): an instantaneous velocity change consistent with the joints."""
+
+    time: float = Field(..., ge=0, description="When [s]; before simulation.t_end.")
+    impulse: tuple[float, float] = Field(..., description="[px, py] [N s]; slope frame: x downhill, y its normal.")
+
+
 class SimulationConfig(_Strict):
     """What to simulate and when to stop."""
 
@@ -246,18 +256,12 @@ class SimulationConfig(_Strict):
         default_factory=InitialState,
         description="Initial leg angles and rates, or 'rigid_limit_cycle' to start on the rigid model's fixed point.",
     )
-    fall_hip_height: float = Field(
-        0.5, gt=0, lt=1, description="Fall when the hip height above the slope drops below this fraction of leg_length."
-    )
-    fall_leg_angle: float = Field(
-        1.4, gt=0, description="Fall when a leg is further than this from the slope normal [rad]."
-    )
+    fall_hip_height: float = Field(0.5, gt=0, lt=1, description="Fall when the hip is below this x leg_length.")
+    fall_leg_angle: float = Field(1.4, gt=0, description="Fall when a leg is this far from the slope normal [rad].")
     max_wall_time: float | None = Field(
-        None,
-        gt=0,
-        description="Wall-clock budget of one run [s]: a run still going then ends with status 'timeout' "
-        "(none = no limit). Keeps a sweep from ever blocking on one run.",
+        None, gt=0, description="Wall-clock budget of one run [s], then status 'timeout' (none = no limit)."
     )
+    pushes: list[Push] = Field(default_factory=list, description="Impulses on the hip, applied in time order.")
 
 
 class OutputConfig(_Strict):
@@ -293,6 +297,8 @@ class Config(_Strict):
             raise ValueError("walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial")
         if self.formulation.kind == "spatial" and self.dynamics != "compliant":
             raise ValueError("formulation.kind: 'spatial' is available with dynamics: compliant only")
+        if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
+            raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
         if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
             raise ValueError("walker.foot_spacing_inner: must be smaller than walker.foot_spacing_outer")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:

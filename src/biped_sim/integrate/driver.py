@@ -4,14 +4,18 @@
 the compiled loop of :mod:`biped_sim.integrate.explicit`, ``radau`` and ``bdf`` in
 :mod:`biped_sim.integrate.stiff`. Between compiled calls the driver enlarges the contact log and
 the strike buffers when one more event might not fit (:func:`~biped_sim.integrate.recorder.with_room`).
+
+Pushes (impulses on the hip at given times) split the integration: the loop runs to the push time
+exactly, the formulation's ``hip_impulse`` makes the velocity jump and the same loop resumes from there,
+so the recorder holds one continuous trajectory (:func:`apply_push`).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,7 +34,7 @@ from biped_sim.integrate.recorder import (
 )
 from biped_sim.integrate.stepper import Loop, make_scratch
 from biped_sim.integrate.tableaus import FIXED, tableau
-from biped_sim.multibody.dispatch import contact_buffers, make_workspace
+from biped_sim.multibody.dispatch import contact_buffers, formulation_of, make_workspace, measures
 from biped_sim.multibody.events import event_count
 
 FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
@@ -38,6 +42,7 @@ STIFF_METHODS = ("radau", "bdf")  # scipy's implicit methods over the compiled r
 TIMEOUT_REASON = "simulation.max_wall_time reached"
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged", TIMEOUT: "timeout"}
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
+PUSH_COLUMNS = ("time", "first_sample", "work")  # a push record: when, the first sample after it, its work [J]
 
 
 @dataclass
@@ -61,6 +66,7 @@ class Integration:
     events: int
     sample_dt: float
     stop_reason: str | None = None  # why it diverged or timed out
+    pushes: np.ndarray = field(default_factory=lambda: np.zeros((0, len(PUSH_COLUMNS))))  # applied, PUSH_COLUMNS
 
 
 def takes_fixed_steps(integrator: IntegratorConfig) -> bool:
@@ -103,39 +109,78 @@ def integrate_model(
     initial_stance_foot: int = 0,
     progress: Callable[[float], None] | None = None,
     deadline: float = math.inf,
+    pushes: Sequence[tuple[float, np.ndarray]] = (),
 ) -> Integration:
     """Integrate ``system`` from (y0, modes0) at t = 0 to ``t_end`` or a stop condition.
 
-    ``deadline``: the ``time.monotonic()`` past which the run stops with status 'timeout'.
+    ``deadline``: the ``time.monotonic()`` past which the run stops with status 'timeout'. ``pushes``:
+    (time, impulse [px, py]) in time order, each before ``t_end``; the integration stops at each time and
+    resumes after :func:`apply_push` (a run that ended earlier, by a fall or max_strikes, skips the rest).
     """
     y = np.array(y0, dtype=np.float64)
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
     rec, interval = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
-    if integrator.method in STIFF_METHODS:
-        from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
-
-        rec = integrate_stiff(
-            system, rec, y, modes, integrator, t_end, interval, max_strikes or 0, progress, deadline
-        )  # fmt: skip
-    else:
+    stiff = integrator.method in STIFF_METHODS
+    if not stiff:
         tab = tableau(integrator.method)
         scratch = make_scratch(ny, nf, event_count(system))
         loop = Loop(tab, system, make_workspace(system), contact_buffers(system), y, modes, scratch, rec)
-        control = integrator.adaptive and tab.kind != FIXED
-        cfg = Settings(
-            t_end, integrator.dt, control, integrator.rtol, integrator.atol, integrator.max_step, interval,
-            max_strikes or 0,
-        )  # fmt: skip
-        while loop.rec.state[0].status == RUNNING:
-            loop = loop._replace(rec=with_room(loop.rec, nf))
-            advance(loop, cfg, STEP_BUDGET)
-            if progress is not None:
-                progress(float(loop.rec.state[0].time))
-            if loop.rec.state[0].status == RUNNING and time.monotonic() > deadline:
-                stop_for_time(loop.rec)
-        rec = loop.rec
-    return finish_integration(rec, interval, max_strikes)
+    applied = []
+    for segment_end in [at for at, _ in pushes] + [t_end]:
+        if stiff:
+            from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
+
+            rec = integrate_stiff(
+                system, rec, y, modes, integrator, segment_end, interval, max_strikes or 0, progress, deadline
+            )  # fmt: skip
+        else:
+            cfg = Settings(
+                segment_end, integrator.dt, integrator.adaptive and tab.kind != FIXED, integrator.rtol,
+                integrator.atol, integrator.max_step, interval, max_strikes or 0,
+            )  # fmt: skip
+            loop = loop._replace(rec=rec)
+            while loop.rec.state[0].status == RUNNING:
+                loop = loop._replace(rec=with_room(loop.rec, nf))
+                advance(loop, cfg, STEP_BUDGET)
+                if progress is not None:
+                    progress(float(loop.rec.state[0].time))
+                if loop.rec.state[0].status == RUNNING and time.monotonic() > deadline:
+                    stop_for_time(loop.rec)
+            rec = loop.rec
+        if len(applied) == len(pushes) or not _reached(rec, segment_end, max_strikes):
+            break
+        applied.append(apply_push(system, y, modes, rec, pushes[len(applied)][1]))
+    result = finish_integration(rec, interval, max_strikes)
+    result.pushes = np.array(applied, dtype=np.float64).reshape(len(applied), len(PUSH_COLUMNS))
+    return result
+
+
+def _reached(rec: Recorder, segment_end: float, max_strikes: int | None) -> bool:
+    """Whether the integration completed by reaching ``segment_end`` (not by max_strikes, a fall or a stop)."""
+    st = rec.state[0]
+    strikes_done = bool(max_strikes) and st.n_strikes >= max_strikes
+    return st.status == COMPLETED and st.time >= segment_end and not strikes_done
+
+
+def apply_push(system: tuple, y: np.ndarray, modes: np.ndarray, rec: Recorder, impulse: np.ndarray) -> tuple:
+    """Apply the impulse on the hip to ``y`` (in place) where the recorder stands and resume its loop.
+
+    The formulation's ``hip_impulse`` makes the jump; the contact modes (armed, touching, the remembered
+    impact speed) are kept: a push is not a contact event. Returns the push record (PUSH_COLUMNS): its time,
+    the index of the first sample after it (a sample at the push time holds the state before it) and its
+    work, the kinetic energy jump (positions do not move, so no other energy changes).
+    """
+    formulation = formulation_of(system)
+    if formulation.hip_impulse is None:
+        raise TypeError(f"the {formulation.name} formulation has no hip impulse (simulation.pushes)")
+    energy = measures(system).mechanical_energy
+    before = energy(y, system, modes)[0]
+    y[:] = formulation.hip_impulse(y, system, np.asarray(impulse, dtype=np.float64))
+    st = rec.state[0]
+    st.status = RUNNING
+    st.fsal_valid = 0  # the stored first stage f(t, y) is the state's before the jump
+    return float(st.time), float(st.n_samples), energy(y, system, modes)[0] - before
 
 
 def finish_integration(rec: Recorder, interval: float, max_strikes: int | None = None) -> Integration:

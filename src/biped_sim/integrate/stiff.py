@@ -143,7 +143,8 @@ def integrate_scipy(
     update changes in place. The stiff methods pass the compiled kernels; the benchmark's
     baseline passes plain-Python ones (``event_values`` and ``apply_events`` as ``.py_func``).
     The returned recorder is ``rec`` or, when its contact log or strike buffers had to grow, its
-    enlarged copy; its rhs_evals is solve_ivp's count of ``fun`` calls.
+    enlarged copy; its rhs_evals adds solve_ivp's count of ``fun`` calls. The integration starts where the
+    recorder stands (t = 0 for a new one, which records the first sample), so a driver may resume it.
     """
     nf = modes.shape[0]
     touching_before = np.zeros(nf)
@@ -159,9 +160,10 @@ def integrate_scipy(
 
     events = [make_event(j) for j in range(event_count(system))]
     options = {"jac": jac} if jac is not None else {}
-    t = 0.0
-    record_sample(rec, t, y, modes)
     st = rec.state[0]
+    t = float(st.time)
+    if st.n_samples == 0:
+        record_sample(rec, t, y, modes)
     nfev = 0
     while st.status == RUNNING:
         if t >= t_end:
@@ -204,6 +206,6 @@ def integrate_scipy(
             progress(t)
         if not math.isfinite(t):
             st.status, st.reason = DIVERGED, NONFINITE
-    st.rhs_evals = nfev
+    st.rhs_evals += nfev
     st.time = t
     return rec

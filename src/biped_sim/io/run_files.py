@@ -11,7 +11,7 @@ HDF5 layout (readable with plain h5py; ``time`` is a dimension scale so xarray s
     /contact/slip_velocity     (ns, nf)      m/s
     /contact/{friction_force_lateral,slip_velocity_lateral}   (ns, nf)   N, m/s   (spatial only: along z)
     /contact/modes             (ns, nf, 3)   armed, touching, remembered impact velocity
-    /energy/{kinetic,potential,elastic,dissipated_normal,dissipated_friction,residual}  (ns,) J
+    /energy/{kinetic,potential,elastic,dissipated_normal,dissipated_friction,push_work,residual}  (ns,) J
     /constraints/position, /constraints/velocity   (ns,)  m, m/s
     /constraints/normalization (ns,)         ||p.p - 1|| over the bodies (spatial only)
     /hip                       (ns, 2)       m (spatial: (ns, 3), x, y, z)
@@ -32,7 +32,7 @@ contact, constraint or event data (contact is a rolling constraint and heel stri
     /state                     (ns, ny)      the walker's reduced state, names in /state_names (legs relabelled
                                              at each strike: 'stance' is the current stance leg)
     /state_names               (ny,)         strings
-    /energy/{kinetic,potential,dissipated_impact,residual}  (ns,) J
+    /energy/{kinetic,potential,dissipated_impact,push_work,residual}  (ns,) J
     /hip                       (ns, 2)       m
     /steps/{strike_time,foot,period,length,slip,stance_angle,stance_rate,swing_angle,swing_rate}
                                              touchdown (pre-impact) angles and rates, as compliant runs record them

@@ -1,7 +1,8 @@
-"""The energy audit of a compliant run: E(t) - E(0) + W_dissipated(t), which must stay near zero.
+"""The energy audit of a compliant run: E(t) - E(0) + W_dissipated(t) - W_push(t), which must stay near zero.
 
 The dissipated work (normal damping, friction) is integrated as ODE states, so the balance is an
-independent check of the integration, not a tautology.
+independent check of the integration, not a tautology. W_push(t) is the work of the pushes applied up to
+t (each its kinetic energy jump, booked from the first sample after it).
 """
 
 from __future__ import annotations
@@ -17,13 +18,14 @@ from biped_sim.walkers.model import BuiltModel
 
 @dataclass
 class EnergyAudit:
-    """Energy terms at the samples; residual = E(t) - E(0) + W_dissipated(t)."""
+    """Energy terms at the samples; residual = E(t) - E(0) + W_dissipated(t) - W_push(t)."""
 
     kinetic: np.ndarray
     potential: np.ndarray
     elastic: np.ndarray
     dissipated_normal: np.ndarray
     dissipated_friction: np.ndarray
+    push_work: np.ndarray  # W_push(t): work of the pushes so far
     residual: np.ndarray
 
 
@@ -35,6 +37,9 @@ def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     layout = formulation_of(model.system).layout_of(model.system)
     w_normal = run.y[:, layout.work_normal]
     w_friction = run.y[:, layout.work_friction]
+    push_work = np.zeros(ns)
+    for _, first_sample, work in run.pushes:
+        push_work[int(first_sample) :] += work
     total = terms.sum(axis=1)
-    residual = total - total[0] + (w_normal - w_normal[0]) + (w_friction - w_friction[0])
-    return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, residual)
+    residual = total - total[0] + (w_normal - w_normal[0]) + (w_friction - w_friction[0]) - push_work
+    return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, push_work, residual)

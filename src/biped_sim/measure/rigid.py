@@ -1,7 +1,7 @@
 """Measures of a rigid run: its heel-strike trace, step table, energy terms and hip path.
 
 Step k's models measure positions from their own origin; :func:`rigid_energy_and_hip` puts every sample in
-one slope frame so that the energy balance E(t) - E(0) + W_impact(t) is checked across steps.
+one slope frame so that the energy balance E(t) - E(0) + W_impact(t) - W_push(t) is checked across steps.
 """
 
 from __future__ import annotations
@@ -18,11 +18,12 @@ from biped_sim.rigid.start import RigidStart, touchdown_legs
 
 @dataclass
 class RigidEnergy:
-    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) (J, J/kg or nondimensional)."""
+    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) - W_push(t) (J, J/kg or nondimensional)."""
 
     kinetic: np.ndarray
     potential: np.ndarray
     dissipated_impact: np.ndarray
+    push_work: np.ndarray  # W_push(t): work of the pushes so far (their kinetic energy jumps)
     residual: np.ndarray
 
 
@@ -37,6 +38,7 @@ class RigidTrace:
     strike_pre: list[np.ndarray] = field(default_factory=list)
     strike_post: list[np.ndarray] = field(default_factory=list)
     step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
+    pushes: list[tuple[float, float, float]] = field(default_factory=list)  # (time, work, ground normal impulse)
 
     def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
         if not len(t):
@@ -101,7 +103,10 @@ def rigid_energy_and_hip(
     kinetic_0, potential_0 = walker.energy(start.state)
     energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
     dissipated = dissipated_by_step[step_of_sample]
-    residual = kinetic + potential - energy_0 + dissipated
+    push_work = np.zeros(len(times))
+    for at, work, _ in trace.pushes:
+        push_work[times >= at] += work  # a sample at a push's time holds the state after it
+    residual = kinetic + potential - energy_0 + dissipated - push_work
     theta = states[:, 0]
     hip = np.column_stack([sample_origin - R * theta - (l - R) * np.sin(theta), R + (l - R) * np.cos(theta)])
-    return RigidEnergy(kinetic, potential, dissipated, residual), hip
+    return RigidEnergy(kinetic, potential, dissipated, push_work, residual), hip

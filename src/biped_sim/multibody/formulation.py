@@ -146,6 +146,9 @@ class Formulation:
     rates: tuple[str, ...]
     bristles: tuple[str, ...]
     capabilities: frozenset[str] = frozenset()
+    # (y, system, impulse) -> the state just after an impulse [px, py] [N s] (slope frame) on the hip: positions
+    # unchanged, rates jumped consistently with the constraints (simulation.pushes); None: no pushes
+    hip_impulse: Callable[..., np.ndarray] | None = None
 
     def layout(self, n_bodies: int, n_feet: int) -> StateLayout:
         """The state layout of a system of this formulation with ``n_bodies`` bodies and ``n_feet`` feet."""
@@ -162,3 +165,19 @@ class Formulation:
     def supports(self, capability: str) -> bool:
         """Whether this formulation has ``capability`` (e.g. ``COMPLIANT_LIMIT_CYCLE``)."""
         return capability in self.capabilities
+
+
+def impulsive_velocity_change(minv: np.ndarray, phi_q: np.ndarray, impulse: np.ndarray) -> np.ndarray:
+    """The rate jump dqd of a constrained system under the generalized impulse ``impulse`` (Python side).
+
+    Solves [M Phi_q^T; Phi_q 0] [dqd; mu] = [impulse; 0] by its Schur complement:
+    (Phi_q M^-1 Phi_q^T) mu = Phi_q M^-1 impulse, dqd = M^-1 (impulse - Phi_q^T mu). Then Phi_q dqd = 0: the
+    constraint velocities Phidot = Phi_q qd are unchanged by the jump (and Phi too: an impulse moves nothing),
+    and mu is the joints' impulse. ``minv``: M^-1 (n, n); ``phi_q``: the constraint Jacobian (m, n).
+    """
+    free = minv @ impulse
+    if phi_q.shape[0] == 0:
+        return free
+    minv_phi_t = minv @ phi_q.T
+    mu = np.linalg.solve(phi_q @ minv_phi_t, phi_q @ free)
+    return free - minv_phi_t @ mu

@@ -39,7 +39,7 @@ from biped_sim.contact.response import (
     normal_response,
     stored_energy,
 )
-from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures
+from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
 
 
@@ -322,6 +322,28 @@ def hip_position(y: np.ndarray, system: PlanarSystem) -> tuple[float, ...]:
     return y[3 * b] + c * sx - s * sy, y[3 * b + 1] + s * sx + c * sy
 
 
+def hip_impulse(y: np.ndarray, system: PlanarSystem, impulse: np.ndarray) -> np.ndarray:
+    """The state just after the impulse p = [px, py] [N s] (slope frame) on the hip, joint 0's point on body a.
+
+    Positions, friction states and dissipated work are unchanged; the rates jump by the constrained
+    impulsive solution (:func:`~biped_sim.multibody.formulation.impulsive_velocity_change`) with the
+    generalized impulse J_hip^T p = (px, py, (A s_a) x p) on body a, so the joints' velocities still agree
+    (Phidot unchanged). Phi_q is the Jacobian the right-hand side builds (one source); M is diagonal.
+    """
+    n = 3 * system.body_mass.shape[0]
+    work = make_workspace(system)
+    constrained_accelerations(y, system, work, np.zeros(n))  # fills work.phi_q (work.force is zero: unused)
+    a = int(system.joint_bodies[0, 0])
+    ax, ay, _, _ = _body_point(y, a, system.joint_points[0, 0], system.joint_points[0, 1])
+    px, py = float(impulse[0]), float(impulse[1])
+    generalized = np.zeros(n)
+    generalized[3 * a : 3 * a + 3] = px, py, ax * py - ay * px
+    minv = np.diag([_inverse_mass(system, c) for c in range(n)])
+    out = np.array(y, dtype=np.float64)
+    out[n : 2 * n] += impulsive_velocity_change(minv, work.phi_q, generalized)
+    return out
+
+
 CONTACT_NAMES = ("penetration", "normal_force", "friction_force", "slip_velocity")
 
 FORMULATION = Formulation(
@@ -346,4 +368,5 @@ FORMULATION = Formulation(
     rates=("vx", "vy", "omega"),
     bristles=("z",),
     capabilities=frozenset({COMPLIANT_LIMIT_CYCLE}),
+    hip_impulse=hip_impulse,
 )

@@ -50,7 +50,7 @@ from biped_sim.multibody.euler_parameters import (
     rotate_t,
     vec3,
 )
-from biped_sim.multibody.formulation import Formulation, Measures
+from biped_sim.multibody.formulation import Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.planar import CONTACT_NAMES
 from biped_sim.multibody.spatial import (
     SpatialSystem,
@@ -245,6 +245,34 @@ def hip_position(y: np.ndarray, system: SpatialSystem) -> tuple[float, ...]:
     return point_state(y, system.body_mass.shape[0], system.con_bodies[0, 0], s_a)[0]
 
 
+def hip_impulse(y: np.ndarray, system: SpatialSystem, impulse: np.ndarray) -> np.ndarray:
+    """The state just after the impulse p = [px, py] [N s] on the hip (point s_a of primitive 0, body a).
+
+    A push acts in the sagittal plane of the slope frame (pz = 0: the pushes of ``simulation.pushes`` are the
+    planar walker's). Positions, friction states and dissipated work are unchanged; the rates jump by the
+    constrained impulsive solution (:func:`~biped_sim.multibody.formulation.impulsive_velocity_change`) with
+    the generalized impulse (p, B(p_a, s_a)^T p) on body a, the point-force map of the right-hand side. The
+    Jacobian (normalisation rows included) and the inverse mass blocks are the right-hand side's: the modified
+    rotational block 4 G^T J' G + 4 j p p^T gives the same jump, since the normalisation row keeps p.dpdot = 0.
+    """
+    nb = system.body_mass.shape[0]
+    n = 7 * nb
+    work = make_workspace(system)
+    constrained_accelerations(y, system, work, np.zeros(n))  # fills work.phi_q and work.minv (force zero: unused)
+    a = int(system.con_bodies[0, 0])
+    force = (float(impulse[0]), float(impulse[1]), 0.0)
+    generalized = np.zeros(n)
+    generalized[7 * a : 7 * a + 3] = force
+    generalized[7 * a + 3 : 7 * a + 7] = b_tmul(parameters(y, a), vec3(system.con_vecs, 0, 0), force)
+    minv = np.zeros((n, n))
+    for b in range(nb):
+        minv[7 * b : 7 * b + 3, 7 * b : 7 * b + 3] = np.eye(3) / system.body_mass[b]
+        minv[7 * b + 3 : 7 * b + 7, 7 * b + 3 : 7 * b + 7] = work.minv[b]
+    out = np.array(y, dtype=np.float64)
+    out[n : 2 * n] += impulsive_velocity_change(minv, work.phi_q, generalized)
+    return out
+
+
 FORMULATION = Formulation(
     name="spatial",
     system_type=SpatialSystem,
@@ -266,4 +294,5 @@ FORMULATION = Formulation(
     coordinates=("x", "y", "z", "e0", "e1", "e2", "e3"),
     rates=("vx", "vy", "vz", "e0dot", "e1dot", "e2dot", "e3dot"),
     bristles=("zx", "zz"),
+    hip_impulse=hip_impulse,
 )

@@ -6,18 +6,21 @@ dense output (scipy's brentq, to 4 machine epsilon) and then polished by Newton 
 direction, dt = -g / (grad g . f), until |g| <= 1e-14: the heel strike is located to about 1e-12 in
 time and state (the integration error), not to the step size. Falls (a leg past
 ``simulation.fall_leg_angle``, the hip on the ground) and stalls (no strike within ``MAX_STEP_TIME``
-natural periods) end the step with a status instead of a strike.
+natural periods) end the step with a status instead of a strike. Pushes stop the flow at their times and
+continue it after the velocity jump, in the same guard phase.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
 from biped_sim.rigid.models import RigidWalker
+from biped_sim.rigid.pushes import hip_push
 
 RTOL = 1e-12
 ATOL = 1e-12
@@ -41,6 +44,7 @@ class RigidStep:
     samples_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     samples_x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     accepted_steps: int = 0  # DOP853 steps taken
+    pushes: list[tuple[float, float, float]] = field(default_factory=list)  # applied: (t, work, ground normal impulse)
 
 
 def _guard_event(guard, direction: float):  # type: ignore[no-untyped-def]
@@ -71,11 +75,19 @@ def _polish(walker: RigidWalker, guard, t: float, x: np.ndarray) -> tuple[float,
     return t, x
 
 
-def rigid_step(walker: RigidWalker, x_start: np.ndarray, sample_rate: float | None = None) -> RigidStep:
+def rigid_step(
+    walker: RigidWalker,
+    x_start: np.ndarray,
+    sample_rate: float | None = None,
+    pushes: Sequence[tuple[float, np.ndarray]] = (),
+) -> RigidStep:
     """Integrate one step from a post-impact state; sample it at ``sample_rate`` (per unit time) if given.
 
     The samples fall on the grid k / sample_rate of the step's own clock (t = 0 at its start) and are kept
-    whatever the step's outcome (strike, fall or stall).
+    whatever the step's outcome (strike, fall or stall). ``pushes``: (time on the step's clock, impulse) in
+    time order; the flow stops at each that comes before the step ends, :func:`~biped_sim.rigid.pushes.hip_push`
+    makes the jump, and the same guard phase goes on (``RigidStep.pushes`` lists those applied; a sample at a
+    push's time holds the state after it).
     """
     from scipy.integrate import solve_ivp  # imported here: scipy.integrate costs 0.3 s of every CLI start-up
 
@@ -89,10 +101,12 @@ def rigid_step(walker: RigidWalker, x_start: np.ndarray, sample_rate: float | No
     accepted = 0
     samples_t: list[np.ndarray] = []
     samples_x: list[np.ndarray] = []
+    applied: list[tuple[float, float, float]] = []
 
     def finish(step: RigidStep) -> RigidStep:
-        # every outcome keeps its samples and counters (a run records the fall's trajectory too)
+        # every outcome keeps its samples, counters and pushes (a run records the fall's trajectory too)
         step.accepted_steps = accepted
+        step.pushes = applied
         if samples_t:
             step.samples_t = np.concatenate(samples_t)
             step.samples_x = np.vstack(samples_x)
@@ -100,29 +114,42 @@ def rigid_step(walker: RigidWalker, x_start: np.ndarray, sample_rate: float | No
 
     for _, guard in walker.guard_phases():
         strike = _guard_event(guard, -1.0)
-        sol = solve_ivp(
-            lambda _t, y: walker.rhs(y),
-            (t, t_limit),
-            x,
-            method="DOP853",
-            rtol=RTOL,
-            atol=ATOL,
-            events=[strike, *fall_events],
-            dense_output=sample_rate is not None,
-        )
-        evals += sol.nfev
-        accepted += len(sol.t) - 1
-        if sample_rate is not None and sol.sol is not None:
-            t_end = sol.t[-1]
-            grid = np.arange(math.ceil(t * sample_rate), math.floor(t_end * sample_rate) + 1) / sample_rate
-            grid = grid[(grid >= t) & (grid < t_end)]
-            if len(grid):
-                samples_t.append(grid)
-                samples_x.append(sol.sol(grid).T)
-        if sol.status != 1:  # no event: ran to the time limit
-            return finish(RigidStep("stalled", x_start, sol.y[:, -1], None, sol.t[-1], math.nan, evals))
+        while True:
+            t_stop = min(pushes[len(applied)][0], t_limit) if len(applied) < len(pushes) else t_limit
+            if t_stop > t:
+                sol = solve_ivp(
+                    lambda _t, y: walker.rhs(y), (t, t_stop), x, method="DOP853", rtol=RTOL, atol=ATOL,
+                    events=[strike, *fall_events], dense_output=sample_rate is not None,
+                )  # fmt: skip
+                evals += sol.nfev
+                accepted += len(sol.t) - 1
+                if sample_rate is not None and sol.sol is not None:
+                    _sample(sol, t, sample_rate, samples_t, samples_x)
+                if sol.status == 1:  # an event: the guard or a fall
+                    break
+                t, x = float(sol.t[-1]), sol.y[:, -1]
+                if sol.status != 0 or t_stop >= t_limit:  # no event: ran to the time limit
+                    return finish(RigidStep("stalled", x_start, x, None, t, math.nan, evals))
+            x = _push(walker, t, x, pushes[len(applied)][1], applied)
         if len(sol.t_events[0]) == 0:
             return finish(RigidStep("fell", x_start, sol.y[:, -1], None, sol.t[-1], math.nan, evals))
         t, x = _polish(walker, guard, float(sol.t_events[0][0]), sol.y_events[0][0])
     x_plus = walker.impact(x)
     return finish(RigidStep("strike", x_start, x, x_plus, t, walker.step_length(x_start, x), evals))
+
+
+def _sample(sol, t: float, sample_rate: float, samples_t: list, samples_x: list) -> None:  # type: ignore[no-untyped-def]
+    """Append the grid points k / sample_rate in [t, end of ``sol``) from its dense output."""
+    t_end = sol.t[-1]
+    grid = np.arange(math.ceil(t * sample_rate), math.floor(t_end * sample_rate) + 1) / sample_rate
+    grid = grid[(grid >= t) & (grid < t_end)]
+    if len(grid):
+        samples_t.append(grid)
+        samples_x.append(sol.sol(grid).T)
+
+
+def _push(walker: RigidWalker, t: float, x: np.ndarray, impulse: np.ndarray, applied: list) -> np.ndarray:
+    """The state after the push at t; appends its record (t, work = kinetic energy jump, ground normal impulse)."""
+    x_after, ground_normal = hip_push(walker, x, impulse)
+    applied.append((t, walker.energy(x_after)[0] - walker.energy(x)[0], ground_normal))
+    return x_after

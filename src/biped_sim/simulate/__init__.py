@@ -17,6 +17,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from biped_sim.config import Config, InitialState
+from biped_sim.errors import ConfigError
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
 from biped_sim.rigid.start import RigidStart, rigid_start
 from biped_sim.simulate.budget import check_run_size
@@ -53,6 +55,9 @@ def prepare_model(config: Config) -> BuiltModel | RigidStart:
         check_run_size(config, 2 * len(start.state) + 4)  # state, hip, energy terms
         return start
     model = build_model(config, initial_state(config))
+    formulation = formulation_of(model.system)
+    if config.simulation.pushes and formulation.hip_impulse is None:
+        raise ConfigError("simulation.pushes", f"the {formulation.name} formulation has no push model")
     check_run_size(config, 2 * len(model.y0) + 12 * model.n_feet + 16)  # state, modes, channels, energy
     return model
 

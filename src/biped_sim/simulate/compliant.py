@@ -26,7 +26,7 @@ from biped_sim.measure.channels import (
 )
 from biped_sim.measure.energy import EnergyAudit, energy_audit
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
-from biped_sim.simulate.result import RunResult, wall_deadline
+from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 from biped_sim.walkers import BuiltModel
 
 CHANNEL_UNITS = {
@@ -37,7 +37,9 @@ CHANNEL_UNITS = {
     "friction_force_lateral": "N",
     "slip_velocity_lateral": "m/s",
 }
-ENERGY_TERMS = ("kinetic", "potential", "elastic", "dissipated_normal", "dissipated_friction", "residual")
+ENERGY_TERMS = (
+    "kinetic", "potential", "elastic", "dissipated_normal", "dissipated_friction", "push_work", "residual",
+)  # fmt: skip
 VIOLATION_UNITS = {"position": "m", "velocity": "m/s", "normalization": "1"}
 DIVERGED_ENERGY = 1.0  # [m g l] an energy residual this large is a blown-up integration, not physics
 DIVERGED_ENERGY_JUMP = 0.01  # [m g l] this much energy error within one sample interval: a blown-up step
@@ -149,6 +151,7 @@ def summarize(result: CompliantRunResult) -> dict[str, Any]:
             "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
             "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),
         },
+        **push_summary(config, [{"work": work} for work in result.run.pushes[:, 2]]),
         "energy_residual_max": float(np.max(np.abs(result.energy.residual))),
         "energy_residual_max_relative": float(np.max(np.abs(result.energy.residual)) / scale),
         "constraint_violation_max": {
@@ -182,6 +185,7 @@ def simulate_compliant(
         max_strikes=config.simulation.max_steps,
         progress=progress,
         deadline=wall_deadline(config),
+        pushes=ordered_pushes(config),
     )
     wall = time.perf_counter() - start
     result = CompliantRunResult(

@@ -14,6 +14,8 @@ from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from biped_sim.config import Config
 from biped_sim.io.run_files import TrajectoryFile, write_run_directory
 from biped_sim.measure.steps import StepAccess, StepTable, steps_csv
@@ -23,6 +25,27 @@ def wall_deadline(config: Config) -> float:
     """``time.monotonic()`` past which a run ends with status 'timeout' (inf without simulation.max_wall_time)."""
     budget = config.simulation.max_wall_time
     return math.inf if budget is None else time.monotonic() + budget
+
+
+def ordered_pushes(config: Config) -> list[tuple[float, np.ndarray]]:
+    """``simulation.pushes`` as (time, impulse [px, py]) in time order (pushes at one time in config order)."""
+    pushes = sorted(config.simulation.pushes, key=lambda push: push.time)
+    return [(push.time, np.array(push.impulse, dtype=np.float64)) for push in pushes]
+
+
+def push_summary(config: Config, applied: list[dict[str, float]]) -> dict[str, Any]:
+    """The summary's ``pushes`` (only in a run that has any): each applied push's time, impulse and what the run
+    measured of it (``applied``, in time order: its work, the kinetic energy jump, and so on). A run that fell or
+    stopped before a push's time lists fewer pushes than its config."""
+    if not config.simulation.pushes:
+        return {}
+    pushes = ordered_pushes(config)
+    return {
+        "pushes": [
+            {"time": at, "impulse": impulse.tolist(), **{key: float(value) for key, value in measured.items()}}
+            for (at, impulse), measured in zip(pushes, applied, strict=False)
+        ]
+    }
 
 
 class RunResult(StepAccess, ABC):

@@ -54,9 +54,9 @@ from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import rigid_step
-from biped_sim.simulate.result import RunResult, wall_deadline
+from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
-RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "residual")
+RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
 
 
 @dataclass
@@ -75,6 +75,7 @@ class RigidRunResult(RunResult):
     strike_time: np.ndarray  # (n,)
     strike_pre: np.ndarray  # (n, ny) just before each strike
     strike_post: np.ndarray  # (n, ny) just after, new stance leg first
+    pushes: list[tuple[float, float, float]]  # applied: (time, work, ground normal impulse)
     steps: StepTable
     rhs_evals: int
     accepted_steps: int
@@ -130,6 +131,7 @@ def _walk(
     walker = start.walker
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
     deadline = wall_deadline(config)
+    pushes = ordered_pushes(config)
     trace = RigidTrace()
     t0, x = 0.0, start.state
     evals = accepted = 0
@@ -139,7 +141,9 @@ def _walk(
         if finished or time.monotonic() > deadline:
             trace.add_samples(np.array([t0]), x, step_index)  # the state the run ends on, just after a strike
             return trace, "walking" if finished else "timeout", None if finished else t0, t0, evals, accepted
-        step = rigid_step(walker, x, rate)
+        pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
+        step = rigid_step(walker, x, rate, pending)
+        trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
         evals += step.rhs_evals
         accepted += step.accepted_steps
         local = step.samples_t < step.period  # the strike (or fall) state is recorded below, not interpolated
@@ -179,6 +183,7 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
         "t_end": result.t_final,
         **result.step_summary(),
         "energy_dissipated": {"impact": impact, "normal": impact, "friction": 0.0},
+        **push_summary(config, [{"work": work, "ground_normal_impulse": ground} for _, work, ground in result.pushes]),
         "energy_residual_max": residual_max,
         "energy_residual_max_relative": residual_max / (walker.reference_mass * walker.gravity * walker.leg_length),
         "constraint_violation_max": {"position": 0.0, "velocity": 0.0},
@@ -225,6 +230,7 @@ def simulate_rigid(
         strike_time=np.array(trace.strike_time),
         strike_pre=np.array(trace.strike_pre).reshape(-1, ny),
         strike_post=np.array(trace.strike_post).reshape(-1, ny),
+        pushes=trace.pushes,
         steps=rigid_step_table(walker, trace),
         rhs_evals=evals,
         accepted_steps=accepted,
