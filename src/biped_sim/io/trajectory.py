@@ -33,7 +33,7 @@ class RunData:
     normal_force: np.ndarray  # (ns, nf) N
     friction_force: np.ndarray  # (ns, nf) N
     penetration: np.ndarray  # (ns, nf) m
-    energy: dict[str, np.ndarray]  # kinetic, potential, elastic, dissipated_normal, dissipated_friction, residual
+    energy: dict[str, np.ndarray]  # kinetic, potential, elastic, dissipated_*, push_work, residual
     violation_position: np.ndarray  # (ns,) m
     violation_velocity: np.ndarray  # (ns,) m/s
     hip: np.ndarray  # (ns, 2) m; spatial runs (ns, 3) with z lateral

@@ -35,9 +35,8 @@ def hip_push(walker: RigidWalker, x: np.ndarray, impulse: np.ndarray) -> tuple[n
         theta, theta_sw, theta_d, theta_sw_d = x
         d_theta = -(math.cos(theta) * px + math.sin(theta) * py)
         ground_normal = -math.sin(theta) * d_theta - py  # the hip mass's momentum change minus p, normal part
-        return np.array([theta, theta_sw, theta_d + d_theta, theta_sw_d + d_theta * math.cos(theta - theta_sw)]), (
-            ground_normal
-        )
+        after = np.array([theta, theta_sw, theta_d + d_theta, theta_sw_d + d_theta * math.cos(theta - theta_sw)])
+        return after, ground_normal
     if not isinstance(walker, LegChain):
         raise TypeError(f"no push model for the rigid {walker.name} walker")
     n = walker.n_q
@@ -45,8 +44,7 @@ def hip_push(walker: RigidWalker, x: np.ndarray, impulse: np.ndarray) -> tuple[n
     jac = np.zeros((2, n))
     jac[:, 0] = walker._hip(q[0])[1]  # the hip's Jacobian: it moves with the stance angle only
     d_qd = np.linalg.solve(walker.mass_matrix(q), jac.T @ np.array([px, py]))
-    kinematics = walker.body_kinematics(q, qd)
-    momentum = sum(
-        (body.mass * j @ d_qd for body, (_, j, _) in zip(walker.bodies, kinematics, strict=True)), np.zeros(2)
-    )
-    return np.concatenate([q, qd + d_qd]), float(momentum[1] - py)
+    momentum_change = np.zeros(2)
+    for body, (_, body_jac, _) in zip(walker.bodies, walker.body_kinematics(q, qd), strict=True):
+        momentum_change += body.mass * body_jac @ d_qd
+    return np.concatenate([q, qd + d_qd]), float(momentum_change[1] - py)
