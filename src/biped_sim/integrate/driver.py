@@ -7,7 +7,8 @@ the strike buffers when one more event might not fit (:func:`~biped_sim.integrat
 
 Pushes (impulses on the hip at given times) split the integration: the loop runs to the push time
 exactly, the formulation's ``hip_impulse`` makes the velocity jump and the same loop resumes from there,
-so the recorder holds one continuous trajectory (:func:`apply_push`).
+so the recorder holds one continuous trajectory (:func:`apply_push`). Fixed-step methods shorten the step
+that reaches a push time and go on at dt from there (their samples then fall off the dt grid of t = 0).
 """
 
 from __future__ import annotations
