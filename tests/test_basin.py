@@ -30,6 +30,15 @@ def test_a_cell_at_the_fixed_point_converges_and_one_far_away_falls() -> None:
     assert basin.outcome[0, 0] == FELL and basin.steps[0, 0] < spec.steps
 
 
+@pytest.mark.slow
+def test_compliant_cells_walk_from_the_configured_start_and_fall_far_from_it() -> None:
+    config = load_config(CONFIGS / "round_foot_walker.yaml")  # starts at (0.25, -1.6)
+    spec = BasinSpec(config, GridAxis("stance_angle", 0.05, 0.25, 2), GridAxis("stance_rate", -1.6, -0.2, 2), 3)
+    basin = map_basin(spec, None)
+    assert basin.outcome[0, 1] != FELL and basin.steps[0, 1] == 3
+    assert basin.outcome[1, 0] == FELL and basin.steps[1, 0] < 3
+
+
 def test_simplest_walker_cells_start_on_the_post_impact_section() -> None:
     spec = BasinSpec(
         load_config(SIMPLEST), parse_axis("--x", "stance_angle=0.1:0.3:3"), parse_axis("--y", "stance_rate=-1:0:3")
@@ -65,6 +74,7 @@ def test_basin_cli_writes_its_files_and_a_rerun_resumes(tmp_path: Path, jobs: st
         (("--x", "stance_angle=0:0.3:3", "--y", "hip_rate=-1:0:3"), "--y"),
         (("--x", "stance_angle=0:0.3:3", "--y", "stance_angle=-1:0:3"), "--y"),
         (("--x", "stance_angle=0:0.3:3", "--y", "stance_rate=-1:0:3", "--steps", "0"), "--steps"),
+        (("--x", "stance_angle=0:0.3:3", "--y", "stance_rate=-1:0:3", "--tolerance", "-1"), "--tolerance"),
     ],
 )
 def test_bad_basin_input_is_one_line_and_writes_nothing(tmp_path: Path, args: tuple[str, ...], field: str) -> None:

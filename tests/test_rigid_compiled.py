@@ -9,7 +9,7 @@ import pytest
 
 from biped_sim import load_config
 from biped_sim.config import Config
-from biped_sim.rigid.compiled import FELL, STRIKE, compile_walker, compiled_step, walk_starts
+from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, compiled_step, walk_starts
 from biped_sim.rigid.limit_cycle import map_jacobian, rigid_limit_cycle, rigid_map
 from biped_sim.rigid.models import CompassChain, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
@@ -87,6 +87,12 @@ def test_walk_from_the_fixed_point_keeps_it_and_from_far_away_falls() -> None:
     assert outcome.status[0] == STRIKE and outcome.steps[0] == 20
     assert np.max(np.abs(outcome.last[0] - on_cycle)) < 1e-9
     assert outcome.status[1] == FELL and outcome.steps[1] < 20
+
+
+def test_a_walk_from_legs_together_stalls_instead_of_striking_in_no_time() -> None:
+    walker = rigid_walker(_config("simplest"))
+    outcome = walk_starts(walker, np.array([[0.0, 0.0, -0.4, -0.4]]), 5)
+    assert outcome.status[0] == STALLED and outcome.steps[0] == 0
 
 
 def test_compass_offsets_enter_the_compiled_model() -> None:

@@ -24,6 +24,10 @@ def basin_command(
     y: Annotated[str, typer.Option("--y", help=f"Vertical axis: {AxisOption}")],
     set_: SetOption = None,
     steps: Annotated[int, typer.Option("--steps", help="Steps each cell walks.")] = 30,
+    tolerance: Annotated[
+        float,
+        typer.Option("--tolerance", help="Converged: last state this close to the gait (max over the four keys)."),
+    ] = 1e-4,
     jobs: Annotated[int | None, typer.Option("--jobs", "-j", help="Parallel workers (default: all cores).")] = None,
     executor: Annotated[str, typer.Option("--executor", help="local (processes) or dask.")] = "local",
     out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/basin"),
@@ -35,14 +39,16 @@ def basin_command(
     """
     from biped_sim.plots import save_figure
     from biped_sim.report.basin import basin_figure
-    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis, write_basin
+    from biped_sim.studies.basin import CONVERGED_TOLERANCE, BasinSpec, map_basin, parse_axis, write_basin
     from biped_sim.sweep import default_jobs, make_executor
 
     if executor not in ("local", "dask"):
         raise ConfigError("--executor", f"unknown executor {executor!r}; expected local or dask")
     if jobs is not None and jobs < 1:
         raise ConfigError("--jobs", "must be at least 1")
-    spec = BasinSpec(load(config_path, set_), parse_axis("--x", x), parse_axis("--y", y), steps)
+    spec = BasinSpec(
+        load(config_path, set_), parse_axis("--x", x), parse_axis("--y", y), steps, tolerance or CONVERGED_TOLERANCE
+    )
     check_writable_dir(out)
     console = Console(stderr=True)
     workers = max(1, min(jobs or default_jobs(), spec.y.n))

@@ -51,6 +51,7 @@ STATUS_NAMES = ("strike", "fell", "stalled")
 MIN_STEP = 1e-14  # a smaller step means the flow cannot be integrated: the step counts as a stall
 ROOT_TOL = 4.0 * np.finfo(float).eps  # relative width of the final bracket of an event time
 N_EVENTS = 4  # the guard, and at most three fall functions (two legs, the hip)
+DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
 
 class CompiledWalker(NamedTuple):
@@ -308,7 +309,8 @@ def walk_kernel(
     cw: CompiledWalker, starts: np.ndarray, max_steps: int, status: np.ndarray, steps: np.ndarray, last: np.ndarray
 ) -> None:
     """Walk each start (a row of ``starts``) up to ``max_steps`` strikes; per start: the final status (STRIKE:
-    walked them all), the strikes taken and the last post-impact state (the start if none)."""
+    walked them all), the strikes taken and the last post-impact state (the start if none). A strike that takes
+    no time (the legs together at the start: the guard is already zero) ends the walk as a stall."""
     ny = starts.shape[1]
     x_minus, x_plus = np.zeros(ny), np.zeros(ny)
     counters = np.zeros(2, dtype=np.int64)
@@ -316,7 +318,9 @@ def walk_kernel(
         last[n, :] = starts[n]
         status[n], steps[n] = STRIKE, 0
         for k in range(max_steps):
-            code, _ = step_kernel(cw, last[n], x_minus, x_plus, counters)
+            code, duration = step_kernel(cw, last[n], x_minus, x_plus, counters)
+            if code == STRIKE and duration < DEGENERATE_STEP * cw.t_limit:
+                code = STALLED  # a strike in no time: the start sits on the guard (legs together), no step
             if code != STRIKE or not np.all(np.isfinite(x_plus)):
                 status[n] = code if code != STRIKE else STALLED
                 break

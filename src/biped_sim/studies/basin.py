@@ -7,7 +7,8 @@ Every cell of the grid (two ``simulation.initial`` keys, the others as in the co
 * ``dynamics: compliant``: a compliant run that stops after K heel strikes (``simulation.max_steps``) or a fall.
 
 A cell *walks* when it takes all K steps; it *converges* when, besides, its last state is within
-``CONVERGED_TOLERANCE`` (max over the four leg angles and rates) of the period-1 gait: the rigid walker's
+a tolerance (``--tolerance``, default ``CONVERGED_TOLERANCE``; max over the four leg angles and rates) of the
+period-1 gait: the rigid walker's
 post-impact fixed point, the compliant walker's touchdown state. A cell that falls records after how many steps.
 
 The slice: for the simplest walker over stance_angle and stance_rate, the swing leg starts as a heel strike
@@ -92,6 +93,7 @@ class BasinSpec:
     x: GridAxis
     y: GridAxis
     steps: int = DEFAULT_STEPS
+    tolerance: float = CONVERGED_TOLERANCE
 
     def __post_init__(self) -> None:
         if self.x.key == self.y.key:
@@ -100,6 +102,8 @@ class BasinSpec:
             raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its four keys")
         if self.steps < 1:
             raise ConfigError("--steps", "must be at least 1")
+        if not (math.isfinite(self.tolerance) and self.tolerance > 0):
+            raise ConfigError("--tolerance", "must be a positive number")
 
     @property
     def garcia_section(self) -> bool:
@@ -108,7 +112,9 @@ class BasinSpec:
 
     def key(self) -> str:
         """What a finished row was computed for (resume only reuses rows of the same basin)."""
-        text = json.dumps([self.config.hash(), self.x.__dict__, self.y.__dict__, self.steps], sort_keys=True)
+        text = json.dumps(
+            [self.config.hash(), self.x.__dict__, self.y.__dict__, self.steps, self.tolerance], sort_keys=True
+        )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def cell_legs(self, x_value: float, y_value: float) -> dict[str, float]:
@@ -130,8 +136,8 @@ class RowTask:
     target: dict[str, float] | None  # the gait's state that converged cells end near (None: no gait found)
 
 
-def _close(legs: dict[str, float], target: dict[str, float] | None) -> bool:
-    return target is not None and max(abs(legs[k] - target[k]) for k in LEG_KEYS) <= CONVERGED_TOLERANCE
+def _close(legs: dict[str, float], target: dict[str, float] | None, tolerance: float) -> bool:
+    return target is not None and max(abs(legs[k] - target[k]) for k in LEG_KEYS) <= tolerance
 
 
 def _rigid_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:
@@ -143,7 +149,7 @@ def _rigid_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int],
         if status != STRIKE:
             outcome.append(FELL)
         else:
-            outcome.append(CONVERGED if _close(walker.legs_state(last), task.target) else WALKS)
+            outcome.append(CONVERGED if _close(walker.legs_state(last), task.target, task.spec.tolerance) else WALKS)
     return outcome, [int(s) for s in walked.steps]
 
 
@@ -168,7 +174,7 @@ def _compliant_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[i
         if result.status != "walking" or strikes < steps:
             outcome.append(FELL)
         else:
-            outcome.append(CONVERGED if _close(last, task.target) else WALKS)
+            outcome.append(CONVERGED if _close(last, task.target, task.spec.tolerance) else WALKS)
         taken.append(min(strikes, steps))
     return outcome, taken
 
@@ -211,7 +217,7 @@ class Basin:
             "n_cells": n_cells,
             "fraction_walking": float(np.count_nonzero(self.outcome != FELL)) / n_cells,
             "fraction_converged": float(np.count_nonzero(self.outcome == CONVERGED)) / n_cells,
-            "converged_tolerance": CONVERGED_TOLERANCE,
+            "converged_tolerance": self.spec.tolerance,
             "fixed_point": self.fixed_point,
             "wall_time_s": self.wall_time_s,
             "rows_reused": self.rows_reused,
@@ -292,7 +298,7 @@ def map_basin(
     steps = np.array([done[row]["steps"] for row in range(spec.y.n)], dtype=np.int64)
     notes = [
         f"each cell walked up to {spec.steps} steps; converged: walked them all and ended within "
-        f"{CONVERGED_TOLERANCE:g} of the gait (max over the four leg angles and rates)",
+        f"{spec.tolerance:g} of the gait (max over the four leg angles and rates)",
         "slice: swing leg as a heel strike leaves it (Garcia's relations): Schwab and Wisse's post-impact section"
         if spec.garcia_section
         else "slice: the two keys vary, the other initial keys as configured",
