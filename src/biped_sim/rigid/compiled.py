@@ -30,9 +30,7 @@ from biped_sim.integrate.dense import dense_eval
 from biped_sim.integrate.stepper import Scratch, error_norm, make_scratch, propagate, stage_input
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.rigid.kernels import (
-    BODY_FIELDS,
     COMPASS,
-    P_BODIES,
     SIMPLEST,
     WHEEL,
     fall_check,
@@ -91,9 +89,7 @@ def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
         len(bodies),
     ]
     rows = [[b.mass, b.inertia, b.leg, b.distance, float(getattr(b, "offset", 0.0))] for b in bodies]
-    params = np.array(header + [v for row in rows for v in row], dtype=float)
-    assert len(params) == P_BODIES + BODY_FIELDS * len(bodies)
-    return kind, params
+    return kind, np.array(header + [v for row in rows for v in row], dtype=float)
 
 
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
