@@ -39,7 +39,7 @@ def short_bench() -> dict:
     their step size. Slow tier only.
     """
     settings = BenchSettings(
-        CONFIG, t_end=1.0, repeats=1, slow_repeats=1, sweep_runs=0, compile_time=False, mujoco=False
+        CONFIG, t_end=1.0, repeats=1, slow_repeats=1, sweep_runs=0, basins=False, compile_time=False, mujoco=False
     )
     return run_bench(settings)
 
@@ -140,6 +140,35 @@ def test_bench_markdown_has_a_row_per_case_targets_and_the_summary_line_last() -
     met = {name: ok for name, _, ok in targets(result)}
     assert met["RHS evaluation < 2 us"] and not met["loop overhead < 25 %"] and met["cached start-up < 1.5 s"]
     assert "Targets: " in "\n".join(lines)
+
+
+def test_bench_markdown_reports_the_rigid_map_rows_and_the_basin_targets() -> None:
+    result = made_up_result()
+    result["rigid_map"] = {
+        "per_step": {"simplest": {"scipy_us": 2000.0, "compiled_us": 40.0, "speedup": 50.0}},
+        "basins": {
+            "simplest_41x41x30": {
+                "cells": 1681,
+                "steps": 30,
+                "workers": 2,
+                "wall_s": 12.0,
+                "target_s": 60.0,
+                "fraction_walking": 0.01,
+            },
+            "compliant_21x21x10": {
+                "cells": 441,
+                "steps": 10,
+                "workers": 2,
+                "wall_s": 700.0,
+                "target_s": 600.0,
+                "fraction_walking": 0.1,
+            },
+        },
+    }
+    text = markdown(result)
+    assert "simplest 2000 -> 40.0 us (50x)" in text and "Basin compliant_21x21x10: 441 cells" in text
+    met = {name: ok for name, _, ok in targets(result)}
+    assert met["basin simplest_41x41x30, 2 workers < 60 s"] and not met["basin compliant_21x21x10, 2 workers < 600 s"]
 
 
 @pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="MuJoCo is the optional extra 'bench'")

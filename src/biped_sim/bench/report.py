@@ -83,6 +83,14 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
     sweep = result.get("sweep")
     if sweep and "speedup_2_vs_1" in sweep:
         out.append(("2 workers >= 1.7x 1 worker", f"{sweep['speedup_2_vs_1']:.2f}x", sweep["speedup_2_vs_1"] >= 1.7))
+    for name, basin in result.get("rigid_map", {}).get("basins", {}).items():
+        out.append(
+            (
+                f"basin {name}, 2 workers < {basin['target_s']:g} s",
+                f"{basin['wall_s']:.1f} s",
+                basin["wall_s"] < basin["target_s"],
+            )
+        )
     mj = result.get("mujoco") or {}
     best = fastest_accurate_row(result)
     if mj.get("available") and best is not None:
@@ -132,6 +140,7 @@ def notes(result: dict[str, Any]) -> list[str]:
             f"Sweep of {sweep['runs']} runs ({sweep['t_end']:g} s each, files written): " + ", ".join(parts)
             + (f" ({sweep['speedup_2_vs_1']:.2f}x)." if "speedup_2_vs_1" in sweep else ".")
         )  # fmt: skip
+    lines += rigid_map_notes(result.get("rigid_map"))
     mj = result.get("mujoco")
     if mj is not None:
         if mj.get("available"):
@@ -147,6 +156,25 @@ def notes(result: dict[str, Any]) -> list[str]:
     lines.append("Targets: " + "; ".join(f"{name}: {value} {_mark(met)}" for name, value, met in targets(result)))
     lines.append("")
     lines.append(summary_line(result))
+    return lines
+
+
+def rigid_map_notes(rigid: dict[str, Any] | None) -> list[str]:
+    """The rigid step map's lines: per-step times compiled vs scipy, and the basins' wall times."""
+    if not rigid:
+        return []
+    parts = [
+        f"{name} {v['scipy_us']:.0f} -> {v['compiled_us']:.1f} us ({v['speedup']:.0f}x)"
+        for name, v in rigid["per_step"].items()
+    ]
+    lines = [
+        "Rigid step from the fixed point, scipy solve_ivp DOP853 -> compiled (rtol 1e-12): " + ", ".join(parts) + "."
+    ]
+    for name, basin in rigid.get("basins", {}).items():
+        lines.append(
+            f"Basin {name}: {basin['cells']} cells x {basin['steps']} steps in {basin['wall_s']:.1f} s with "
+            f"{basin['workers']} workers (pool start included; {basin['fraction_walking']:.1%} of the cells walk)."
+        )
     return lines
 
 

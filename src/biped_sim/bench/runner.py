@@ -36,6 +36,7 @@ import scipy
 from numba import njit
 
 from biped_sim.bench.baseline import integrate_baseline
+from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.config import Config, load_config
 from biped_sim.integrate.driver import Integration, integrate_model
 from biped_sim.multibody.dispatch import make_workspace, system_rhs
@@ -82,6 +83,7 @@ class BenchSettings:
     repeats: int = 5
     slow_repeats: int = 3  # rows whose first timed run takes over SLOW_RUN_S (the baseline, the smallest dt)
     sweep_runs: int = 32  # 0: no sweep throughput
+    basins: bool = True  # the rigid map's basin wall times (minutes; bench.rigid_map)
     compile_time: bool = True
     mujoco: bool = True
     quick: bool = False
@@ -95,6 +97,7 @@ class BenchSettings:
             repeats=3,
             slow_repeats=1,
             sweep_runs=0,
+            basins=False,
             compile_time=False,
             mujoco=False,
             quick=True,
@@ -412,6 +415,8 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     if settings.sweep_runs:
         result["sweep"] = sweep_throughput(settings.config_path, settings.sweep_runs, settings.t_end)
         log(f"sweep: {json.dumps(result['sweep'])}")
+    result["rigid_map"] = rigid_map_bench(settings.basins)
+    log(f"rigid map: {json.dumps(result['rigid_map'])}")
     if settings.mujoco:
         result["mujoco"] = mujoco_comparison(settings, base, reference, log)
     result["environment"] = environment()

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from biped_sim.cli import (
     analysis_commands,  # noqa: F401
+    basin_commands,  # noqa: F401
     bench_commands,  # noqa: F401
     experiment_commands,  # noqa: F401
     run_commands,  # noqa: F401  (registers commands)

@@ -18,20 +18,23 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
+from biped_sim.rigid.compiled import CompiledWalker, compile_walker, compiled_step
 from biped_sim.rigid.models import RigidWalker, initial_state, rigid_walker
-from biped_sim.rigid.stepping import RigidStep, rigid_step
+from biped_sim.rigid.stepping import RTOL, RigidStep, rigid_step
 
 RIGID_TOLERANCE = 1e-10
 FD_STEP = 1e-6
 MAX_NEWTON = 30
 SETTLE_STEPS = 30
 STABILITY_MARGIN = 1e-9  # |lambda| < 1 - margin counts as stable
+
+Engine = Literal["compiled", "scipy"]
 
 
 @dataclass
@@ -98,9 +101,15 @@ class StepFailedError(RuntimeError):
 # --- rigid ---------------------------------------------------------------------------------------------------
 
 
-def rigid_map(walker: RigidWalker, z: np.ndarray) -> tuple[np.ndarray, RigidStep]:
-    """The step-to-step map on the section: post-impact coordinates -> the next ones."""
-    step = rigid_step(walker, walker.from_section(np.asarray(z, dtype=float)))
+def rigid_map(
+    walker: RigidWalker, z: np.ndarray, compiled: CompiledWalker | None = None
+) -> tuple[np.ndarray, RigidStep]:
+    """The step-to-step map on the section: post-impact coordinates -> the next ones.
+
+    Compiled (:mod:`biped_sim.rigid.compiled`) when ``compiled`` is given, else scipy's reference step.
+    """
+    x_start = walker.from_section(np.asarray(z, dtype=float))
+    step = rigid_step(walker, x_start) if compiled is None else compiled_step(walker, x_start, compiled)
     if step.status != "strike" or step.x_plus is None:
         raise StepFailedError(f"the rigid {walker.name} {step.status} during the step")
     return walker.to_section(step.x_plus), step
@@ -170,14 +179,18 @@ def settle(step_map: Callable[[np.ndarray], np.ndarray], z: np.ndarray, steps: i
 
 
 def rigid_limit_cycle(
-    config: Config, guess: dict[str, float] | None = None, settle_steps: int = SETTLE_STEPS
+    config: Config,
+    guess: dict[str, float] | None = None,
+    settle_steps: int = SETTLE_STEPS,
+    engine: Engine = "compiled",
 ) -> LimitCycle:
     """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
 
     The initial guess is ``guess`` (the four README keys), else the config's initial state, else (for the
     rigid_limit_cycle start) a generic post-impact state. The guess first walks ``settle_steps`` steps, so
     that Newton starts near the stable cycle when there is one (Newton from the raw guess if that fails);
-    ``settle_steps = 0`` finds the cycle nearest the guess, stable or not.
+    ``settle_steps = 0`` finds the cycle nearest the guess, stable or not. ``engine``: the compiled step map,
+    or scipy's reference (a run's start uses it, so that runs keep their bits).
     """
     rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
     walker = rigid_walker(rigid)
@@ -188,8 +201,10 @@ def rigid_limit_cycle(
     else:
         starts = [initial_state(rigid, walker)]
 
+    compiled = compile_walker(walker) if engine == "compiled" else None
+
     def step_map(z: np.ndarray) -> np.ndarray:
-        return rigid_map(walker, z)[0]
+        return rigid_map(walker, z, compiled)[0]
 
     found = None
     for start in starts:
@@ -197,7 +212,7 @@ def rigid_limit_cycle(
         for z_start in (settle(step_map, z0, settle_steps), z0) if settle_steps else (z0,):
             try:
                 found = newton_fixed_point(step_map, z_start, RIGID_TOLERANCE)
-                _, step = rigid_map(walker, found[0])
+                _, step = rigid_map(walker, found[0], compiled)
             except StepFailedError:
                 found = None
                 continue
@@ -229,6 +244,7 @@ def rigid_limit_cycle(
         tolerance=RIGID_TOLERANCE,
         notes=[
             "section just after heel strike; coordinates " + ", ".join(walker.section_names),
+            f"step map: {'compiled DOP853' if compiled is not None else 'scipy DOP853'} rtol {RTOL:g}",
             f"multipliers: central differences, relative step {FD_STEP:g}; the coordinates the impact fixes "
             "(zero multipliers) are not section coordinates",
             "touchdown: the state just before the strike, relabelled (stance = the leg touching down)",
@@ -247,8 +263,12 @@ def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
 
 
 def rigid_limit_cycle_initial(config: Config) -> dict[str, float]:
-    """The rigid model's period-1 fixed point as a compliant run's initial state (the four README keys)."""
-    cycle = rigid_limit_cycle(config)
+    """The rigid model's period-1 fixed point as a run's initial state (the four README keys).
+
+    Found with scipy's reference step map: runs that start on the cycle keep the bits they had before the
+    compiled map (which agrees to about 1e-12).
+    """
+    cycle = rigid_limit_cycle(config, engine="scipy")
     if not cycle.converged:
         raise ConfigError(
             "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"

@@ -22,6 +22,7 @@ from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import simulate
+from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_basin
 from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
 from biped_sim.studies.convergence import converge
 from biped_sim.studies.drop_test import drop_test_table
@@ -293,6 +294,41 @@ def energy_balance_checks() -> list[Check]:
     ]
 
 
+def basin_checks() -> list[Check]:
+    """Schwab & Wisse's basin of the simplest walker at slope 0.009, qualitatively: it holds the fixed point, is a
+    small fraction of the post-impact plane, and is a thin band (principal axes of its cells) along a falling
+    diagonal (faster starts need larger stance angles). No number is taken from the paper."""
+    config = _simplest(0.009)
+    spec = BasinSpec(config, GridAxis("stance_angle", 0.1, 0.4, 61), GridAxis("stance_rate", -0.45, -0.05, 81), 30)
+    basin = map_basin(spec, None)
+    group = "Schwab & Wisse 2001, simplest walker's basin (slope 0.009, 61 x 81 cells, 30 steps)"
+    fixed = basin.fixed_point or {"stance_angle": math.nan, "stance_rate": math.nan}
+    i = int(np.argmin(np.abs(spec.x.values - fixed["stance_angle"])))
+    j = int(np.argmin(np.abs(spec.y.values - fixed["stance_rate"])))
+    rows, cols = np.nonzero(basin.outcome != FELL)
+    points = np.vstack([spec.x.values[cols], spec.y.values[rows]])
+    fraction = len(cols) / basin.outcome.size
+    if len(cols) > 2:
+        values, vectors = np.linalg.eigh(np.cov(points))
+        aspect, direction = math.sqrt(values[1] / max(values[0], 1e-300)), vectors[:, 1]
+    else:
+        aspect, direction = math.nan, np.array([1.0, 1.0])
+    falling = float(direction[0] * direction[1])
+    return [
+        Check(
+            group,
+            "the cell at the fixed point converges",
+            "converged",
+            str(basin.outcome[j, i] == CONVERGED),
+            "-",
+            basin.outcome[j, i] == CONVERGED,
+        ),
+        Check(group, "fraction of the plane that walks", "in (0, 0.05)", f"{fraction:.4f}", "-", 0 < fraction < 0.05),
+        Check(group, "thin: length / width of the band", ">= 5", f"{aspect:.1f}", "-", aspect >= 5),
+        Check(group, "the band falls: rate decreases as angle grows", "< 0", f"{falling:.3f}", "-", falling < 0),
+    ]
+
+
 def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None) -> tuple[list[Check], dict[str, Any]]:
     """Run every check, write report.md and report.json into ``out_dir``; returns the checks and extras."""
     refs = load_rigid_references()
@@ -304,6 +340,7 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         ("rimless wheel", rimless_wheel_checks),
         ("Goswami compass gait", lambda: goswami_checks(refs)),
         ("rigid physics", rigid_physics_checks),
+        ("simplest walker's basin", basin_checks),
         ("contact laws", contact_law_checks),
         ("energy balance", energy_balance_checks),
     ]

@@ -1,0 +1,219 @@
+"""Compiled equations of the rigid walkers: flow, guards, fall checks and impact maps (numba).
+
+The same equations as :mod:`biped_sim.rigid.models` (which stays the readable reference the tests compare
+with), written allocation-free for the compiled step map of :mod:`biped_sim.rigid.compiled`. A walker is a
+``kind`` and a parameter vector ``p`` (layout: the ``P_*`` indices below, built by
+:func:`biped_sim.rigid.compiled.walker_params`):
+
+* ``SIMPLEST``: Garcia's walker, MODEL.md 8 (only the slope and the fall angle are read);
+* ``COMPASS``: two legs and a hip mass as a chain of bodies (Kane's equations, rolling arc foot), with the
+  leg centre-of-mass offset ``w`` (perpendicular to the leg) and the foot-arc offset ``d``: slope frame x
+  downhill, y normal; axis(theta) = (sin, -cos) (hip -> foot), perp(theta) = (cos, sin); body = hip + c
+  axis + w perp; hip = C - (l - R) axis(theta_st) - d perp(theta_st), C = (x_C0 - R theta_st, R);
+* ``WHEEL``: the rimless wheel, one hub mass on a spoke of the chain (n_q = 1).
+
+Each body of a chain is (mass, inertia, leg, distance along the leg, offset perpendicular to it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+SIMPLEST, COMPASS, WHEEL = 0, 1, 2
+P_NQ, P_L, P_R, P_D, P_G, P_SLOPE, P_FALL, P_HALF, P_NB, P_BODIES = range(10)
+BODY_FIELDS = 5  # mass, inertia, leg, distance, offset
+FALL_HIP_FRACTION = 0.05  # the hip below this fraction of l counts as a fall (as rigid/stepping.py)
+
+
+@njit(cache=True)
+def _hip_derivatives(p: np.ndarray, theta: float) -> tuple[float, float, float, float]:
+    """d(hip)/d(theta_st) and d2(hip)/d(theta_st)^2 (x, y each) for the rolling stance foot."""
+    lr, r, d = p[P_L] - p[P_R], p[P_R], p[P_D]
+    s, c = math.sin(theta), math.cos(theta)
+    return -r - lr * c + d * s, -lr * s - d * c, lr * s + d * c, -lr * c + d * s
+
+
+@njit(cache=True)
+def _body_terms(p: np.ndarray, b: int, q: np.ndarray, qd: np.ndarray, leg: int) -> tuple:
+    """Body b's Jacobian columns (j0x, j0y, j1x, j1y) and bias acceleration Jdot qd (bx, by), carried by ``leg``."""
+    base = P_BODIES + BODY_FIELDS * b
+    dist, off = p[base + 3], p[base + 4]
+    hx, hy, hxx, hyy = _hip_derivatives(p, q[0])
+    s, c = math.sin(q[leg]), math.cos(q[leg])
+    cx, cy = dist * c - off * s, dist * s + off * c  # d(position)/d(theta_leg) of the leg's part
+    rate2 = qd[leg] * qd[leg]
+    bx = hxx * qd[0] * qd[0] - (dist * s + off * c) * rate2
+    by = hyy * qd[0] * qd[0] + (dist * c - off * s) * rate2
+    if leg == 0:
+        return hx + cx, hy + cy, 0.0, 0.0, bx, by
+    return hx, hy, cx, cy, bx, by
+
+
+@njit(cache=True)
+def _solve(m00: float, m01: float, m11: float, f0: float, f1: float, n: int) -> tuple[float, float]:
+    """Solution of the symmetric 1x1 or 2x2 system M a = f."""
+    if n == 1:
+        return f0 / m00, 0.0
+    det = m00 * m11 - m01 * m01
+    return (m11 * f0 - m01 * f1) / det, (m00 * f1 - m01 * f0) / det
+
+
+@njit(cache=True)
+def _chain_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """Kane's equations M(q) qdd = sum_b J_b^T m_b (g - Jdot_b qd), M = sum_b m_b J_b^T J_b + I_b e_b e_b^T."""
+    n = int(p[P_NQ])
+    q, qd = x[:n], x[n:]
+    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
+    m00 = m01 = m11 = f0 = f1 = 0.0
+    for b in range(int(p[P_NB])):
+        base = P_BODIES + BODY_FIELDS * b
+        mass, inertia, leg = p[base], p[base + 1], int(p[base + 2])
+        j0x, j0y, j1x, j1y, bx, by = _body_terms(p, b, q, qd, leg)
+        m00 += mass * (j0x * j0x + j0y * j0y)
+        m01 += mass * (j0x * j1x + j0y * j1y)
+        m11 += mass * (j1x * j1x + j1y * j1y)
+        if leg == 0:
+            m00 += inertia
+        else:
+            m11 += inertia
+        f0 += mass * (j0x * (gx - bx) + j0y * (gy - by))
+        f1 += mass * (j1x * (gx - bx) + j1y * (gy - by))
+    a0, a1 = _solve(m00, m01, m11, f0, f1, n)
+    out[:n] = qd
+    out[n] = a0
+    if n == 2:
+        out[3] = a1
+
+
+@njit(cache=True)
+def _simplest_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """Garcia's equations (MODEL.md 8); x = (theta, theta_sw, thetadot, thetadot_sw), phi = theta - theta_sw."""
+    theta, theta_sw, theta_d, theta_sw_d = x[0], x[1], x[2], x[3]
+    phi = theta - theta_sw
+    theta_dd = math.sin(theta - p[P_SLOPE])
+    phi_dd = theta_dd + math.sin(phi) * (theta_d * theta_d - math.cos(theta - p[P_SLOPE]))
+    out[0] = theta_d
+    out[1] = theta_sw_d
+    out[2] = theta_dd
+    out[3] = theta_dd - phi_dd
+
+
+@njit(cache=True)
+def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """out = dx/dt of the walker ``kind``."""
+    if kind == SIMPLEST:
+        _simplest_rhs(p, x, out)
+    else:
+        _chain_rhs(p, x, out)
+
+
+@njit(cache=True)
+def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
+    """Phase 0: the stance leg passing the slope normal (x[0]); phase 1: the heel strike (downward zero)."""
+    if phase == 0:
+        return x[0]
+    if kind == WHEEL:
+        return x[0] + p[P_HALF]
+    d = p[P_D]
+    if kind == SIMPLEST or d == 0.0:
+        return x[0] + x[1]
+    return (p[P_L] - p[P_R]) * (math.cos(x[0]) - math.cos(x[1])) + d * (math.sin(x[1]) - math.sin(x[0]))
+
+
+@njit(cache=True)
+def guard_rate(kind: int, p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarray) -> float:
+    """Time derivative of :func:`guard` along the flow f = dx/dt."""
+    if phase == 0 or kind == WHEEL:
+        return f[0]
+    d = p[P_D]
+    if kind == SIMPLEST or d == 0.0:
+        return f[0] + f[1]
+    lr = p[P_L] - p[P_R]
+    return lr * (-math.sin(x[0]) * f[0] + math.sin(x[1]) * f[1]) + d * (math.cos(x[1]) * f[1] - math.cos(x[0]) * f[0])
+
+
+@njit(cache=True)
+def first_phase(kind: int) -> int:
+    """The wheel's step has only the strike phase; the bipeds first wait for the stance leg to pass the normal."""
+    return 1 if kind == WHEEL else 0
+
+
+@njit(cache=True)
+def n_fall_checks(kind: int, p: np.ndarray) -> int:
+    """Fall functions: one per leg angle, then the hip height."""
+    return (2 if kind == SIMPLEST else int(p[P_NQ])) + 1
+
+
+@njit(cache=True)
+def fall_check(kind: int, p: np.ndarray, i: int, x: np.ndarray) -> float:
+    """Fall function i (positive while standing): fall angle - |leg angle i|, or hip height - 0.05 l."""
+    n = n_fall_checks(kind, p) - 1
+    if i < n:
+        return p[P_FALL] - abs(x[i])
+    lr = p[P_L] - p[P_R]
+    height = p[P_R] + lr * math.cos(x[0]) - p[P_D] * math.sin(x[0])
+    return height - FALL_HIP_FRACTION * p[P_L]
+
+
+@njit(cache=True)
+def _simplest_impact(x: np.ndarray, out: np.ndarray) -> None:
+    """MODEL.md 8: theta+ = -theta-, thetadot+ = cos 2theta thetadot-, phi+ = -2 theta-,
+    phidot+ = cos 2theta (1 - cos 2theta) thetadot-; theta_sw = theta - phi."""
+    theta, theta_d = x[0], x[2]
+    c2 = math.cos(2.0 * theta)
+    theta_d_p = c2 * theta_d
+    out[0] = -theta
+    out[1] = theta
+    out[2] = theta_d_p
+    out[3] = theta_d_p - c2 * (1.0 - c2) * theta_d
+
+
+@njit(cache=True)
+def _chain_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, out: np.ndarray) -> None:
+    """Plastic strike: (J'^T M J') qd+ = J'^T M v-, v- = J qd- the bodies' velocities before; legs relabelled."""
+    n = int(p[P_NQ])
+    q, qd = x[:n], x[n:]
+    q_new, zero = q_work[:2], q_work[2:4]  # the new angles; zero rates (the Jacobians need no bias)
+    zero[:] = 0.0
+    if kind == WHEEL:
+        q_new[0] = q[0] + 2.0 * p[P_HALF]
+    else:
+        q_new[0], q_new[1] = q[1], q[0]
+    m00 = m01 = m11 = r0 = r1 = 0.0
+    for b in range(int(p[P_NB])):
+        base = P_BODIES + BODY_FIELDS * b
+        mass, inertia, leg = p[base], p[base + 1], int(p[base + 2])
+        j0x, j0y, j1x, j1y, _, _ = _body_terms(p, b, q, qd, leg)
+        vx = j0x * qd[0] + (j1x * qd[1] if n == 2 else 0.0)
+        vy = j0y * qd[0] + (j1y * qd[1] if n == 2 else 0.0)
+        omega = qd[leg]
+        new_leg = leg if kind == WHEEL else 1 - leg
+        k0x, k0y, k1x, k1y, _, _ = _body_terms(p, b, q_new, zero, new_leg)
+        m00 += mass * (k0x * k0x + k0y * k0y)
+        m01 += mass * (k0x * k1x + k0y * k1y)
+        m11 += mass * (k1x * k1x + k1y * k1y)
+        r0 += mass * (k0x * vx + k0y * vy)
+        r1 += mass * (k1x * vx + k1y * vy)
+        if new_leg == 0:
+            m00 += inertia
+            r0 += inertia * omega
+        else:
+            m11 += inertia
+            r1 += inertia * omega
+    a0, a1 = _solve(m00, m01, m11, r0, r1, n)
+    out[:n] = q_new[:n]
+    out[n] = a0
+    if n == 2:
+        out[3] = a1
+
+
+@njit(cache=True)
+def rigid_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, out: np.ndarray) -> None:
+    """out = the post-impact state (new stance leg first) from the pre-impact state x (q_work: 4 scratch floats)."""
+    if kind == SIMPLEST:
+        _simplest_impact(x, out)
+    else:
+        _chain_impact(kind, p, x, q_work, out)

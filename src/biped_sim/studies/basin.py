@@ -1,0 +1,344 @@
+"""Basins of attraction: which starts on a grid over two initial-state keys walk, converge to the gait, or fall.
+
+Every cell of the grid (two ``simulation.initial`` keys, the others as in the config) is walked for K steps:
+
+* ``dynamics: rigid``: K strikes of the compiled rigid step map (:mod:`biped_sim.rigid.compiled`) from the
+  cell's post-impact state; a fall or a stall (no strike: the walker rocked back) ends it;
+* ``dynamics: compliant``: a compliant run that stops after K heel strikes (``simulation.max_steps``) or a fall.
+
+A cell *walks* when it takes all K steps; it *converges* when, besides, its last state is within
+a tolerance (``--tolerance``, default ``CONVERGED_TOLERANCE``; max over the four leg angles and rates) of the
+period-1 gait: the rigid walker's
+post-impact fixed point, the compliant walker's touchdown state. A cell that falls records after how many steps.
+
+The slice: for the simplest walker over stance_angle and stance_rate, the swing leg starts as a heel strike
+leaves it (Garcia's relations phi = 2 theta, phidot = thetadot (1 - cos 2 theta), i.e. swing_angle = -theta,
+swing_rate = thetadot cos 2 theta), so the map is Schwab and Wisse's post-impact section. For every other
+walker or pair of keys, the two keys vary and the other two stay as configured (a slice of the full
+state space through the config's start, not a section).
+
+Cells run in chunks of one grid row on an executor (the sweep's local pool or Dask); each finished row is
+recorded atomically in ``DIR/cells/`` under a key of the resolved config, the grid and K, so a rerun of the
+same basin skips the rows already done.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, Future, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from biped_sim.config import Config, InitialState, config_from_dict
+from biped_sim.errors import ConfigError
+from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
+from biped_sim.io.provenance import provenance
+from biped_sim.rigid.compiled import STRIKE, walk_starts
+from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
+from biped_sim.rigid.models import rigid_walker
+from biped_sim.studies.limit_cycle import limit_cycle
+
+LEG_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
+KEY_PREFIX = "simulation.initial."
+DEFAULT_STEPS = 30
+CONVERGED_TOLERANCE = 1e-4  # rad and rad/s (the simplest walker: nondimensional)
+FELL, WALKS, CONVERGED = 0, 1, 2
+OUTCOMES = ("fell", "walks", "converged")
+CELLS_DIR = "cells"
+STEP_TIME_ALLOWANCE = 10.0  # a compliant cell's t_end: this many sqrt(l / g) per step (it stops at K strikes)
+
+
+@dataclass(frozen=True)
+class GridAxis:
+    """One axis of the grid: an initial-state key and N evenly spaced values from LO to HI."""
+
+    key: str
+    lo: float
+    hi: float
+    n: int
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.linspace(self.lo, self.hi, self.n)
+
+
+def parse_axis(option: str, text: str) -> GridAxis:
+    """``KEY=LO:HI:N`` (KEY a simulation.initial key, with or without the prefix); ConfigError naming the option."""
+    key, sep, rest = text.partition("=")
+    key = key.strip().removeprefix(KEY_PREFIX)
+    if not sep or key not in LEG_KEYS:
+        raise ConfigError(option, f"expected KEY=LO:HI:N with KEY one of {KEY_PREFIX}{{{', '.join(LEG_KEYS)}}}")
+    parts = rest.split(":")
+    try:
+        lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except (IndexError, ValueError):
+        raise ConfigError(option, f"{rest!r}: expected LO:HI:N (two numbers and a count)") from None
+    if len(parts) != 3 or not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo or n < 2:
+        raise ConfigError(option, f"{rest!r}: need finite LO < HI and N >= 2")
+    return GridAxis(key, lo, hi, n)
+
+
+@dataclass(frozen=True)
+class BasinSpec:
+    """What to map: the config, the two axes and K."""
+
+    config: Config
+    x: GridAxis
+    y: GridAxis
+    steps: int = DEFAULT_STEPS
+    tolerance: float = CONVERGED_TOLERANCE
+
+    def __post_init__(self) -> None:
+        if self.x.key == self.y.key:
+            raise ConfigError("--y", f"the same key as --x ({self.x.key})")
+        if not isinstance(self.config.simulation.initial, InitialState):
+            raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its four keys")
+        if self.steps < 1:
+            raise ConfigError("--steps", "must be at least 1")
+        if not (math.isfinite(self.tolerance) and self.tolerance > 0):
+            raise ConfigError("--tolerance", "must be a positive number")
+
+    @property
+    def garcia_section(self) -> bool:
+        """The simplest walker over stance angle and rate: the swing leg as a heel strike leaves it."""
+        return self.config.walker.kind == "simplest" and {self.x.key, self.y.key} == {"stance_angle", "stance_rate"}
+
+    def key(self) -> str:
+        """What a finished row was computed for (resume only reuses rows of the same basin)."""
+        text = json.dumps(
+            [self.config.hash(), self.x.__dict__, self.y.__dict__, self.steps, self.tolerance], sort_keys=True
+        )
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def cell_legs(self, x_value: float, y_value: float) -> dict[str, float]:
+        """The four README keys of the cell at (x_value, y_value)."""
+        legs = self.config.simulation.initial.model_dump()  # type: ignore[union-attr]
+        legs[self.x.key], legs[self.y.key] = float(x_value), float(y_value)
+        if self.garcia_section:
+            theta, rate = legs["stance_angle"], legs["stance_rate"]
+            legs["swing_angle"], legs["swing_rate"] = -theta, rate * math.cos(2.0 * theta)
+        return legs
+
+
+@dataclass(frozen=True)
+class RowTask:
+    """One grid row (fixed y value) to walk in a worker."""
+
+    spec: BasinSpec
+    row: int
+    target: dict[str, float] | None  # the gait's state that converged cells end near (None: no gait found)
+
+
+def _close(legs: dict[str, float], target: dict[str, float] | None, tolerance: float) -> bool:
+    return target is not None and max(abs(legs[k] - target[k]) for k in LEG_KEYS) <= tolerance
+
+
+def _rigid_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:
+    walker = rigid_walker(task.spec.config)
+    starts = np.array([walker.state_from_legs(legs) for legs in cells])
+    walked = walk_starts(walker, starts, task.spec.steps)
+    outcome = []
+    for status, last in zip(walked.status, walked.last, strict=True):
+        if status != STRIKE:
+            outcome.append(FELL)
+        else:
+            outcome.append(CONVERGED if _close(walker.legs_state(last), task.target, task.spec.tolerance) else WALKS)
+    return outcome, [int(s) for s in walked.steps]
+
+
+def _compliant_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:
+    from biped_sim.simulate import simulate  # the compliant engine: imported only by workers that need it
+
+    config, steps = task.spec.config, task.spec.steps
+    t_end = STEP_TIME_ALLOWANCE * steps * math.sqrt(config.walker.leg_length / config.gravity)
+    outcome, taken = [], []
+    for legs in cells:
+        data = config.model_dump(mode="json")
+        data["simulation"].update(initial=legs, max_steps=steps, t_end=t_end)
+        try:
+            result = simulate(config_from_dict(data))
+        except ConfigError:  # the walker cannot start there (e.g. a foot below the ground): it falls at once
+            outcome.append(FELL)
+            taken.append(0)
+            continue
+        strikes = len(result.steps.strike_time)
+        table = result.steps
+        last = {k: float(getattr(table, k)[-1]) for k in LEG_KEYS} if strikes else {}
+        if result.status != "walking" or strikes < steps:
+            outcome.append(FELL)
+        else:
+            outcome.append(CONVERGED if _close(last, task.target, task.spec.tolerance) else WALKS)
+        taken.append(min(strikes, steps))
+    return outcome, taken
+
+
+def basin_row(task: RowTask) -> dict[str, Any]:
+    """Walk every cell of one row (runs in a worker): {'row', 'outcome', 'steps'}."""
+    spec = task.spec
+    y_value = spec.y.values[task.row]
+    cells = [spec.cell_legs(x_value, y_value) for x_value in spec.x.values]
+    row = _rigid_row if spec.config.dynamics == "rigid" else _compliant_row
+    outcome, steps = row(task, cells)
+    return {"row": task.row, "outcome": outcome, "steps": steps}
+
+
+@dataclass
+class Basin:
+    """A mapped basin: outcome and steps per cell (rows: y values, columns: x values) and the gait."""
+
+    spec: BasinSpec
+    outcome: np.ndarray  # (ny, nx) FELL, WALKS or CONVERGED
+    steps: np.ndarray  # (ny, nx) steps taken (K for cells that walk)
+    cycle: LimitCycle | None
+    wall_time_s: float = 0.0
+    rows_reused: int = 0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def fixed_point(self) -> dict[str, float] | None:
+        return gait_target(self.spec, self.cycle)
+
+    def to_json(self) -> dict[str, Any]:
+        """The document of ``biped-sim basin --json``."""
+        n_cells = int(self.outcome.size)
+        return {
+            "walker": self.spec.config.walker.kind,
+            "dynamics": self.spec.config.dynamics,
+            "x": self.spec.x.__dict__,
+            "y": self.spec.y.__dict__,
+            "steps": self.spec.steps,
+            "n_cells": n_cells,
+            "fraction_walking": float(np.count_nonzero(self.outcome != FELL)) / n_cells,
+            "fraction_converged": float(np.count_nonzero(self.outcome == CONVERGED)) / n_cells,
+            "converged_tolerance": self.spec.tolerance,
+            "fixed_point": self.fixed_point,
+            "wall_time_s": self.wall_time_s,
+            "rows_reused": self.rows_reused,
+            "notes": self.notes,
+        }
+
+
+def gait_target(spec: BasinSpec, cycle: LimitCycle | None) -> dict[str, float] | None:
+    """The gait state converged cells end near: rigid post-impact fixed point, compliant touchdown."""
+    if cycle is None or not cycle.converged:
+        return None
+    return cycle.fixed_point if spec.config.dynamics == "rigid" else cycle.touchdown
+
+
+def find_gait(spec: BasinSpec) -> LimitCycle | None:
+    """The period-1 gait from the config's start (None when there is none to find)."""
+    try:
+        return limit_cycle(spec.config)
+    except (ConfigError, StepFailedError):
+        return None
+
+
+def _row_path(out_dir: Path, row: int) -> Path:
+    return out_dir / CELLS_DIR / f"row_{row:04d}.json"
+
+
+def finished_rows(spec: BasinSpec, out_dir: Path) -> dict[int, dict[str, Any]]:
+    """Rows recorded by an earlier run of the same basin (other basins' or unreadable files are ignored)."""
+    done = {}
+    for row in range(spec.y.n):
+        path = _row_path(out_dir, row)
+        try:
+            record = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        if record.get("key") == spec.key() and len(record.get("outcome", [])) == spec.x.n:
+            done[row] = record
+    return done
+
+
+def _rows(
+    spec: BasinSpec, pending: list[int], target: dict[str, float] | None, executor: Executor | None
+) -> Iterator[dict[str, Any]]:
+    """The finished rows' records as they come: from ``executor``, or computed here when it is None."""
+    tasks = [RowTask(spec, row, target) for row in pending]
+    if executor is None:
+        yield from map(basin_row, tasks)
+        return
+    futures: list[Future[dict[str, Any]]] = [executor.submit(basin_row, task) for task in tasks]
+    for future in as_completed(futures):
+        yield future.result()
+
+
+def map_basin(
+    spec: BasinSpec,
+    out_dir: Path | None,
+    executor: Executor | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Basin:
+    """Walk every cell of the grid, one task per row on ``executor`` (None: in this process); with ``out_dir``,
+    finished rows are recorded in ``out_dir/cells`` as they come and reused by a rerun.
+    ``progress(done, total)`` after each row."""
+    clock = time.perf_counter()
+    cycle = find_gait(spec)
+    target = gait_target(spec, cycle)
+    done = finished_rows(spec, out_dir) if out_dir is not None else {}
+    reused = len(done)
+    if out_dir is not None:
+        (out_dir / CELLS_DIR).mkdir(parents=True, exist_ok=True)
+    for result in _rows(spec, [row for row in range(spec.y.n) if row not in done], target, executor):
+        record = {"key": spec.key(), **result}
+        if out_dir is not None:
+            write_json_atomic(_row_path(out_dir, record["row"]), record)
+        done[record["row"]] = record
+        if progress is not None:
+            progress(len(done), spec.y.n)
+    outcome = np.array([done[row]["outcome"] for row in range(spec.y.n)], dtype=np.int64)
+    steps = np.array([done[row]["steps"] for row in range(spec.y.n)], dtype=np.int64)
+    notes = [
+        f"each cell walked up to {spec.steps} steps; converged: walked them all and ended within "
+        f"{spec.tolerance:g} of the gait (max over the four leg angles and rates)",
+        "slice: swing leg as a heel strike leaves it (Garcia's relations): Schwab and Wisse's post-impact section"
+        if spec.garcia_section
+        else "slice: the two keys vary, the other initial keys as configured",
+    ]
+    if target is None:
+        notes.append("no period-1 gait found from the config's start: no cell counts as converged")
+    return Basin(spec, outcome, steps, cycle, time.perf_counter() - clock, reused, notes)
+
+
+def write_basin(basin: Basin, out_dir: Path) -> list[Path]:
+    """basin.h5 (grid, outcome, steps, gait, resolved config and provenance) and basin.csv, atomically."""
+    import h5py
+
+    spec = basin.spec
+    doc = basin.to_json()
+    h5_path, csv_path = out_dir / "basin.h5", out_dir / "basin.csv"
+
+    def write_h5(tmp: Path) -> None:
+        with h5py.File(tmp, "w") as f:
+            f.create_dataset("x", data=spec.x.values)
+            f.create_dataset("y", data=spec.y.values)
+            f.create_dataset("outcome", data=basin.outcome)
+            f.create_dataset("steps", data=basin.steps)
+            f["x"].attrs["key"] = KEY_PREFIX + spec.x.key
+            f["y"].attrs["key"] = KEY_PREFIX + spec.y.key
+            f["outcome"].attrs["codes"] = json.dumps(dict(enumerate(OUTCOMES)))
+            for name, value in (doc["fixed_point"] or {}).items():
+                f.attrs[f"fixed_point_{name}"] = value
+            for name in ("n_cells", "fraction_walking", "fraction_converged", "converged_tolerance", "steps"):
+                f.attrs[name] = doc[name]
+            f.attrs["notes"] = json.dumps(basin.notes)
+            f.attrs["config"] = json.dumps(spec.config.model_dump(mode="json"), sort_keys=True)
+            f.attrs["config_hash"] = spec.config.hash()
+            for name, value in provenance().items():
+                f.attrs[name] = value
+
+    write_with(h5_path, write_h5)
+    lines = [f"{spec.x.key},{spec.y.key},outcome,steps"]
+    for j, y_value in enumerate(spec.y.values):
+        for i, x_value in enumerate(spec.x.values):
+            lines.append(f"{float(x_value)!r},{float(y_value)!r},{OUTCOMES[basin.outcome[j, i]]},{basin.steps[j, i]}")
+    write_text_atomic(csv_path, "\n".join(lines) + "\n")
+    return [h5_path, csv_path]
