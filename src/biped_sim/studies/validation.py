@@ -18,6 +18,7 @@ import numpy as np
 
 from biped_sim.config import Config, config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
+from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
@@ -26,6 +27,8 @@ from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_ba
 from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
 from biped_sim.studies.convergence import converge
 from biped_sim.studies.drop_test import drop_test_table
+from biped_sim.studies.fit import FitProblem, parse_parameter, run_fit, synthetic_reference_data
+from biped_sim.studies.fit_stats import summarize
 
 ROOT = Path(__file__).resolve().parents[3]
 REFERENCES = ROOT / "configs" / "references" / "rigid_walkers.yaml"
@@ -329,6 +332,22 @@ def basin_checks() -> list[Check]:
     ]
 
 
+def fit_recovery_checks() -> list[Check]:
+    """``biped-sim fit`` recovers known values: the default walker's leg inertia and hip mass, fitted from a wrong
+    start to its own seven step periods plus 1 ms of noise (seed 1), within three of the fit's standard errors."""
+    truth = load_config(CONFIGS / "round_foot_walker.yaml")
+    spec = ReferenceSpec.model_validate(synthetic_reference_data(truth, 7, 1e-3, seed=1))
+    config = config_from_dict(truth.model_dump(mode="json"), ["walker.leg_inertia=0.0047", "walker.hip_mass=2.3"])
+    params = tuple(parse_parameter(t, config) for t in ("walker.leg_inertia=0.0043:0.006", "walker.hip_mass=1.5:3"))
+    result = summarize(run_fit(FitProblem(config, Reference(Path("synthetic"), spec), params)))
+    ok = result.converged and not result.identifiability.warnings
+    checks = [Check("Fit recovery", "converged, no identifiability warning", "yes", "yes" if ok else "no", "-", ok)]
+    for estimate, true in zip(result.estimates, (truth.walker.leg_inertia, truth.walker.hip_mass), strict=True):
+        se = estimate.standard_error if estimate.standard_error is not None else math.nan
+        checks.append(_close("Fit recovery", f"{estimate.key} (3 standard errors)", true, estimate.value, 3 * se))
+    return checks
+
+
 def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None) -> tuple[list[Check], dict[str, Any]]:
     """Run every check, write report.md and report.json into ``out_dir``; returns the checks and extras."""
     refs = load_rigid_references()
@@ -343,6 +362,7 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         ("simplest walker's basin", basin_checks),
         ("contact laws", contact_law_checks),
         ("energy balance", energy_balance_checks),
+        ("fit recovery", fit_recovery_checks),
     ]
     for name, stage in stages:
         if progress:
