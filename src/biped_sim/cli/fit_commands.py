@@ -205,7 +205,8 @@ def fit_command(
         typer.echo(
             (f"{label}: " if label else "")
             + ", ".join(f"{k} = {v:.6g}" for k, v in result.parameters.items())
-            + f"; RMS error {stats.rms_abs:.4g} s ({stats.rms_rel:.3g} %), {result.run.evaluations} evaluations, "
+            + f"; RMS error {stats.rms_abs:.4g} s ({stats.rms_rel:.3g} %), {result.run.evaluations} evaluations "
+            + f"in {result.run.wall_time_s:.1f} s, "
             + ("converged" if result.converged else "NOT converged")
             + f" ({result.run.best.message})"
         )

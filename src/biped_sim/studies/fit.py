@@ -22,6 +22,7 @@ to the config's own values; the best fit wins. Statistics are in :mod:`biped_sim
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
@@ -308,6 +309,7 @@ class FitRun:
     evaluations: int
     start_outcome: Outcome
     best_outcome: Outcome
+    wall_time_s: float
 
     @property
     def best(self) -> StartResult:
@@ -321,6 +323,7 @@ def run_fit(
     progress: Callable[[int, StartResult], None] | None = None,
 ) -> FitRun:
     """Fit ``problem`` from ``starts`` starts; ``executor`` runs each Jacobian's p difference runs in parallel."""
+    clock = time.perf_counter()
     evaluator = Evaluator(problem, executor)
     results = []
     for i, start in enumerate(start_points(problem, starts)):
@@ -329,7 +332,8 @@ def run_fit(
             progress(i, results[-1])
     best = min(results, key=lambda s: s.cost)
     start_outcome, best_outcome = evaluator.outcomes([start_points(problem, 1)[0], best.u])
-    return FitRun(problem, results, evaluator.evaluations, start_outcome, best_outcome)
+    elapsed = time.perf_counter() - clock
+    return FitRun(problem, results, evaluator.evaluations, start_outcome, best_outcome, elapsed)
 
 
 def synthetic_reference_data(config: Config, steps: int, noise_s: float, seed: int, skip: int = 0) -> dict[str, Any]:
@@ -349,7 +353,11 @@ def synthetic_reference_data(config: Config, steps: int, noise_s: float, seed: i
     return {
         "experiment": "synthetic_" + config.walker.kind,
         "description": f"SYNTHETIC step periods, {origin}; not measured data.",
-        "citation": {"authors": ["biped-sim"], "title": "Synthetic step periods (not measured)", "year": 2026},
+        "citation": {
+            "authors": ["biped-sim-synthetic"],
+            "title": "Synthetic step periods (not measured)",
+            "year": 2026,
+        },
         "source": {"kind": "text", "label": None, "details": origin},
         "quantity": {"name": "step_period", "unit": "s", "statistic": "single", "n_trials": 1},
         "values": [round(float(v), 9) for v in noisy],

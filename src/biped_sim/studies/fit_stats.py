@@ -191,6 +191,7 @@ def fit_document(result: FitResult) -> dict[str, Any]:
         "steps_compared": after.compared,
         "reference_steps": len(after.steps),
         "evaluations": run.evaluations,
+        "wall_time_s": run.wall_time_s,
         "estimates": [vars(e) | {"scale": "log" if e.log else "linear"} for e in result.estimates],
         "correlation": {"keys": keys, "matrix": ident.correlation.tolist()},
         "residual_variance": result.residual_variance,
