@@ -9,7 +9,7 @@ from __future__ import annotations
 import contextlib
 import json
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -22,7 +22,7 @@ from biped_sim.io.output import OutputKind, check_output_dir, staged_directory
 
 if TYPE_CHECKING:
     from biped_sim.io.references import Reference
-    from biped_sim.studies.fit import FitProblem
+    from biped_sim.studies.fit import FitProblem, StartResult
     from biped_sim.studies.fit_stats import FitResult
 
 FIT_FILES = (
@@ -143,6 +143,16 @@ def _write_fit(result: FitResult, doc: dict[str, Any], directory: Path) -> None:
     write_json_atomic(directory / "fit.json", doc)
 
 
+def _progress(label: str | None, starts: int) -> Callable[[int, StartResult], None]:
+    """One line on stderr per finished start (a fit can take minutes)."""
+
+    def report(index: int, start: StartResult) -> None:
+        prefix = f"{label}: " if label else ""
+        typer.echo(f"{prefix}start {index + 1}/{starts}: cost {start.cost:.6g} ({start.message})", err=True)
+
+    return report
+
+
 def _label_dir(label: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", label)
 
@@ -185,7 +195,7 @@ def fit_command(
     fits: list[tuple[str | None, FitResult, dict[str, Any]]] = []
     with _executor(executor, jobs, scheduler) as pool:
         for label, problem in problems:
-            result = summarize(run_fit(problem, starts, pool))
+            result = summarize(run_fit(problem, starts, pool, _progress(label, starts)))
             fits.append((label, result, _document(result, config_path)))
     with staged_directory(out_dir, FIT_OUTPUT) as stage:
         for label, result, doc in fits:

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 import yaml
+from pydantic import ValidationError
 from scipy.optimize import least_squares
 from scipy.stats import qmc
 
@@ -149,7 +150,7 @@ def simulate_strikes(config_data: dict[str, Any]) -> Outcome:
     inside the bounds that another rule forbids) is an outcome that got nowhere, never an exception."""
     try:
         result = simulate(Config.model_validate(config_data))
-    except (ConfigError, ValueError) as exc:  # pydantic's ValidationError is a ValueError
+    except (ConfigError, ValidationError) as exc:
         return Outcome((), f"invalid: {str(exc).splitlines()[0]}", 0.0)
     summary = result.summary
     return Outcome(tuple(summary["step_times"]), summary["status"], float(summary["t_end"]))
