@@ -170,6 +170,7 @@ def _zero_std_reference(tmp_path: Path, reference_file: Path) -> str:
         (["--param", BOUNDS, "--reference", "ZERO"], "std: entry 2 is 0"),
         (["--param", BOUNDS, "--each", "contact.model=flores,nonsense"], "contact.model"),
         (["--param", BOUNDS, "--starts", "0"], "--starts: must be at least 1"),
+        (["--param", BOUNDS, "--reference", "NONE"], "--reference: required"),
     ],
 )
 def test_bad_input_is_one_line_and_writes_nothing(
@@ -178,7 +179,9 @@ def test_bad_input_is_one_line_and_writes_nothing(
     out = tmp_path / "out"
     swap = {"BAD": _bad_reference(tmp_path), "ZERO": _zero_std_reference(tmp_path, reference_file)}
     case = [swap.get(item, item) for item in case]
-    if "--reference" not in case:
+    if "NONE" in case:
+        case = case[: case.index("--reference")]
+    elif "--reference" not in case:
         case += ["--reference", str(reference_file)]
     result = invoke("fit", str(DEFAULT_CONFIG), *case, "--out", str(out))
     assert result.exit_code == 2

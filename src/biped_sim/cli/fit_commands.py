@@ -161,7 +161,9 @@ def _label_dir(label: str) -> str:
 @user_errors
 def fit_command(
     config_path: ConfigArgument,
-    reference: Annotated[Path, typer.Option("--reference", help="Reference file of step periods (YAML).")],
+    reference: Annotated[
+        Path | None, typer.Option("--reference", help="Reference file of step periods (YAML).")
+    ] = None,
     param: Annotated[
         list[str] | None, typer.Option("--param", help="Numeric config key to fit within bounds: KEY=LO:HI.")
     ] = None,
@@ -188,6 +190,8 @@ def fit_command(
             raise ConfigError(option, f"must be at least {least}")
     if executor not in ("local", "dask"):
         raise ConfigError("--executor", f"unknown executor {executor!r}; expected local or dask")
+    if reference is None:
+        raise ConfigError("--reference", "required: a reference file of step periods (see docs/experiments.md)")
     ref = _reference(reference)
     problems = _problems(config_path, set_ or [], ref, param or [], skip, each)
     out_dir = out or Path("results") / "fit" / config_path.stem

@@ -165,6 +165,15 @@ class FitProblem:
     parameters: tuple[FitParameter, ...]
     skip: int = 0
 
+    def __post_init__(self) -> None:
+        if not self.reference.is_periods:
+            raise ConfigError(str(self.reference.path), "a fit needs a step_period reference")
+        if not self.parameters:
+            raise ConfigError("--param", "give at least one KEY=LO:HI to fit")
+        if self.skip < 0:
+            raise ConfigError("--skip-steps", "must be at least 0")
+        reference_sigma(self.reference)
+
     @property
     def sigma(self) -> np.ndarray:
         return reference_sigma(self.reference)
