@@ -23,7 +23,9 @@ from biped_sim.studies.fit import (
     PENALTY_PERIODS,
     FitParameter,
     FitProblem,
+    FitRun,
     Outcome,
+    StartResult,
     parse_parameter,
     run_fit,
     synthetic_reference,
@@ -81,6 +83,41 @@ def test_missed_steps_cost_more_the_earlier_the_fall(reference: Reference) -> No
     assert np.all(np.isfinite(nowhere)) and nowhere[0] == pytest.approx(2 * PENALTY_PERIODS * period[0] / NOISE_S)
     assert late[0] == early[0] == 0.0
     assert np.all(early[1:] > late[1:]) and np.all(late[1:] >= PENALTY_PERIODS * np.asarray(period[1:]) / NOISE_S)
+
+
+def _solved(problem: FitProblem, u: list[float], jacobian: list[list[float]], residuals: list[float]) -> FitRun:
+    """A finished one-start fit with a given solution, Jacobian and residuals (no simulation)."""
+    walked = Outcome(tuple(np.cumsum(problem.reference.values)), "walking", sum(problem.reference.values))
+    x = np.asarray(u)
+    start = StartResult(x, x, np.asarray(residuals), np.asarray(jacobian), 0.0, 1, "test", 1)
+    return FitRun(problem, [start], 1, walked, walked, 0.0)
+
+
+def test_standard_errors_in_parameter_units_linear_and_log(reference: Reference) -> None:
+    config = _config()
+    params = (
+        FitParameter("walker.leg_inertia", 0.004, 0.006, 0.005),
+        FitParameter("contact.restitution", 0.01, 0.9, 0.3),
+    )
+    result = summarize(_solved(FitProblem(config, reference, params), [0.5, 0.5], [[2, 0], [0, 4], [0, 0]], [0, 0, 0]))
+    linear, log = result.estimates
+    assert result.variance_source == "reference std" and result.identifiability.rank == 2
+    assert linear.standard_error == pytest.approx(0.5 * 0.002)  # sqrt((J^T J)^-1) = 1/2, times d value / d u
+    assert log.value == pytest.approx(0.01 * 90**0.5)
+    assert log.standard_error == pytest.approx(0.25 * log.value * math.log(90))
+    assert result.identifiability.warnings == [] and result.identifiability.correlation[0, 1] == 0
+
+
+def test_residual_variance_without_std_and_the_correlation_warning(reference: Reference) -> None:
+    bare = Reference(reference.path, reference.spec.model_copy(update={"std": None}))
+    one = (FitParameter("walker.leg_inertia", 0.004, 0.006, 0.005),)
+    result = summarize(_solved(FitProblem(_config(), bare, one), [0.5], [[1], [0], [0]], [1, 2, 2]))
+    assert result.variance_source == "residual variance" and result.residual_variance == pytest.approx(9 / 2)
+    assert result.estimates[0].standard_error == pytest.approx(math.sqrt(4.5) * 0.002)
+    two = (*one, FitParameter("walker.hip_mass", 1.5, 3.0, 2.0))
+    collinear = [[1, 1.001], [2, 2.0], [3, 3.0]]
+    result = summarize(_solved(FitProblem(_config(), reference, two), [0.5, 0.5], collinear, [0, 0, 0]))
+    assert any("correlate at -" in w for w in result.identifiability.warnings)
 
 
 def test_recovers_the_true_value_within_its_standard_error(reference: Reference) -> None:
