@@ -153,6 +153,21 @@ def _progress(label: str | None, starts: int) -> Callable[[int, StartResult], No
     return report
 
 
+def _print_fit(label: str | None, result: FitResult) -> None:
+    """One line per fit (values, RMS error, evaluations, convergence) and its identifiability warnings."""
+    stats = result.after.stats
+    typer.echo(
+        (f"{label}: " if label else "")
+        + ", ".join(f"{k} = {v:.6g}" for k, v in result.parameters.items())
+        + f"; RMS error {stats.rms_abs:.4g} s ({stats.rms_rel:.3g} %), {result.run.evaluations} evaluations "
+        + f"in {result.run.wall_time_s:.1f} s, "
+        + ("converged" if result.converged else "NOT converged")
+        + f" ({result.run.best.message})"
+    )
+    for warning in result.identifiability.warnings:
+        typer.echo(f"  warning: {warning}")
+
+
 def _label_dir(label: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", label)
 
@@ -182,6 +197,7 @@ def fit_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print fit.json (or the contest) to stdout.")] = False,
 ) -> None:
     """Fit config parameters so that the model's step periods match a reference (bounded least squares)."""
+    from biped_sim.io.atomic import json_safe
     from biped_sim.studies.fit import run_fit
     from biped_sim.studies.fit_stats import ranking_table, summarize
 
@@ -209,23 +225,11 @@ def fit_command(
             ranking.write(stage)
     if as_json:
         docs = [doc for _, _, doc in fits]
-        from biped_sim.io.atomic import json_safe
-
         shown = docs[0] if each is None else {"each": each, "fits": docs}
         typer.echo(json.dumps(json_safe(shown), indent=2, allow_nan=False))
         return
     for label, result, _ in fits:
-        stats = result.after.stats
-        typer.echo(
-            (f"{label}: " if label else "")
-            + ", ".join(f"{k} = {v:.6g}" for k, v in result.parameters.items())
-            + f"; RMS error {stats.rms_abs:.4g} s ({stats.rms_rel:.3g} %), {result.run.evaluations} evaluations "
-            + f"in {result.run.wall_time_s:.1f} s, "
-            + ("converged" if result.converged else "NOT converged")
-            + f" ({result.run.best.message})"
-        )
-        for warning in result.identifiability.warnings:
-            typer.echo(f"  warning: {warning}")
+        _print_fit(label, result)
     if each is not None:
         typer.echo(ranking.markdown())
     typer.echo(f"files: {out_dir}/")
