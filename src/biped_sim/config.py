@@ -195,9 +195,10 @@ class BaumgarteConfig(_Strict):
 class FormulationConfig(_Strict):
     """Multibody formulation."""
 
-    kind: Literal["planar", "spatial"] = Field(
+    kind: Literal["planar", "spatial", "minimal"] = Field(
         "planar",
-        description="'planar': (x, y, phi) per body; 'spatial': (r, Euler parameters) per body, 3D contact.",
+        description="'planar': (x, y, phi) per body; 'spatial': (r, Euler parameters) per body, 3D contact; "
+        "'minimal': planar, hip position and one angle per body (no constraints; baumgarte unused).",
     )
     baumgarte: BaumgarteConfig = Field(default_factory=BaumgarteConfig)
 
@@ -291,8 +292,8 @@ class Config(_Strict):
             raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
         if self.walker.kind == "four_legged" and (self.dynamics != "compliant" or self.formulation.kind != "spatial"):
             raise ValueError("walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial")
-        if self.formulation.kind == "spatial" and self.dynamics != "compliant":
-            raise ValueError("formulation.kind: 'spatial' is available with dynamics: compliant only")
+        if self.formulation.kind != "planar" and self.dynamics != "compliant":
+            raise ValueError(f"formulation.kind: {self.formulation.kind!r} is available with dynamics: compliant only")
         if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
             raise ValueError("walker.foot_spacing_inner: must be smaller than walker.foot_spacing_outer")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:

@@ -6,11 +6,12 @@ RHS evaluations and accepted steps, the cost per evaluation, the real-time facto
 wall seconds), the worst step-period error against a tight reference (dop853, rtol 1e-12) and
 the speed-up over the baseline (solve_ivp RK45 over the plain-Python RHS, :mod:`.baseline`).
 Fixed-step rows first search the largest step that keeps every step period within
-:data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone (hence the loop overhead), compile
-and start-up times in fresh processes, sweep throughput with 1 and 2 workers, and MuJoCo.
+:data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone in absolute and in minimal
+coordinates (hence the loop overhead), compile and start-up times in fresh processes, sweep
+throughput with 1 and 2 workers, and MuJoCo.
 
 :data:`CASES` is the list of rows: another formulation or method is one more entry
-(the spatial-formulation row is one: the same walker in Euler parameters).
+(the spatial and minimal-coordinate rows: the same walker in Euler parameters, in leg angles).
 """
 
 from __future__ import annotations
@@ -60,11 +61,13 @@ class BenchCase:
     overrides: tuple[str, ...] = ()  # extra config overrides, e.g. another formulation
 
 
+MINIMAL = "dopri5 rtol 1e-6, minimal coordinates"  # the headline in the minimal formulation (issue 13 targets)
 CASES: tuple[BenchCase, ...] = (
     BenchCase("baseline: solve_ivp RK45, Python RHS, rtol 1e-6", BASELINE, 1e-6),
     BenchCase("dopri5 rtol 1e-6", "dopri5", 1e-6),
     BenchCase("dopri5 rtol 1e-9", "dopri5", 1e-9),
     BenchCase("dopri5 rtol 1e-6, spatial formulation", "dopri5", 1e-6, ("formulation.kind=spatial",)),
+    BenchCase(MINIMAL, "dopri5", 1e-6, ("formulation.kind=minimal",)),
     BenchCase("rk4", "rk4"),
     BenchCase("rk2", "rk2"),
     BenchCase("euler", "euler"),
@@ -379,7 +382,7 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     for row in rows:
         row.ratio_vs_baseline = baseline.wall_s / row.wall_s
     headline = next(r for r in rows if r.label == HEADLINE)
-    rhs_us = rhs_cost_us(*measured[HEADLINE])
+    rhs_us, rhs_minimal_us = rhs_cost_us(*measured[HEADLINE]), rhs_cost_us(*measured[MINIMAL])
     # best-case against best-case: both timings are disturbed by whatever else runs on the machine
     loop_overhead = 1.0 - headline.rhs_evals * rhs_us * 1e-6 / min(headline.walls_s)
     ours, theirs = step_periods(measured[HEADLINE][1]), step_periods(measured[baseline.label][1])
@@ -402,11 +405,13 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
         },
         "rows": [asdict(r) for r in rows],
         "headline": HEADLINE,
+        "minimal": MINIMAL,
         "rhs_alone_us": rhs_us,
+        "rhs_alone_minimal_us": rhs_minimal_us,
         "loop_overhead": loop_overhead,
         "baseline_vs_headline_max_period_difference_s": float(np.max(np.abs(ours[:n] - theirs[:n]))),
     }
-    log(f"RHS alone {rhs_us:.3f} us, loop overhead {loop_overhead:.0%}")
+    log(f"RHS alone {rhs_us:.3f} us (minimal coordinates {rhs_minimal_us:.3f} us), loop overhead {loop_overhead:.0%}")
     result["startup"] = startup_times(settings.config_path, cold=settings.compile_time)
     log(f"start-up: {json.dumps(result['startup'])}")
     if settings.sweep_runs:
