@@ -6,12 +6,17 @@ import math
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-from biped_sim import config_from_dict, load_config, simulate
+from biped_sim import config_from_dict, load_config, run, simulate
+from biped_sim.animate import WalkerDrawing
 from biped_sim.errors import ConfigError
+from biped_sim.io.trajectory import load_run
 from biped_sim.multibody.dispatch import formulation_of, make_workspace, system_rhs
 from biped_sim.multibody.minimal import HIP, MinimalSystem, star_state, star_system
 from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.plots import plot_run
 from biped_sim.testing import default_walker
 from biped_sim.walkers import build_model
 
@@ -176,3 +181,18 @@ def test_bundled_config_starts_as_planar() -> None:
     assert isinstance(minimal.system, MinimalSystem)
     assert np.array_equal(minimal.y0, star_state(planar.y0, planar.system))
     assert np.array_equal(minimal.modes0, planar.modes0)
+
+
+def test_run_directory_reads_back_plots_and_animates(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    run(default_walker(*MINIMAL, t_end=1.0), tmp_path)
+    data = load_run(tmp_path)
+    assert data.body_names == ["leg0", "leg1"]  # x_hip is no body
+    assert data.leg_angles().shape == data.leg_rates().shape == (len(data.time), 2)
+    np.testing.assert_array_equal(data.hip, data.state[:, :2])
+    assert np.all(data.violation_position == 0.0) and np.all(data.violation_velocity == 0.0)
+    assert all(path.stat().st_size > 0 for path in plot_run(data, tmp_path / "figures"))
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    drawing = WalkerDrawing(data, fig)
+    drawing.draw(0)
+    assert np.hypot(drawing.arrows.U, drawing.arrows.V).max() > 0  # the stance foot carries the walker

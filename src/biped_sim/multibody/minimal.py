@@ -59,27 +59,28 @@ class MinimalSystem(NamedTuple):
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
 
 
-class Workspace(NamedTuple):
-    """Preallocated buffers for one right-hand-side evaluation."""
+# columns of the workspace's per-body table: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos, sin phi_b
+TORQUE, ARM_X, ARM_Y, COS, SIN = range(5)
 
-    torque: np.ndarray  # (nb,) the legs' generalized forces Q_b (the hip's are local variables)
-    arm: np.ndarray  # (nb, 2) a_b = A(phi_b) c_b: each centre of mass from the hip
+
+class Workspace(NamedTuple):
+    """Preallocated buffers for one right-hand-side evaluation (one array: each array costs reference counts)."""
+
+    legs: np.ndarray  # (nb, 5) per body, columns TORQUE, ARM_X, ARM_Y, COS, SIN; the hip's Q_h are local variables
 
 
 def make_workspace(system: MinimalSystem) -> Workspace:
     """Allocate the buffers of ``system`` (once per simulation, not per step)."""
-    nb = system.body_mass.shape[0]
-    return Workspace(np.zeros(nb), np.zeros((nb, 2)))
+    return Workspace(np.zeros((system.body_mass.shape[0], 5)))
 
 
 @njit(cache=True)
 def foot_arc(
-    y: np.ndarray, n: int, b: int, fx: float, fy: float, radius: float
+    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float
 ) -> tuple[float, float, float, float, float, float]:
-    """A foot of body b, arc centre (fx, fy) from the hip (body frame), against the ground
-    (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
+    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against the
+    ground (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
     (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_h."""
-    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
     cx, cy = y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
     return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius)
 
@@ -87,9 +88,9 @@ def foot_arc(
 @njit(cache=True)
 def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
     """:func:`foot_arc` of foot i."""
-    centre = system.foot_center
-    n = HIP + system.body_mass.shape[0]
-    return foot_arc(y, n, system.foot_body[i], centre[i, 0], centre[i, 1], system.foot_radius[i])
+    centre, b = system.foot_center, system.foot_body[i]
+    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+    return foot_arc(y, HIP + system.body_mass.shape[0], b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i])
 
 
 @njit(cache=True)
@@ -103,12 +104,12 @@ def foot_contact(y: np.ndarray, system: MinimalSystem, foot: int) -> tuple[float
 def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free).
 
-    One flat function over local arrays: every array numba hands to a called function (or reads from the
-    system tuple inside one) costs reference-count updates, which were most of this kernel's time.
+    One flat function: each array it reads costs numba a reference-count update at entry and exit, and
+    each array handed to a function that is not inlined one more; these were most of this kernel's time.
     """
     mass, inertia, com = system.body_mass, system.body_inertia, system.body_com
     foot_body, centre, radius = system.foot_body, system.foot_center, system.foot_radius
-    torque, arm = work.torque, work.arm
+    legs = work.legs
     nb, nf = mass.shape[0], foot_body.shape[0]
     n = HIP + nb
     gx, gy = system.gravity[0], system.gravity[1]
@@ -118,24 +119,20 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
         ax = c * com[b, 0] - s * com[b, 1]
         ay = s * com[b, 0] + c * com[b, 1]
-        arm[b, 0] = ax
-        arm[b, 1] = ay
         hip_x += m * (gx + om * om * ax)
         hip_y += m * (gy + om * om * ay)
-        torque[b] = m * (ax * gy - ay * gx)
+        legs[b, TORQUE], legs[b, ARM_X], legs[b, ARM_Y] = m * (ax * gy - ay * gx), ax, ay
+        legs[b, COS], legs[b, SIN] = c, s
     for k in range(n):
         ydot[k] = y[n + k]
     w_normal = w_friction = 0.0
-    switches, npar, fpar, floor = (
-        system.switches,
-        system.normal_params,
-        system.friction_params,
-        system.limits[IMPACT_FLOOR],
-    )
+    switches, npar, fpar = system.switches, system.normal_params, system.friction_params
+    floor = system.limits[IMPACT_FLOOR]
     for i in range(nf):
         b = foot_body[i]
-        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, centre[i, 0], centre[i, 1], radius[i])
-        if not is_loaded(modes, i, delta):  # ground_forces would return zeros: skip its call (its arrays' refcounts)
+        c, s = legs[b, COS], legs[b, SIN]
+        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], radius[i])
+        if not is_loaded(modes, i, delta):  # ground_forces would return zeros: skip the call (and its refcounts)
             ydot[2 * n + i] = 0.0
             continue
         f_n, f_t, z_dot, p_n, p_f = ground_forces(
@@ -143,7 +140,7 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         )
         hip_x += f_t
         hip_y += f_n
-        torque[b] += dx * f_n - dy * f_t
+        legs[b, TORQUE] += dx * f_n - dy * f_t
         ydot[2 * n + i] = z_dot
         w_normal += p_n
         w_friction += p_f
@@ -153,21 +150,21 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
     # S = m I2 - sum_b m_b^2 e_b e_b^T / D_b against Q_h - sum_b m_b e_b Q_b / D_b, then each leg
     s00 = s01 = s11 = 0.0
     for b in range(nb):
-        m, ax, ay = mass[b], arm[b, 0], arm[b, 1]
+        m, ax, ay = mass[b], legs[b, ARM_X], legs[b, ARM_Y]
         k = m / (inertia[b] + m * (ax * ax + ay * ay))
         s00 += m - k * m * ay * ay
         s01 += k * m * ax * ay
         s11 += m - k * m * ax * ax
-        hip_x += k * ay * torque[b]
-        hip_y -= k * ax * torque[b]
+        hip_x += k * ay * legs[b, TORQUE]
+        hip_y -= k * ax * legs[b, TORQUE]
     det = s00 * s11 - s01 * s01
     acc_x = (s11 * hip_x - s01 * hip_y) / det
     acc_y = (s00 * hip_y - s01 * hip_x) / det
     ydot[n] = acc_x
     ydot[n + 1] = acc_y
     for b in range(nb):
-        m, ax, ay = mass[b], arm[b, 0], arm[b, 1]
-        ydot[n + HIP + b] = (torque[b] - m * (ax * acc_y - ay * acc_x)) / (inertia[b] + m * (ax * ax + ay * ay))
+        m, ax, ay = mass[b], legs[b, ARM_X], legs[b, ARM_Y]
+        ydot[n + HIP + b] = (legs[b, TORQUE] - m * (ax * acc_y - ay * acc_x)) / (inertia[b] + m * (ax * ax + ay * ay))
 
 
 @njit(cache=True)
