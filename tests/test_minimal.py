@@ -147,7 +147,7 @@ def test_other_integrators(method: str) -> None:
     assert minimal.step_periods == pytest.approx(planar.step_periods, rel=1e-3)
 
 
-@pytest.mark.parametrize("name", ["round_foot_walker.yaml", "compass_goswami.yaml"])
+@pytest.mark.parametrize("name", ["round_foot_walker.yaml", "compass_goswami.yaml", "four_legged_walker.yaml"])
 def test_cli_runs_the_planar_configs(name: str, tmp_path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "run"
     result = invoke("run", str(CONFIGS / name), "--set", "formulation.kind=minimal", "--set", "simulation.t_end=1.5",
@@ -156,16 +156,31 @@ def test_cli_runs_the_planar_configs(name: str, tmp_path) -> None:  # type: igno
     assert (out / "summary.json").is_file()
 
 
-@pytest.mark.parametrize(
-    ("sets", "field"),
-    [
-        (["walker.kind=simplest", "dynamics=rigid"], "formulation.kind"),
-        (["walker.kind=four_legged"], "walker.kind"),
-    ],
-)
-def test_refused_where_it_does_not_apply(sets: list[str], field: str) -> None:
-    with pytest.raises(ConfigError, match=field):
+@pytest.mark.parametrize("sets", [["dynamics=rigid"], ["walker.kind=simplest", "dynamics=rigid"]])
+def test_rigid_dynamics_refuse_it(sets: list[str]) -> None:
+    with pytest.raises(ConfigError, match=r"formulation\.kind"):
         config_from_dict({}, [*MINIMAL, *sets])
+
+
+@pytest.mark.slow
+def test_four_legged_sagittal_motion_agrees_with_spatial() -> None:
+    """The four-legged walker's laterally symmetric gait is sagittal: the minimal star (two pairs, two feet per
+    pair at one sagittal place) walks as the spatial machine, to the integration error at rtol 1e-10."""
+    runs = [
+        simulate(
+            load_config(CONFIGS / "four_legged_walker.yaml", [f"formulation.kind={kind}", "simulation.t_end=6", *TIGHT])
+        )
+        for kind in ("spatial", "minimal")
+    ]
+    spatial, minimal = runs
+    assert (
+        minimal.status == spatial.status == "walking" and minimal.summary["n_steps"] == spatial.summary["n_steps"] >= 12
+    )
+    assert minimal.step_periods == pytest.approx(spatial.step_periods, rel=3e-8)
+    for kind in ("normal", "friction"):
+        dissipated = minimal.summary["energy_dissipated"][kind]
+        assert dissipated == pytest.approx(spatial.summary["energy_dissipated"][kind], rel=1e-7)
+    assert np.max(np.abs(minimal.energy.residual)) < 1e-8 * minimal.model.total_mass * 9.81 * minimal.model.leg_length
 
 
 def test_limit_cycle_refuses_minimal() -> None:
