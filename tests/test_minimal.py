@@ -96,7 +96,7 @@ def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str) -> None:
         hip_acceleration = full[3 * nb : 3 * nb + 2] + alpha0 * np.array([-arm[1], arm[0]]) - omega0**2 * arm
         expected = np.concatenate([hip_acceleration, full[3 * nb + 2 : 6 * nb : 3], full[6 * nb :]])
         scale = np.max(np.abs(expected))
-        np.testing.assert_allclose(fast[n:], expected, rtol=1e-11, atol=1e-11 * scale)
+        np.testing.assert_allclose(fast[n:], expected, rtol=1e-12, atol=1e-12 * scale)
         loaded += int(np.count_nonzero(full[6 * nb + nf :]))
     assert loaded > 10  # the contact forces took part
 
