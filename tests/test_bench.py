@@ -17,6 +17,7 @@ from biped_sim.bench.runner import (
     BASELINE,
     CASES,
     HEADLINE,
+    MINIMAL,
     PERIOD_TOLERANCE,
     SLOW_RUN_S,
     BenchSettings,
@@ -120,7 +121,9 @@ def made_up_result() -> dict[str, Any]:
         "reference": {"method": "dop853", "rtol": 1e-12, "atol": 1e-15, "n_strikes": 2, "periods": [0.3954]},
         "rows": rows,
         "headline": HEADLINE,
+        "minimal": MINIMAL,
         "rhs_alone_us": 1.5,
+        "rhs_alone_minimal_us": 0.35,
         "loop_overhead": 0.4,
         "baseline_vs_headline_max_period_difference_s": 2e-8,
         "startup": {"cached": {"import_s": 0.3, "build_s": 0.2, "first_integration_s": 0.02, "to_first_step_s": 0.6}},
@@ -139,6 +142,10 @@ def test_bench_markdown_has_a_row_per_case_targets_and_the_summary_line_last() -
     assert lines[-1] == summary_line(result) == "ratio_vs_baseline=26.7 rtf=3.33 rhs_us=6.000"  # the headline row
     met = {name: ok for name, _, ok in targets(result)}
     assert met["RHS evaluation < 2 us"] and not met["loop overhead < 25 %"] and met["cached start-up < 1.5 s"]
+    assert met["minimal-coordinate RHS < 0.4 us"]  # 0.35 us
+    assert not met[
+        "minimal-coordinate RTF >= 2x absolute (dopri5 rtol 1e-6)"
+    ]  # its made-up wall is twice the headline's
     assert "Targets: " in "\n".join(lines)
 
 

@@ -65,7 +65,8 @@ class WalkerConfig(_Strict):
             "Walker builder: 'compass' = two straight legs, round feet, hip joint; 'simplest' = Garcia's "
             "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only); "
             "'four_legged' = Liu's machine: an outer and an inner pair of legs, each pair joined rigidly by a cross "
-            "bar, the pairs by a hip axle, four disc feet (compliant, formulation.kind: spatial only)."
+            "bar, the pairs by a hip axle, four disc feet (compliant; formulation.kind: spatial, or minimal for its "
+            "sagittal motion)."
         ),
     )
     spokes: int = Field(8, ge=3, description="Number of spokes (rimless_wheel).")
@@ -198,9 +199,10 @@ class BaumgarteConfig(_Strict):
 class FormulationConfig(_Strict):
     """Multibody formulation."""
 
-    kind: Literal["planar", "spatial"] = Field(
+    kind: Literal["planar", "spatial", "minimal"] = Field(
         "planar",
-        description="'planar': (x, y, phi) per body; 'spatial': (r, Euler parameters) per body, 3D contact.",
+        description="'planar': (x, y, phi) per body; 'spatial': (r, Euler parameters) per body, 3D contact; "
+        "'minimal': planar, hip position and one angle per body (no constraints; baumgarte unused).",
     )
     baumgarte: BaumgarteConfig = Field(default_factory=BaumgarteConfig)
 
@@ -293,10 +295,15 @@ class Config(_Strict):
     def _cross_checks(self) -> Config:
         if self.dynamics == "compliant" and self.walker.kind in ("simplest", "rimless_wheel"):
             raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
-        if self.walker.kind == "four_legged" and (self.dynamics != "compliant" or self.formulation.kind != "spatial"):
-            raise ValueError("walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial")
-        if self.formulation.kind == "spatial" and self.dynamics != "compliant":
-            raise ValueError("formulation.kind: 'spatial' is available with dynamics: compliant only")
+        if self.walker.kind == "four_legged" and (
+            self.dynamics != "compliant" or self.formulation.kind not in ("spatial", "minimal")
+        ):
+            raise ValueError(
+                "walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial (or minimal, "
+                "its sagittal motion)"
+            )
+        if self.formulation.kind != "planar" and self.dynamics != "compliant":
+            raise ValueError(f"formulation.kind: {self.formulation.kind!r} is available with dynamics: compliant only")
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
         if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:

@@ -6,11 +6,11 @@ RHS evaluations and accepted steps, the cost per evaluation, the real-time facto
 wall seconds), the worst step-period error against a tight reference (dop853, rtol 1e-12) and
 the speed-up over the baseline (solve_ivp RK45 over the plain-Python RHS, :mod:`.baseline`).
 Fixed-step rows first search the largest step that keeps every step period within
-:data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone (hence the loop overhead), compile
-and start-up times in fresh processes, sweep throughput with 1 and 2 workers, and MuJoCo.
+:data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone in absolute and in minimal
+coordinates (hence the loop overhead), compile and start-up times in fresh processes, sweep
+throughput with 1 and 2 workers, and MuJoCo.
 
-:data:`CASES` is the list of rows: another formulation or method is one more entry
-(the spatial-formulation row is one: the same walker in Euler parameters).
+:data:`CASES` is the list of rows: another formulation, method or walker is one more entry.
 """
 
 from __future__ import annotations
@@ -59,13 +59,19 @@ class BenchCase:
     method: str  # integrator name, or BASELINE
     rtol: float | None = None  # adaptive rows; None for fixed-step rows (dt searched)
     overrides: tuple[str, ...] = ()  # extra config overrides, e.g. another formulation
+    same_walker: bool = True  # False: another walker than the reference's (no period error)
 
 
+MINIMAL = "dopri5 rtol 1e-6, minimal coordinates"  # the headline in the minimal formulation (issue 13 targets)
+FOUR_LEGGED = "walker.kind=four_legged"  # another walker than the reference's: no period error
 CASES: tuple[BenchCase, ...] = (
     BenchCase("baseline: solve_ivp RK45, Python RHS, rtol 1e-6", BASELINE, 1e-6),
     BenchCase("dopri5 rtol 1e-6", "dopri5", 1e-6),
     BenchCase("dopri5 rtol 1e-9", "dopri5", 1e-9),
     BenchCase("dopri5 rtol 1e-6, spatial formulation", "dopri5", 1e-6, ("formulation.kind=spatial",)),
+    BenchCase(MINIMAL, "dopri5", 1e-6, ("formulation.kind=minimal",)),
+    BenchCase("dopri5 1e-6, four-legged, spatial", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=spatial"), False),
+    BenchCase("dopri5 1e-6, four-legged, minimal", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=minimal"), False),
     BenchCase("rk4", "rk4"),
     BenchCase("rk2", "rk2"),
     BenchCase("euler", "euler"),
@@ -243,7 +249,7 @@ def measure_case(
     wall, walls, run = timed(
         lambda: integrate(model, config, case.method), warm_up, settings.repeats, settings.slow_repeats
     )
-    row = make_row(case, config, wall, walls, run, period_error(run, reference))
+    row = make_row(case, config, wall, walls, run, period_error(run, reference) if case.same_walker else math.nan)
     row.dt_search = trials
     if case.rtol is None and row.period_error > PERIOD_TOLERANCE:
         row.note = f"no dt down to {DT_LADDER[-1]:g} s meets {PERIOD_TOLERANCE:g}"
@@ -322,12 +328,9 @@ def startup_times(config_path: Path, cold: bool) -> dict[str, Any]:
         first = startup_run(config_path, cache_dir)
         if cold:
             result["cold"] = first
-        result["cached"] = min((startup_run(config_path, cache_dir) for _ in range(3)), key=_first_step)
+        runs = [startup_run(config_path, cache_dir) for _ in range(3)]
+        result["cached"] = min(runs, key=lambda data: data["to_first_step_s"])
     return result
-
-
-def _first_step(data: dict[str, float]) -> float:
-    return data["to_first_step_s"]
 
 
 _SWEEP_FILE = """\
@@ -382,7 +385,7 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     for row in rows:
         row.ratio_vs_baseline = baseline.wall_s / row.wall_s
     headline = next(r for r in rows if r.label == HEADLINE)
-    rhs_us = rhs_cost_us(*measured[HEADLINE])
+    rhs_us, rhs_minimal_us = rhs_cost_us(*measured[HEADLINE]), rhs_cost_us(*measured[MINIMAL])
     # best-case against best-case: both timings are disturbed by whatever else runs on the machine
     loop_overhead = 1.0 - headline.rhs_evals * rhs_us * 1e-6 / min(headline.walls_s)
     ours, theirs = step_periods(measured[HEADLINE][1]), step_periods(measured[baseline.label][1])
@@ -405,11 +408,13 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
         },
         "rows": [asdict(r) for r in rows],
         "headline": HEADLINE,
+        "minimal": MINIMAL,
         "rhs_alone_us": rhs_us,
+        "rhs_alone_minimal_us": rhs_minimal_us,
         "loop_overhead": loop_overhead,
         "baseline_vs_headline_max_period_difference_s": float(np.max(np.abs(ours[:n] - theirs[:n]))),
     }
-    log(f"RHS alone {rhs_us:.3f} us, loop overhead {loop_overhead:.0%}")
+    log(f"RHS alone {rhs_us:.3f} us (minimal coordinates {rhs_minimal_us:.3f} us), loop overhead {loop_overhead:.0%}")
     result["startup"] = startup_times(settings.config_path, cold=settings.compile_time)
     log(f"start-up: {json.dumps(result['startup'])}")
     if settings.sweep_runs:

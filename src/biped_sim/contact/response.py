@@ -5,6 +5,9 @@ lead over the partner foot); what the ground does with it is written once, here:
 
 * the per-foot discrete mode table ``modes[i]`` = (ARMED, TOUCHING, IMPACT_SPEED) and the indices of
   the kernels' ``switches`` and ``limits`` vectors;
+* :func:`arc_contact`: a foot arc against the ground (penetration, approach and slip velocities,
+  contact point): the one place where the ground's shape is;
+* :func:`ground_forces`: the normal and friction forces on a loaded foot and their dissipation;
 * :func:`normal_response`: the normal force of the selected law with the approach velocity
   remembered at touchdown (floored) and the power its damping dissipates;
 * :func:`update_contact_modes`: the scuffing guard's arming rule (:func:`guard_arms`), touchdown and
@@ -22,7 +25,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.friction import LUGRE
+from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
 from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
 
 # columns of the per-foot discrete mode table
@@ -60,6 +63,59 @@ def make_contact_buffers(bristles: np.ndarray) -> ContactBuffers:
     """Allocate the buffers for the feet whose bristle-state indices are the rows of ``bristles``."""
     nf = bristles.shape[0]
     return ContactBuffers(np.zeros(nf, dtype=np.int64), np.zeros(2 * nf), np.zeros(nf), bristles.astype(np.int64))
+
+
+@njit(cache=True)
+def arc_contact(
+    rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float
+) -> tuple[float, float, float, float, float, float]:
+    """A foot arc of centre (cx, cy) and ``radius`` against the ground line y = 0, normal (0, 1) (MODEL.md 3).
+
+    (rx, ry) is a reference point of the foot's body, (vx, vy) its velocity and ``omega`` the body's
+    angular velocity: the planar formulation passes the centre of mass, the minimal one the hip.
+    Returns (delta, delta_dot, slip, x_contact, dx, dy): penetration R - C_y, approach velocity
+    -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact point's position
+    along the slope, and P - r (the lever arm of the contact force about the reference point).
+    """
+    px = cx
+    py = cy - radius
+    dx, dy = px - rx, py - ry
+    vpx = vx - omega * dy
+    vpy = vy + omega * dx
+    return -py, -vpy, vpx, px, dx, dy
+
+
+@njit(cache=True)
+def ground_forces(
+    switches: np.ndarray,
+    npar: np.ndarray,
+    fpar: np.ndarray,
+    floor: float,
+    modes: np.ndarray,
+    i: int,
+    delta: float,
+    delta_dot: float,
+    slip: float,
+    z: float,
+) -> tuple[float, float, float, float, float]:
+    """(F_N, F_T, zdot, P_normal, P_friction) on foot i, zero unless it is loaded (:func:`is_loaded`).
+
+    F_N and the power P_normal lost in the normal damping come from :func:`normal_response`; F_T from
+    the friction law ``switches[FRICTION_MODEL]`` (LuGre with bristle deflection ``z``, whose rate is
+    zdot); P_friction = -F_T v_t is the power friction takes (for LuGre this includes the small,
+    load-dependent bristle energy, which is not a potential). Arrays, not the system: see
+    :func:`normal_response`.
+    """
+    f_n = f_t = z_dot = p_normal = p_friction = 0.0  # one return: numba then elides the reference counting
+    if is_loaded(modes, i, delta):
+        f_n, p_normal = normal_response(switches[NORMAL_MODEL], npar, floor, modes, i, delta, delta_dot)
+        if switches[FRICTION_MODEL] == LUGRE:
+            z_dot = lugre_bristle_rate(slip, z, fpar)
+            f_t = lugre_friction(slip, z, z_dot, f_n, fpar)
+        else:
+            f_t = friction_force(switches[FRICTION_MODEL], slip, f_n, fpar)
+        p_friction = -f_t * slip
+    return f_n, f_t, z_dot, p_normal, p_friction
 
 
 @njit(cache=True)

@@ -62,8 +62,10 @@ class RunData:
 
     @property
     def body_names(self) -> list[str]:
-        """Bodies in state order (from the 'x_<body>' entries)."""
-        return [name[2:] for name in self.state_names if name.startswith("x_")]
+        """Bodies in state order: from the 'phi_<body>' entries (planar, minimal), else the 'x_<body>' ones (spatial;
+        minimal-coordinate states also hold 'x_hip', which is no body)."""
+        planar = [name[4:] for name in self.state_names if name.startswith("phi_")]
+        return planar or [name[2:] for name in self.state_names if name.startswith("x_")]
 
     @property
     def label(self) -> str:

@@ -21,7 +21,7 @@ from numba import types
 from numba.extending import overload
 
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
-from biped_sim.multibody import planar, spatial_kernels
+from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
 
 FORMULATIONS: dict[type, Formulation] = {}
@@ -113,3 +113,4 @@ def contact_buffers(system: tuple) -> ContactBuffers:
 
 register(planar.FORMULATION)
 register(spatial_kernels.FORMULATION)
+register(minimal.FORMULATION)

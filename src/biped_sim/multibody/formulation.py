@@ -54,9 +54,11 @@ class Measures(NamedTuple):
 class StateLayout:
     """Where each quantity of an ODE state y = [q | qd | z | W_normal | W_friction] sits.
 
-    q holds ``len(coordinates)`` entries per body, qd as many rates per body (in the same order), z
-    ``len(bristles)`` friction states per foot, then the work dissipated by normal damping and by
-    friction (integrated with the motion: the energy balance E(t) - E(0) + W(t) = 0 checks the run).
+    q holds the system's ``base_coordinates`` (a floating base shared by the bodies, e.g. the minimal
+    formulation's hip position; none for absolute coordinates), then ``len(coordinates)`` entries per
+    body; qd the same rates in the same order; z ``len(bristles)`` friction states per foot, then the
+    work dissipated by normal damping and by friction (integrated with the motion: the energy balance
+    E(t) - E(0) + W(t) = 0 checks the run).
     """
 
     coordinates: tuple[str, ...]  # one body's coordinates, e.g. ("x", "y", "phi")
@@ -64,20 +66,38 @@ class StateLayout:
     bristles: tuple[str, ...]  # one foot's friction states, e.g. ("z",)
     n_bodies: int
     n_feet: int
+    base_coordinates: tuple[str, ...] = ()  # the system's own coordinates before the bodies', e.g. ("x_hip", "y_hip")
+    base_rates: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if len(self.rates) != len(self.coordinates):
-            raise ValueError("a body needs one rate per coordinate")
+        if len(self.rates) != len(self.coordinates) or len(self.base_rates) != len(self.base_coordinates):
+            raise ValueError("a body and the base need one rate per coordinate")
+
+    @property
+    def n_coordinates(self) -> int:
+        """Length of q (and of qd): the generalized coordinates."""
+        return len(self.base_coordinates) + len(self.coordinates) * self.n_bodies
+
+    @property
+    def positions(self) -> slice:
+        """q: every generalized coordinate in y."""
+        return slice(0, self.n_coordinates)
+
+    @property
+    def velocities(self) -> slice:
+        """qd: every generalized velocity in y."""
+        return slice(self.n_coordinates, 2 * self.n_coordinates)
 
     def position(self, body: int) -> slice:
         """Body ``body``'s coordinates in y."""
         width = len(self.coordinates)
-        return slice(width * body, width * (body + 1))
+        start = len(self.base_coordinates) + width * body
+        return slice(start, start + width)
 
     def velocity(self, body: int) -> slice:
         """Body ``body``'s velocities in y."""
         width = len(self.rates)
-        start = width * self.n_bodies + width * body
+        start = self.n_coordinates + len(self.base_rates) + width * body
         return slice(start, start + width)
 
     def coordinate(self, body: int, name: str) -> int:
@@ -91,7 +111,7 @@ class StateLayout:
     @property
     def first_bristle(self) -> int:
         """Index in y of foot 0's first friction state."""
-        return 2 * len(self.coordinates) * self.n_bodies
+        return 2 * self.n_coordinates
 
     def bristle(self, foot: int) -> slice:
         """Foot ``foot``'s friction states in y."""
@@ -121,8 +141,8 @@ class StateLayout:
 
     def names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
         """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``)."""
-        coords = [f"{axis}_{body}" for body in body_names for axis in self.coordinates]
-        rates = [f"{axis}_{body}" for body in body_names for axis in self.rates]
+        coords = [*self.base_coordinates, *(f"{axis}_{body}" for body in body_names for axis in self.coordinates)]
+        rates = [*self.base_rates, *(f"{axis}_{body}" for body in body_names for axis in self.rates)]
         bristles = [f"{state}_{foot}" for foot in foot_names for state in self.bristles]
         return coords + rates + bristles + ["W_normal", "W_friction"]
 
@@ -146,13 +166,17 @@ class Formulation:
     rates: tuple[str, ...]
     bristles: tuple[str, ...]
     capabilities: frozenset[str] = frozenset()
+    base_coordinates: tuple[str, ...] = ()  # see StateLayout
+    base_rates: tuple[str, ...] = ()
     # (y, system, impulse) -> the state just after an impulse [px, py] [N s] (slope frame) on the hip: positions
     # unchanged, rates jumped consistently with the constraints (simulation.pushes); None: no pushes
     hip_impulse: Callable[..., np.ndarray] | None = None
 
     def layout(self, n_bodies: int, n_feet: int) -> StateLayout:
         """The state layout of a system of this formulation with ``n_bodies`` bodies and ``n_feet`` feet."""
-        return StateLayout(self.coordinates, self.rates, self.bristles, n_bodies, n_feet)
+        return StateLayout(
+            self.coordinates, self.rates, self.bristles, n_bodies, n_feet, self.base_coordinates, self.base_rates
+        )
 
     def layout_of(self, system: Any) -> StateLayout:
         """The state layout of ``system``."""

@@ -28,15 +28,12 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
-    FRICTION_MODEL,
     IMPACT_FLOOR,
-    NORMAL_MODEL,
-    is_loaded,
-    normal_response,
+    arc_contact,
+    ground_forces,
     stored_energy,
 )
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
@@ -81,25 +78,15 @@ def make_workspace(system: PlanarSystem) -> Workspace:
 
 @njit(cache=True)
 def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
-    """Foot arc against the ground line y = 0 with normal (0, 1) (MODEL.md 3).
-
-    Returns (delta, delta_dot, slip, x_contact, dx, dy): penetration R - C_y, approach velocity
-    -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact point's
-    position along the slope, and P - r_body (the lever arm of the contact force).
-    """
+    """Foot i's arc against the ground (:func:`~biped_sim.contact.response.arc_contact`, about its body's centre
+    of mass): (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_body."""
     nb = system.body_mass.shape[0]
     b = system.foot_body[i]
     x, yb, phi = y[3 * b], y[3 * b + 1], y[3 * b + 2]
     vx, vy, om = y[3 * nb + 3 * b], y[3 * nb + 3 * b + 1], y[3 * nb + 3 * b + 2]
     c, s = math.cos(phi), math.sin(phi)
     sx, sy = system.foot_center[i, 0], system.foot_center[i, 1]
-    radius = system.foot_radius[i]
-    px = x + c * sx - s * sy
-    py = yb + s * sx + c * sy - radius
-    dx, dy = px - x, py - yb
-    vpx = vx - om * dy
-    vpy = vy + om * dx
-    return -py, -vpy, vpx, px, dx, dy
+    return arc_contact(x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy, system.foot_radius[i])
 
 
 @njit(cache=True)
@@ -113,27 +100,14 @@ def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float,
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float]:
-    """Contact forces on foot i and their dissipation rates.
-
-    Returns (F_N, F_T, zdot, P_normal, P_friction, delta, delta_dot, slip, dx, dy) with F_N and the
-    power P_normal lost in the normal damping from :func:`~biped_sim.contact.response.normal_response`,
-    and P_friction = -F_T v_t the power taken by friction (for LuGre this includes the small,
-    load-dependent bristle energy, which is not a potential). The force acts when the foot is armed
-    and penetrates.
+    """Contact forces on foot i and their dissipation rates: (F_N, F_T, zdot, P_normal, P_friction) of
+    :func:`~biped_sim.contact.response.ground_forces`, then delta, delta_dot, slip, dx, dy of :func:`foot_kinematics`.
     """
     delta, delta_dot, slip, _, dx, dy = foot_kinematics(y, system, i)
-    f_n = f_t = z_dot = p_normal = p_friction = 0.0  # one return: numba then elides the reference counting
-    if is_loaded(modes, i, delta):
-        npar, floor = system.normal_params, system.limits[IMPACT_FLOOR]
-        f_n, p_normal = normal_response(system.switches[NORMAL_MODEL], npar, floor, modes, i, delta, delta_dot)
-        fpar = system.friction_params
-        if system.switches[FRICTION_MODEL] == LUGRE:
-            z = y[6 * system.body_mass.shape[0] + i]
-            z_dot = lugre_bristle_rate(slip, z, fpar)
-            f_t = lugre_friction(slip, z, z_dot, f_n, fpar)
-        else:
-            f_t = friction_force(system.switches[FRICTION_MODEL], slip, f_n, fpar)
-        p_friction = -f_t * slip
+    f_n, f_t, z_dot, p_normal, p_friction = ground_forces(
+        system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, i,
+        delta, delta_dot, slip, y[6 * system.body_mass.shape[0] + i],
+    )  # fmt: skip
     return f_n, f_t, z_dot, p_normal, p_friction, delta, delta_dot, slip, dx, dy
 
 

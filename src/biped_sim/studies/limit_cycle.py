@@ -97,9 +97,11 @@ class TouchdownSection:
 
     def __init__(self, config: Config, model: BuiltModel) -> None:
         system = model.system
+        formulation = formulation_of(system)
+        if not formulation.supports(COMPLIANT_LIMIT_CYCLE):
+            raise ConfigError("formulation.kind", f"the compliant limit cycle is not available in {formulation.name!r}")
         if not (
-            formulation_of(system).supports(COMPLIANT_LIMIT_CYCLE)
-            and system.body_mass.shape[0] == 2
+            system.body_mass.shape[0] == 2
             and system.joint_bodies.tolist() == [[0, 1]]
             and system.foot_body.tolist() == [0, 1]
             and system.foot_partner.tolist() == [1, 0]
@@ -110,7 +112,7 @@ class TouchdownSection:
                 "walker.kind", "the compliant limit cycle needs the planar compass walker (two identical legs)"
             )
         self.system = system
-        self.layout = formulation_of(system).layout_of(system)
+        self.layout = formulation.layout_of(system)
         self.hip_in_body = system.joint_points[0, :2].copy()
         self.centre_from_hip = system.foot_center[0] - self.hip_in_body
         self.radius = float(system.foot_radius[0])

@@ -10,12 +10,13 @@ from collections.abc import Callable
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.compass import build_compass
-from biped_sim.walkers.four_legged import build_four_legged
-from biped_sim.walkers.model import BuiltModel
+from biped_sim.walkers.four_legged import build_four_legged, build_four_legged_sagittal
+from biped_sim.walkers.model import BuiltModel, minimal_model
 from biped_sim.walkers.spatial_compass import build_spatial_compass
 
-BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
+BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {  # planar; minimal converts them
     "compass": build_compass,
+    "four_legged": build_four_legged_sagittal,  # the config allows it in minimal coordinates only
 }
 SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
     "compass": build_spatial_compass,
@@ -40,6 +41,8 @@ def build_model(config: Config, initial: InitialState | None = None) -> BuiltMod
             "walker.kind",
             f"{config.walker.kind!r} has no compliant-contact builder in the {config.formulation.kind} formulation",
         )
+    if config.formulation.kind == "minimal":  # the planar builder's walker, in minimal coordinates
+        return minimal_model(builder(config, initial))
     return builder(config, initial)
 
 

@@ -1,4 +1,4 @@
-"""Liu's four-legged passive walker: an outer and an inner pair of legs, four disc feet (spatial only).
+"""Liu's four-legged passive walker: an outer and an inner pair of legs, four disc feet (spatial, or sagittal).
 
 Each pair is one rigid body: two straight legs (mass m, centre of mass c below the hip, inertia I
 about their centre of mass for any axis across the leg, none about the leg's own axis: slender
@@ -19,6 +19,10 @@ outer pair in stance on both feet (each carrying half the weight: static penetra
 (M g cos gamma / 2 K)^(1/n)), the inner pair swinging, leg angles and rates from
 ``simulation.initial``. Nothing in the machine or in this start breaks the lateral symmetry, so
 roll and yaw stay at round-off unless the model is perturbed.
+
+Its motion is then sagittal: :func:`build_four_legged_sagittal` is the same machine as a planar star
+(two bodies, J'_zz each, joined at the hip, two feet per body at one sagittal place), which the
+minimal-coordinate formulation integrates (``formulation.kind: minimal``).
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ import numpy as np
 
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
+from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
 from biped_sim.walkers.compass import sagittal_initial_state
 from biped_sim.walkers.model import (
@@ -59,6 +64,57 @@ def pair_properties(config: Config, spacing: float) -> tuple[float, float, np.nd
     return mass, d, np.diag([j_xx, j_yy, j_zz])
 
 
+def _leg_pairs(config: Config) -> tuple[np.ndarray, list[float], np.ndarray]:
+    """(masses, hip-to-centre-of-mass distances, inertias J') of the outer and inner pair."""
+    props = [pair_properties(config, s) for s in (config.walker.foot_spacing_outer, config.walker.foot_spacing_inner)]
+    if min(np.linalg.eigvalsh(j).min() for _, _, j in props) <= 0.0:
+        raise ConfigError("walker.leg_inertia", "each leg pair needs a positive-definite inertia")
+    return np.array([mass for mass, _, _ in props]), [d for _, d, _ in props], np.array([j for _, _, j in props])
+
+
+def _meta(static_penetration: float, masses: np.ndarray) -> dict[str, float]:
+    return {"static_penetration": static_penetration, "outer_mass": float(masses[0]), "inner_mass": float(masses[1])}
+
+
+BODY_NAMES = ["outer", "inner"]
+FOOT_NAMES = ["outer_left", "outer_right", "inner_left", "inner_right"]
+FOOT_BODY = np.array([0, 0, 1, 1], dtype=np.int64)
+FOOT_PARTNER = np.array([2, 3, 0, 1], dtype=np.int64)  # the other pair's foot on the same side
+
+
+def build_four_legged_sagittal(config: Config, initial: InitialState) -> BuiltModel:
+    """The four-legged walker's sagittal motion as a planar star: the two pairs (sagittal inertia J'_zz) hinged
+    at the hip, each pair's two feet at one place of its sagittal plane, standing on the outer pair."""
+    w = config.walker
+    l, R = w.leg_length, w.foot_radius
+    masses, offsets, inertia = _leg_pairs(config)
+    total_mass = float(masses.sum())
+    stiffness = contact_stiffness(config)
+    normal, friction, switches = contact_arrays(config, stiffness, total_mass)
+    gravity = spatial_gravity(config)[:2]
+    system = PlanarSystem(
+        body_mass=masses,
+        body_inertia=inertia[:, 2, 2].copy(),
+        joint_bodies=np.array([[0, 1]], dtype=np.int64),
+        joint_points=np.array([[0.0, offsets[0], 0.0, offsets[1]]]),
+        foot_body=FOOT_BODY.copy(),
+        foot_center=np.array([[0.0, -(l - R - offsets[b])] for b in FOOT_BODY]),
+        foot_radius=np.full(4, R),
+        foot_partner=FOOT_PARTNER.copy(),
+        gravity=gravity,
+        baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),
+        normal_params=normal,
+        friction_params=friction,
+        switches=switches,
+        limits=contact_limits(config),
+    )
+    static_penetration = static_contact_penetration(config, 0.5 * total_mass, stiffness)
+    coords, rates, hip_speed = sagittal_initial_state(config, initial, (offsets[0], offsets[1]), static_penetration)
+    y0, modes0 = standing_start(system, coords, rates, (0, 1), max(hip_speed, config.contact.impact_velocity_floor))
+    meta = _meta(static_penetration, masses)
+    return BuiltModel(system, y0, modes0, BODY_NAMES, FOOT_NAMES, l, total_mass, stiffness, meta)
+
+
 def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     """Bodies, hip axle and four feet of the four-legged walker, standing on its outer pair."""
     if config.formulation.kind != "spatial":
@@ -66,18 +122,12 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     w = config.walker
     l, R = w.leg_length, w.foot_radius
     spacings = (w.foot_spacing_outer, w.foot_spacing_inner)
-    props = [pair_properties(config, s) for s in spacings]
-    if min(np.linalg.eigvalsh(j).min() for _, _, j in props) <= 0.0:
-        raise ConfigError("walker.leg_inertia", "each leg pair needs a positive-definite inertia")
-    masses = np.array([mass for mass, _, _ in props])
-    offsets = [d for _, d, _ in props]
-    inertia = np.array([j for _, _, j in props])
+    masses, offsets, inertia = _leg_pairs(config)
     total_mass = float(masses.sum())
     stiffness = contact_stiffness(config)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
     kinds, bodies, vecs, rows = constraint_arrays(revolute(0, offsets[0], 1, offsets[1]))
 
-    foot_body = np.array([0, 0, 1, 1], dtype=np.int64)
     foot_center = np.array(
         [[0.0, -(l - R - offsets[b]), side * 0.5 * spacings[b]] for b in (0, 1) for side in (1.0, -1.0)]
     )
@@ -89,11 +139,11 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
         con_bodies=bodies,
         con_vecs=vecs,
         con_row=rows,
-        foot_body=foot_body,
+        foot_body=FOOT_BODY.copy(),
         foot_center=foot_center,
         foot_axis=np.array([DISC_AXIS] * 4),
         foot_radius=np.full(4, R),
-        foot_partner=np.array([2, 3, 0, 1], dtype=np.int64),
+        foot_partner=FOOT_PARTNER.copy(),
         gravity=spatial_gravity(config),
         baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),
         normal_params=normal,
@@ -108,17 +158,5 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     # the outer pair "just struck"
     y0, modes0 = standing_start(system, q, qd, (0, 1), max(hip_speed, config.contact.impact_velocity_floor))
     return BuiltModel(
-        system=system,
-        y0=y0,
-        modes0=modes0,
-        body_names=["outer", "inner"],
-        foot_names=["outer_left", "outer_right", "inner_left", "inner_right"],
-        leg_length=l,
-        total_mass=total_mass,
-        stiffness=stiffness,
-        meta={
-            "static_penetration": static_penetration,
-            "outer_mass": float(masses[0]),
-            "inner_mass": float(masses[1]),
-        },
+        system, y0, modes0, BODY_NAMES, FOOT_NAMES, l, total_mass, stiffness, _meta(static_penetration, masses)
     )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -14,6 +14,7 @@ from biped_sim.contact.response import ARMED, IMPACT_SPEED, N_MODE_COLUMNS, TOUC
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import contact_buffers, formulation_of
 from biped_sim.multibody.events import system_update_modes
+from biped_sim.multibody.minimal import MinimalSystem, star_state, star_system
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
 
@@ -22,7 +23,7 @@ from biped_sim.multibody.spatial import SpatialSystem
 class BuiltModel:
     """A walker ready to integrate: the system, its initial state and what the numbers mean."""
 
-    system: PlanarSystem | SpatialSystem
+    system: PlanarSystem | SpatialSystem | MinimalSystem
     y0: np.ndarray
     modes0: np.ndarray
     body_names: list[str]
@@ -113,16 +114,16 @@ def standing_start(
     stance_feet: tuple[int, ...],
     impact_speed: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(y0, modes0) of a walker whose ``stance_feet`` "just struck": bodies at ``q`` with rates ``qd`` (one row
-    per body, the formulation's coordinates), bristles relaxed, no work dissipated yet.
+    """(y0, modes0) of a walker whose ``stance_feet`` "just struck": generalized coordinates ``q`` and rates ``qd``
+    (absolute coordinates: one row per body), bristles relaxed, no work dissipated yet.
 
     The stance feet are armed and touching and remember ``impact_speed`` as their approach velocity; the mode
     update then arms each other foot that is ahead of its partner and in the air.
     """
     layout = formulation_of(system).layout_of(system)
     y0 = np.zeros(layout.size)
-    y0[layout.position(0).start : layout.position(layout.n_bodies - 1).stop] = np.ravel(q)
-    y0[layout.velocity(0).start : layout.velocity(layout.n_bodies - 1).stop] = np.ravel(qd)
+    y0[layout.positions] = np.ravel(q)
+    y0[layout.velocities] = np.ravel(qd)
     modes0 = np.zeros((layout.n_feet, N_MODE_COLUMNS))
     for foot in stance_feet:
         modes0[foot, ARMED] = 1.0
@@ -130,3 +131,9 @@ def standing_start(
         modes0[foot, IMPACT_SPEED] = impact_speed
     system_update_modes(y0, system, modes0, contact_buffers(system))
     return y0, modes0
+
+
+def minimal_model(planar: BuiltModel) -> BuiltModel:
+    """The planar walker ``planar`` (a star of bodies hinged at the hip) in minimal coordinates: its system and
+    start converted, so that both formulations describe the same walker by construction."""
+    return replace(planar, system=star_system(planar.system), y0=star_state(planar.y0, planar.system))

@@ -1,0 +1,324 @@
+"""Planar walkers in minimal (generalized) coordinates, compiled with numba: a star of bodies hinged at the hip.
+
+Every body b hangs from one hip point H; its centre of mass sits at c_b from H and its feet's arc
+centres at f_i from H (body frame, any 2-D vectors: off-axis centres of mass and feet need nothing
+more). The generalized coordinates are the floating base and one absolute angle per body,
+q = (x_h, y_h, phi_0, ..., phi_{nb-1}), so the hip joints hold by construction: no constraint rows,
+no Baumgarte, no drift. With a_b = A(phi_b) c_b and e_b = d a_b / d phi_b = (-a_by, a_bx), the centre of
+mass moves as r_b = r_h + a_b, v_b = v_h + omega_b e_b, and M(q) qdd = Q with the arrow-shaped
+
+    M = [ m I2        m_b e_b ... ]        Q_h = sum_b m_b (g + omega_b^2 a_b) + sum_feet F
+        [ m_b e_b^T   D_b         ]        Q_b = m_b e_b . g + sum_{feet of b} (P - r_h) x F
+
+(m the total mass, D_b = J_b + m_b |c_b|^2 the inertia about the hip, F the contact force at the
+contact point P). It is solved by the Schur complement on the diagonal leg block: a 2x2 system for
+the hip acceleration, then each leg's angular acceleration. The feet, contact laws, events and
+energy audit are those of every formulation (:mod:`biped_sim.contact.response`); the state is
+y = [q | qd | z (one bristle per foot) | W_normal | W_friction] (``FORMULATION.layout_of(system)``).
+:func:`star_system` and :func:`star_state` convert a planar absolute-coordinate star (the walker
+builders' output) into this formulation, so both describe the same walker by construction.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from biped_sim.contact.response import (
+    FALL_HIP_HEIGHT,
+    FALL_LEG_ANGLE,
+    IMPACT_FLOOR,
+    arc_contact,
+    ground_forces,
+    is_loaded,
+    stored_energy,
+)
+from biped_sim.multibody.formulation import Formulation, Measures
+from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
+
+HIP = 2  # hip coordinates (x_h, y_h) come first in q
+
+
+class MinimalSystem(NamedTuple):
+    """Numeric description of a star-shaped planar walker in minimal coordinates, as the kernels read it."""
+
+    body_mass: np.ndarray  # (nb,) [kg]
+    body_inertia: np.ndarray  # (nb,) about the centre of mass [kg m^2]
+    body_com: np.ndarray  # (nb, 2) centre of mass from the hip, body frame
+    foot_body: np.ndarray  # (nf,) int64
+    foot_center: np.ndarray  # (nf, 2) arc centre from the hip, body frame
+    foot_radius: np.ndarray  # (nf,)
+    foot_partner: np.ndarray  # (nf,) int64: the foot this one must be ahead of to arm (-1: none)
+    gravity: np.ndarray  # (2,) in the slope frame
+    normal_params: np.ndarray
+    friction_params: np.ndarray
+    switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
+    limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
+
+
+# columns of the workspace's per-body table: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos, sin phi_b
+TORQUE, ARM_X, ARM_Y, COS, SIN = range(5)
+
+
+class Workspace(NamedTuple):
+    """Preallocated buffers for one right-hand-side evaluation (one array: each array costs reference counts)."""
+
+    legs: np.ndarray  # (nb, 5) per body, columns TORQUE, ARM_X, ARM_Y, COS, SIN; the hip's Q_h are local variables
+
+
+def make_workspace(system: MinimalSystem) -> Workspace:
+    """Allocate the buffers of ``system`` (once per simulation, not per step)."""
+    return Workspace(np.zeros((system.body_mass.shape[0], 5)))
+
+
+@njit(cache=True)
+def foot_arc(
+    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float
+) -> tuple[float, float, float, float, float, float]:
+    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against the
+    ground (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
+    (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_h."""
+    cx, cy = y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
+    return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius)
+
+
+@njit(cache=True)
+def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
+    """:func:`foot_arc` of foot i."""
+    centre, b = system.foot_center, system.foot_body[i]
+    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+    return foot_arc(y, HIP + system.body_mass.shape[0], b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i])
+
+
+@njit(cache=True)
+def foot_contact(y: np.ndarray, system: MinimalSystem, foot: int) -> tuple[float, float, float]:
+    """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
+    delta, delta_dot, _, x_contact, _, _ = foot_kinematics(y, system, foot)
+    return delta, delta_dot, x_contact
+
+
+@njit(cache=True)
+def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
+    """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free).
+
+    One flat function: each array it reads costs numba a reference-count update at entry and exit, and
+    each array handed to a function that is not inlined one more; these were most of this kernel's time.
+    """
+    mass, inertia, com = system.body_mass, system.body_inertia, system.body_com
+    foot_body, centre, radius = system.foot_body, system.foot_center, system.foot_radius
+    legs = work.legs
+    nb, nf = mass.shape[0], foot_body.shape[0]
+    n = HIP + nb
+    gx, gy = system.gravity[0], system.gravity[1]
+    hip_x = hip_y = 0.0  # Q_h
+    for b in range(nb):
+        m, om = mass[b], y[n + HIP + b]
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        ax = c * com[b, 0] - s * com[b, 1]
+        ay = s * com[b, 0] + c * com[b, 1]
+        hip_x += m * (gx + om * om * ax)
+        hip_y += m * (gy + om * om * ay)
+        legs[b, TORQUE], legs[b, ARM_X], legs[b, ARM_Y] = m * (ax * gy - ay * gx), ax, ay
+        legs[b, COS], legs[b, SIN] = c, s
+    for k in range(n):
+        ydot[k] = y[n + k]
+    w_normal = w_friction = 0.0
+    switches, npar, fpar = system.switches, system.normal_params, system.friction_params
+    floor = system.limits[IMPACT_FLOOR]
+    for i in range(nf):
+        b = foot_body[i]
+        c, s = legs[b, COS], legs[b, SIN]
+        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], radius[i])
+        if not is_loaded(modes, i, delta):  # ground_forces would return zeros: skip the call (and its refcounts)
+            ydot[2 * n + i] = 0.0
+            continue
+        f_n, f_t, z_dot, p_n, p_f = ground_forces(
+            switches, npar, fpar, floor, modes, i, delta, delta_dot, slip, y[2 * n + i]
+        )
+        hip_x += f_t
+        hip_y += f_n
+        legs[b, TORQUE] += dx * f_n - dy * f_t
+        ydot[2 * n + i] = z_dot
+        w_normal += p_n
+        w_friction += p_f
+    ydot[2 * n + nf] = w_normal
+    ydot[2 * n + nf + 1] = w_friction
+    # M qdd = Q by the Schur complement on the diagonal leg block: the 2x2 hip block
+    # S = m I2 - sum_b m_b^2 e_b e_b^T / D_b against Q_h - sum_b m_b e_b Q_b / D_b, then each leg
+    s00 = s01 = s11 = 0.0
+    for b in range(nb):
+        m, ax, ay = mass[b], legs[b, ARM_X], legs[b, ARM_Y]
+        k = m / (inertia[b] + m * (ax * ax + ay * ay))
+        s00 += m - k * m * ay * ay
+        s01 += k * m * ax * ay
+        s11 += m - k * m * ax * ax
+        hip_x += k * ay * legs[b, TORQUE]
+        hip_y -= k * ax * legs[b, TORQUE]
+    det = s00 * s11 - s01 * s01
+    acc_x = (s11 * hip_x - s01 * hip_y) / det
+    acc_y = (s00 * hip_y - s01 * hip_x) / det
+    ydot[n] = acc_x
+    ydot[n + 1] = acc_y
+    for b in range(nb):
+        m, ax, ay = mass[b], legs[b, ARM_X], legs[b, ARM_Y]
+        ydot[n + HIP + b] = (legs[b, TORQUE] - m * (ax * acc_y - ay * acc_x)) / (inertia[b] + m * (ax * ax + ay * ay))
+
+
+@njit(cache=True)
+def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
+    nb = system.body_mass.shape[0]
+    n = HIP + nb
+    kinetic = 0.0
+    potential = 0.0
+    for b in range(nb):
+        m, om = system.body_mass[b], y[n + HIP + b]
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        ax = c * system.body_com[b, 0] - s * system.body_com[b, 1]
+        ay = s * system.body_com[b, 0] + c * system.body_com[b, 1]
+        vx, vy = y[n] - om * ay, y[n + 1] + om * ax
+        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * system.body_inertia[b] * om * om
+        potential -= m * (system.gravity[0] * (y[0] + ax) + system.gravity[1] * (y[1] + ay))
+    elastic = 0.0
+    for i in range(system.foot_body.shape[0]):
+        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
+    return kinetic, potential, elastic
+
+
+@njit(cache=True)
+def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
+    """Fall: hip below the height limit, or any body rotated past the leg-angle limit."""
+    if y[1] < system.limits[FALL_HIP_HEIGHT]:
+        return True
+    for b in range(system.body_mass.shape[0]):
+        if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
+            return True
+    return False
+
+
+# ---------------------------------------------------------------- conversion and post-processing (Python side)
+
+
+def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def star_hips(planar: PlanarSystem) -> np.ndarray:
+    """(nb, 2): each body's hip point in its frame, for a planar system whose joints all hinge body 0's hip
+    point to another body (joint j: bodies (0, b), one joint per body b > 0). ValueError for any other topology."""
+    nb = planar.body_mass.shape[0]
+    joints, points = planar.joint_bodies, planar.joint_points
+    star = sorted(joints[:, 1].tolist()) == list(range(1, nb)) and bool(np.all(joints[:, 0] == 0))
+    if not star or np.any(points[:, :2] != points[:1, :2]):
+        raise ValueError("minimal coordinates need a star of bodies hinged at one hip point of body 0")
+    hips = np.zeros((nb, 2))
+    hips[0] = points[0, :2] if nb > 1 else 0.0
+    for j, b in enumerate(joints[:, 1]):
+        hips[b] = points[j, 2:]
+    return hips
+
+
+def star_system(planar: PlanarSystem) -> MinimalSystem:
+    """The same walker as the planar star ``planar`` (:func:`star_hips`) in minimal coordinates."""
+    hips = star_hips(planar)
+    return MinimalSystem(
+        body_mass=planar.body_mass.copy(),
+        body_inertia=planar.body_inertia.copy(),
+        body_com=-hips,
+        foot_body=planar.foot_body.copy(),
+        foot_center=planar.foot_center - hips[planar.foot_body],
+        foot_radius=planar.foot_radius.copy(),
+        foot_partner=planar.foot_partner.copy(),
+        gravity=planar.gravity.copy(),
+        normal_params=planar.normal_params.copy(),
+        friction_params=planar.friction_params.copy(),
+        switches=planar.switches.copy(),
+        limits=planar.limits.copy(),
+    )
+
+
+def star_state(y: np.ndarray, planar: PlanarSystem) -> np.ndarray:
+    """The minimal-coordinate state of the planar star state ``y``: the hip of body 0, the angles and rates,
+    the bristles and the dissipated work (the joints are taken as satisfied)."""
+    nb = planar.body_mass.shape[0]
+    hip_arm = _rotate(y[2], star_hips(planar)[0])
+    phi, omega = y[2 : 3 * nb : 3], y[3 * nb + 2 : 6 * nb : 3]
+    hip = y[0:2] + hip_arm
+    hip_velocity = y[3 * nb : 3 * nb + 2] + omega[0] * np.array([-hip_arm[1], hip_arm[0]])
+    return np.concatenate([hip, phi, hip_velocity, omega, y[6 * nb :]])
+
+
+def pitch(y: np.ndarray, system: MinimalSystem, body: int) -> tuple[float, float]:
+    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
+    n = HIP + system.body_mass.shape[0]
+    return float(y[HIP + body]), float(y[n + HIP + body])
+
+
+def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
+    """(penetration, normal force, friction force, slip velocity) of a foot (the right-hand side's equations)."""
+    delta, delta_dot, slip, _, _, _ = foot_kinematics(y, system, foot)
+    z = y[2 * (HIP + system.body_mass.shape[0]) + foot]
+    f_n, f_t, _, _, _ = ground_forces(
+        system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, foot,
+        delta, delta_dot, slip, z,
+    )  # fmt: skip
+    return delta, f_n, f_t, slip
+
+
+def no_violation(y: np.ndarray, system: MinimalSystem) -> tuple[float, float]:
+    """||Phi||, ||Phidot||: structurally zero, the coordinates satisfy the hip joints exactly."""
+    return 0.0, 0.0
+
+
+def hip_impulse(y: np.ndarray, system: MinimalSystem, impulse: np.ndarray) -> np.ndarray:
+    """The state just after the impulse p = [px, py] [N s] (slope frame) on the hip: M(q) dqd = (px, py, 0, ...).
+
+    The hip is the floating base, so the generalized impulse is p on the base coordinates alone and there are
+    no constraints to project through; M is the arrow matrix of the module docstring.
+    """
+    nb = system.body_mass.shape[0]
+    n = HIP + nb
+    mass = np.zeros((n, n))
+    mass[0, 0] = mass[1, 1] = float(np.sum(system.body_mass))
+    for b in range(nb):
+        m = system.body_mass[b]
+        arm = _rotate(y[HIP + b], system.body_com[b])
+        mass[0, HIP + b] = mass[HIP + b, 0] = -m * arm[1]
+        mass[1, HIP + b] = mass[HIP + b, 1] = m * arm[0]
+        mass[HIP + b, HIP + b] = system.body_inertia[b] + m * float(arm @ arm)
+    generalized = np.zeros(n)
+    generalized[:HIP] = impulse[:HIP]
+    out = np.array(y, dtype=np.float64)
+    out[n : 2 * n] += np.linalg.solve(mass, generalized)
+    return out
+
+
+FORMULATION = Formulation(
+    name="minimal",
+    system_type=MinimalSystem,
+    rhs=rhs,
+    foot_contact=foot_contact,
+    has_fallen=has_fallen,
+    make_workspace=make_workspace,
+    measures=Measures(
+        contact_x=lambda y, system, foot: foot_contact(y, system, foot)[2],
+        pitch=pitch,
+        mechanical_energy=mechanical_energy,
+        violation=no_violation,
+        violation_names=("position", "velocity"),
+        contact=contact_channels,
+        contact_names=CONTACT_NAMES,
+        hip=lambda y, system: (float(y[0]), float(y[1])),
+        attitude=None,
+    ),
+    coordinates=("phi",),
+    rates=("omega",),
+    bristles=("z",),
+    base_coordinates=("x_hip", "y_hip"),
+    base_rates=("vx_hip", "vy_hip"),
+    hip_impulse=hip_impulse,
+)
