@@ -42,8 +42,7 @@ class ChainBody:
     """A body of the chain: mass, inertia about its centre of mass, which leg carries it and where.
 
     ``leg`` indexes the coordinate vector (0 = stance); ``distance`` is measured from the hip along that
-    leg, towards its foot, and ``offset`` perpendicular to it, positive downhill when the leg is vertical
-    (along :func:`_axis_d`): the body sits at hip + distance axis(theta) + offset perp(theta).
+    leg, towards its foot, ``offset`` across it (+ downhill when vertical): at hip + distance axis + offset perp.
     """
 
     mass: float
@@ -51,11 +50,6 @@ class ChainBody:
     leg: int
     distance: float
     offset: float = 0.0
-
-    def placement(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
-        """The body's position from the hip, r(theta), and its derivative r'(theta) (r'' = -r)."""
-        axis, perp = _axis(theta), _axis_d(theta)
-        return self.distance * axis + self.offset * perp, self.distance * perp - self.offset * axis
 
 
 def _axis(theta: float) -> np.ndarray:
@@ -117,18 +111,13 @@ class RigidWalker:
 
     @property
     def strike_angle_offset(self) -> float:
-        """phi = atan2(d, l - R): the direction of the foot arc centre from the hip, relative to the leg axis.
-
-        The hip is above the stance arc centre at theta_st = -phi, and the legs strike symmetrically about
-        that direction: theta_sw + phi = -(theta_st + phi) (phi = 0 without a foot offset).
-        """
+        """phi = atan2(d, l - R): the hip is above the stance arc centre at theta_st = -phi, and the legs strike
+        symmetrically about that direction, theta_sw + phi = -(theta_st + phi)."""
         return math.atan2(self.foot_offset, self.leg_length - self.foot_radius)
 
     def step_length(self, x_start: np.ndarray, x_minus: np.ndarray) -> float:
-        """Advance of the contact point over a step: rolling R dtheta plus the arc centres' spread at the strike.
-
-        The contact points lie below the arc centres, at hip + (l - R) axis(theta) + d perp(theta) along x.
-        """
+        """Advance of the contact point over a step: rolling R dtheta plus the spread of the arc centres (at
+        hip + (l - R) axis(theta) + d perp(theta), above the contact points) at the strike."""
         theta_new, theta_old = self.next_stance_angle(x_minus), float(x_minus[0])
         rolled = self.foot_radius * (x_start[0] - x_minus[0])
         spread = (self.leg_length - self.foot_radius) * (math.sin(theta_new) - math.sin(theta_old))
@@ -137,9 +126,8 @@ class RigidWalker:
 
     def hip_height(self, x: np.ndarray) -> float:
         """Hip height above the slope line: R + (l - R) cos theta_st - d sin theta_st."""
-        return (
-            self.foot_radius + (self.leg_length - self.foot_radius) * math.cos(x[0]) - self.foot_offset * math.sin(x[0])
-        )
+        l, R, d = self.leg_length, self.foot_radius, self.foot_offset
+        return R + (l - R) * math.cos(x[0]) - d * math.sin(x[0])
 
     def legs_state(self, x: np.ndarray) -> dict[str, float]:
         """The README's four InitialState keys for a state."""
@@ -155,12 +143,9 @@ class RigidWalker:
 
 
 class LegChain(RigidWalker):
-    """Legs hinged at one hip, the stance foot an arc of radius R rolling on the slope (compass, wheel).
-
-    Each foot arc's centre lies at l - R along its leg's axis from the hip and ``foot_offset`` (d)
-    perpendicular to it; the stance arc's centre is C = (-R theta_st, R) (contact point at x = 0 for
-    theta_st = 0), so the hip is C - (l - R) axis(theta_st) - d perp(theta_st).
-    """
+    """Legs hinged at one hip, the stance foot an arc of radius R rolling on the slope (compass, wheel); the arc
+    centre at l - R along the leg and d = ``foot_offset`` across it, C = (-R theta_st, R): hip = C - (l - R)
+    axis(theta_st) - d perp(theta_st)."""
 
     def __init__(
         self,
@@ -197,7 +182,8 @@ class LegChain(RigidWalker):
         hip, hip_d, hip_dd = self._hip(q[0])
         out = []
         for body in self.bodies:
-            r, r_d = body.placement(q[body.leg])
+            axis, perp = _axis(q[body.leg]), _axis_d(q[body.leg])
+            r, r_d = body.distance * axis + body.offset * perp, body.distance * perp - body.offset * axis  # r'' = -r
             jac = np.zeros((2, self.n_q))
             jac[:, 0] = hip_d
             jac[:, body.leg] += r_d
@@ -282,15 +268,11 @@ class LegChain(RigidWalker):
 
 
 class CompassChain(LegChain):
-    """Compass walker: two legs (mass m at c along and w across the leg from the hip, inertia I), a hip point
-    mass M_H, and foot arcs offset d across the leg.
+    """Compass walker: two legs (mass m at c along and w across the leg, inertia I), a hip mass M_H, feet offset d.
 
-    The swing foot's clearance (its arc centre's height minus R) is
-    (l - R)(cos theta_st - cos theta_sw) + d (sin theta_sw - sin theta_st)
-    = 2 A sin((theta_st + theta_sw + 2 phi) / 2) sin((theta_sw - theta_st) / 2), A = hypot(l - R, d),
-    phi = :attr:`strike_angle_offset`. The second factor vanishes when the legs cross at mid-stance
-    (scuffing, ignored), the first at the heel strike: the guard is its argument theta_st + theta_sw + 2 phi.
-    """
+    The swing foot's clearance, (l - R)(cos theta_st - cos theta_sw) + d (sin theta_sw - sin theta_st) =
+    2 hypot(l - R, d) sin((theta_st + theta_sw + 2 phi) / 2) sin((theta_sw - theta_st) / 2), vanishes at the
+    mid-stance crossing (scuffing, ignored) and at the strike: the guard is theta_st + theta_sw + 2 phi."""
 
     name = "compass"
     section_names = ("stance_angle", "stance_rate", "swing_rate")
@@ -306,8 +288,7 @@ class CompassChain(LegChain):
         self.fall_leg_angle = config.simulation.fall_leg_angle
 
     def guard_phases(self) -> list[tuple[str, Guard]]:
-        # the strike (legs symmetric about -phi, swing foot ahead, so the hip past the stance arc centre) is
-        # sought only after the hip has passed over the stance arc centre: earlier crossings are scuffing
+        # the strike is sought once the hip has passed over the stance arc centre: earlier crossings are scuffing
         phi = self.strike_angle_offset
         if phi == 0.0:  # the d = 0 guards exactly as they always were (golden results are bit-for-bit)
             return [("stance_past_normal", lambda x: x[0]), ("heel_strike", lambda x: x[0] + x[1])]
