@@ -27,6 +27,11 @@ CASES = {
     "compass": (CONFIGS / "compass_goswami.yaml", ["dynamics=rigid"], [0.2, -0.2, -1.0, -0.4]),
     "round_foot": (CONFIGS / "round_foot_walker.yaml", ["dynamics=rigid"], [0.25, -0.25, -1.6, -0.5]),
     "rimless_wheel": (CONFIGS / "rimless_wheel.yaml", ["dynamics=rigid"], [math.pi / 8, -1.0]),
+    "offsets": (
+        CONFIGS / "round_foot_walker.yaml",
+        ["dynamics=rigid", "walker.foot_offset=0.002", "walker.leg_com_offset=-0.001"],
+        [0.25, -0.25, -1.6, -0.5],
+    ),
 }
 
 

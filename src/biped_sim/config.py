@@ -79,6 +79,8 @@ class WalkerConfig(_Strict):
     leg_mass: float = Field(1.0, gt=0, description="Mass of one leg, m [kg].")
     leg_com_from_hip: float = Field(0.15, ge=0, description="Leg centre of mass distance from the hip, c [m].")
     leg_inertia: float = Field(0.005, ge=0, description="Leg moment of inertia about its centre of mass, I [kg m^2].")
+    leg_com_offset: float = Field(0.0, description="Leg centre of mass across the leg, w [m] (McGeer's w), + downhill.")
+    foot_offset: float = Field(0.0, description="Foot arc centre across the leg, d [m] (McGeer's d), + downhill.")
     hip_mass: float = Field(2.0, ge=0, description="Hip point mass M_H [kg], split half to each leg at the hip.")
     foot_spacing_outer: float = Field(
         0.2, gt=0, description="four_legged: lateral distance between the two outer legs (and feet) [m]."
@@ -98,6 +100,11 @@ class WalkerConfig(_Strict):
             raise ValueError("foot_radius: must be smaller than walker.leg_length")
         if self.leg_com_from_hip > self.leg_length:
             raise ValueError("leg_com_from_hip: must not exceed walker.leg_length")
+        # the leg's mass and its foot arc centre stay within the leg's reach (the arc centre below the hip)
+        if math.hypot(self.leg_com_from_hip, self.leg_com_offset) > self.leg_length:
+            raise ValueError("leg_com_offset: puts the centre of mass farther than walker.leg_length from the hip")
+        if abs(self.foot_offset) >= self.leg_length - self.foot_radius:
+            raise ValueError("foot_offset: |foot_offset| must be smaller than walker.leg_length - walker.foot_radius")
         return self
 
 

@@ -39,6 +39,7 @@ import mujoco
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.errors import ConfigError
 from biped_sim.walkers import build_model
 from biped_sim.walkers.model import contact_stiffness
 
@@ -69,6 +70,9 @@ def contact_solref(config: Config) -> tuple[float, float]:
 def walker_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the compass walker of ``config`` on its slope (legs hang along -z from the hip)."""
     w = config.walker
+    for name in ("leg_com_offset", "foot_offset"):
+        if getattr(w, name) != 0.0:
+            raise ConfigError(f"walker.{name}", "the MuJoCo benchmark's walker has no offsets: must be 0")
     l, R, m, c, I, M_H = w.leg_length, w.foot_radius, w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.hip_mass
     mass = m + 0.5 * M_H
     d = m * c / mass

@@ -111,16 +111,27 @@ def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def strike_angle_offset(kind: int, p: np.ndarray) -> float:
+    """phi = atan2(d, l - R): the offset foot's arc centre leans phi from the leg axis (0 without an offset)."""
+    if kind != COMPASS or p[P_D] == 0.0:
+        return 0.0
+    return math.atan2(p[P_D], p[P_L] - p[P_R])
+
+
+@njit(cache=True)
 def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
-    """Phase 0: the stance leg passing the slope normal (x[0]); phase 1: the heel strike (downward zero)."""
+    """Phase 0: the hip passing over the stance arc centre (x[0] + phi); phase 1: the heel strike (downward zero).
+
+    With a foot offset d the swing foot's clearance (l - R)(cos th_st - cos th_sw) + d (sin th_sw - sin th_st)
+    factors as 2 A sin((th_st + th_sw + 2 phi) / 2) sin((th_sw - th_st) / 2) (A = hypot(l - R, d)), so the
+    strike is th_st + th_sw + 2 phi = 0, as in :class:`~biped_sim.rigid.models.CompassChain` (phi = 0 without d).
+    """
+    phi = strike_angle_offset(kind, p)
     if phase == 0:
-        return x[0]
+        return x[0] if phi == 0.0 else x[0] + phi
     if kind == WHEEL:
         return x[0] + p[P_HALF]
-    d = p[P_D]
-    if kind == SIMPLEST or d == 0.0:
-        return x[0] + x[1]
-    return (p[P_L] - p[P_R]) * (math.cos(x[0]) - math.cos(x[1])) + d * (math.sin(x[1]) - math.sin(x[0]))
+    return x[0] + x[1] if phi == 0.0 else x[0] + x[1] + 2.0 * phi
 
 
 @njit(cache=True)
@@ -128,11 +139,7 @@ def guard_rate(kind: int, p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarra
     """Time derivative of :func:`guard` along the flow f = dx/dt."""
     if phase == 0 or kind == WHEEL:
         return f[0]
-    d = p[P_D]
-    if kind == SIMPLEST or d == 0.0:
-        return f[0] + f[1]
-    lr = p[P_L] - p[P_R]
-    return lr * (-math.sin(x[0]) * f[0] + math.sin(x[1]) * f[1]) + d * (math.cos(x[1]) * f[1] - math.cos(x[0]) * f[0])
+    return f[0] + f[1]
 
 
 @njit(cache=True)

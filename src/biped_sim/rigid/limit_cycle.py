@@ -33,6 +33,10 @@ FD_STEP = 1e-6
 MAX_NEWTON = 30
 SETTLE_STEPS = 30
 STABILITY_MARGIN = 1e-9  # |lambda| < 1 - margin counts as stable
+# the gait search's scan when the walk from the guess falls: step angles [rad] x stance rates [sqrt(g / l)]
+SCAN_ANGLES = (0.1, 0.15, 0.2, 0.25, 0.3)
+SCAN_RATES = (0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0)
+SCAN_SWING_RATIO = 0.6
 
 Engine = Literal["compiled", "scipy"]
 
@@ -57,6 +61,7 @@ class LimitCycle:
     multipliers: np.ndarray
     tolerance: float
     notes: list[str] = field(default_factory=list)
+    start: str = ""  # which start the solver found the cycle from (empty: not recorded)
 
     @property
     def max_multiplier_modulus(self) -> float:
@@ -90,6 +95,7 @@ class LimitCycle:
             "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers[order]],
             "max_multiplier_modulus": self.max_multiplier_modulus,
             "stable": self.stable,
+            "start": self.start,
             "notes": self.notes,
         }
 
@@ -178,6 +184,47 @@ def settle(step_map: Callable[[np.ndarray], np.ndarray], z: np.ndarray, steps: i
     return z
 
 
+SearchResult = tuple[np.ndarray, bool, int, float]
+
+
+def _solve_from(
+    step_map: Callable[[np.ndarray], np.ndarray], tries: list[tuple[str, np.ndarray, int]]
+) -> tuple[SearchResult, str] | None:
+    """Newton from each try (label, section point, steps walked from it first); the first converged solve wins,
+    else the last solve that did not fall (None if every try fell)."""
+    best = None
+    for label, z0, steps in tries:
+        how = f"{label}, after {steps} settling steps" if steps else label
+        try:
+            found = newton_fixed_point(step_map, settle(step_map, z0, steps) if steps else z0, RIGID_TOLERANCE)
+            step_map(found[0])
+        except StepFailedError:
+            continue
+        best = (found, how)
+        if found[1]:
+            break
+    return best
+
+
+def scan_starts(walker: RigidWalker) -> list[tuple[str, np.ndarray]]:
+    """A small scan of post-impact section points: step angle x speed (rates in units of sqrt(g / l)).
+
+    The swing leg starts at 0.6 times the stance rate (typical of passive gaits just after a strike).
+    """
+    scale = math.sqrt(walker.gravity / walker.leg_length)
+    points = []
+    for k in SCAN_RATES:
+        rate = -k * scale
+        if walker.name == "rimless_wheel":
+            points.append((f"scan stance_rate {rate:.4g}", np.array([rate])))
+            continue
+        for angle in SCAN_ANGLES:
+            label = f"scan stance_angle {angle:g}, stance_rate {rate:.4g}"
+            z = [angle, rate] if walker.name == "simplest" else [angle, rate, SCAN_SWING_RATIO * rate]
+            points.append((label, np.array(z)))
+    return points
+
+
 def rigid_limit_cycle(
     config: Config,
     guess: dict[str, float] | None = None,
@@ -187,42 +234,48 @@ def rigid_limit_cycle(
     """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
 
     The initial guess is ``guess`` (the four README keys), else the config's initial state, else (for the
-    rigid_limit_cycle start) a generic post-impact state. The guess first walks ``settle_steps`` steps, so
-    that Newton starts near the stable cycle when there is one (Newton from the raw guess if that fails);
-    ``settle_steps = 0`` finds the cycle nearest the guess, stable or not. ``engine``: the compiled step map,
-    or scipy's reference (a run's start uses it, so that runs keep their bits).
+    rigid_limit_cycle start) generic post-impact states. The guess first walks ``settle_steps`` steps, so
+    that Newton starts near the stable cycle when there is one, then Newton starts from the guess itself;
+    when neither converges (the walker falls from the guess), the same two tries run from each point of
+    :func:`scan_starts` in turn. ``settle_steps = 0`` finds the cycle nearest the guess, stable or not (no
+    scan: a continuation must not jump branch). The record's ``start`` says which start found the cycle.
+    ``engine``: the compiled step map, or scipy's reference (a run's start uses it, so that runs keep their bits).
     """
     rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
     walker = rigid_walker(rigid)
     if guess is not None:
-        starts = [walker.state_from_legs(guess)]
+        starts = [("the guess", walker.state_from_legs(guess))]
     elif config.simulation.initial == "rigid_limit_cycle":
-        starts = _generic_starts(walker)
+        starts = [(f"generic start {i + 1}", start) for i, start in enumerate(_generic_starts(walker))]
     else:
-        starts = [initial_state(rigid, walker)]
+        starts = [("the config's initial state", initial_state(rigid, walker))]
 
     compiled = compile_walker(walker) if engine == "compiled" else None
 
     def step_map(z: np.ndarray) -> np.ndarray:
         return rigid_map(walker, z, compiled)[0]
 
-    found = None
-    for start in starts:
-        z0 = walker.to_section(start)
-        for z_start in (settle(step_map, z0, settle_steps), z0) if settle_steps else (z0,):
-            try:
-                found = newton_fixed_point(step_map, z_start, RIGID_TOLERANCE)
-                _, step = rigid_map(walker, found[0], compiled)
-            except StepFailedError:
-                found = None
-                continue
-            if found[1]:
-                break
-        if found is not None and found[1]:
-            break
-    if found is None:
-        raise ConfigError("simulation.initial", f"no rigid limit cycle: the rigid {walker.name} falls from the guess")
-    z, converged, iterations, residual = found
+    tries = []
+    for label, x in starts:  # each start walked (toward a stable gait), then as it is
+        z0 = walker.to_section(x)
+        tries += [(label, z0, settle_steps), (label, z0, 0)] if settle_steps else [(label, z0, 0)]
+    solved = _solve_from(step_map, tries)
+    if settle_steps and (solved is None or not solved[0][1]):
+        # the scan: every point walked first (stable gaits), then every point as it is (any gait)
+        scan = scan_starts(walker)
+        scanned = _solve_from(
+            step_map, [(label, z, settle_steps) for label, z in scan] + [(label, z, 0) for label, z in scan]
+        )
+        if scanned is not None and (solved is None or scanned[0][1]):
+            solved = scanned
+    if solved is None:
+        raise ConfigError(
+            "simulation.initial",
+            f"no rigid limit cycle: the rigid {walker.name} falls from the guess"
+            + (" and from every start of the scan" if settle_steps else ""),
+        )
+    (z, converged, iterations, residual), how = solved
+    _, step = rigid_map(walker, z, compiled)
     jac = map_jacobian(step_map, z)
     x_plus = walker.from_section(z)
     touchdown = walker.legs_state(np.concatenate([step.x_minus[: walker.n_q][::-1], step.x_minus[walker.n_q :][::-1]]))
@@ -243,12 +296,14 @@ def rigid_limit_cycle(
         multipliers=np.linalg.eigvals(jac),
         tolerance=RIGID_TOLERANCE,
         notes=[
+            f"found by Newton from {how}",
             "section just after heel strike; coordinates " + ", ".join(walker.section_names),
             f"step map: {'compiled DOP853' if compiled is not None else 'scipy DOP853'} rtol {RTOL:g}",
             f"multipliers: central differences, relative step {FD_STEP:g}; the coordinates the impact fixes "
             "(zero multipliers) are not section coordinates",
             "touchdown: the state just before the strike, relabelled (stance = the leg touching down)",
         ],
+        start=how,
     )
 
 
@@ -257,8 +312,10 @@ def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
     scale = math.sqrt(walker.gravity / walker.leg_length)
     if walker.name == "rimless_wheel":
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
+    swing_offset = 2.0 * walker.strike_angle_offset  # the legs just after a strike: theta_sw = -theta_st - 2 phi
     return [
-        np.array([angle, -angle, -k * scale, -0.4 * k * scale]) for angle, k in ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
+        np.array([angle, -angle - swing_offset, -k * scale, -0.4 * k * scale])
+        for angle, k in ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
     ]
 
 

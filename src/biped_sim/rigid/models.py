@@ -42,13 +42,14 @@ class ChainBody:
     """A body of the chain: mass, inertia about its centre of mass, which leg carries it and where.
 
     ``leg`` indexes the coordinate vector (0 = stance); ``distance`` is measured from the hip along that
-    leg, towards its foot.
+    leg, towards its foot, ``offset`` across it (+ downhill when vertical): at hip + distance axis + offset perp.
     """
 
     mass: float
     inertia: float
     leg: int
     distance: float
+    offset: float = 0.0
 
 
 def _axis(theta: float) -> np.ndarray:
@@ -75,6 +76,7 @@ class RigidWalker:
     gravity: float = 1.0
     leg_length: float = 1.0
     foot_radius: float = 0.0
+    foot_offset: float = 0.0
     slope: float = 0.0
     fall_leg_angle: float = 1.4
     reference_mass: float = 1.0
@@ -107,17 +109,25 @@ class RigidWalker:
         """Angle of the leg about to touch down, just before the strike."""
         return float(x_minus[1])
 
+    @property
+    def strike_angle_offset(self) -> float:
+        """phi = atan2(d, l - R): the hip is above the stance arc centre at theta_st = -phi, and the legs strike
+        symmetrically about that direction, theta_sw + phi = -(theta_st + phi)."""
+        return math.atan2(self.foot_offset, self.leg_length - self.foot_radius)
+
     def step_length(self, x_start: np.ndarray, x_minus: np.ndarray) -> float:
-        """Advance of the contact point over a step: rolling R dtheta plus the legs' spread at the strike."""
+        """Advance of the contact point over a step: rolling R dtheta plus the spread of the arc centres (at
+        hip + (l - R) axis(theta) + d perp(theta), above the contact points) at the strike."""
+        theta_new, theta_old = self.next_stance_angle(x_minus), float(x_minus[0])
         rolled = self.foot_radius * (x_start[0] - x_minus[0])
-        spread = (self.leg_length - self.foot_radius) * (
-            math.sin(self.next_stance_angle(x_minus)) - math.sin(x_minus[0])
-        )
+        spread = (self.leg_length - self.foot_radius) * (math.sin(theta_new) - math.sin(theta_old))
+        spread += self.foot_offset * (math.cos(theta_new) - math.cos(theta_old))
         return float(rolled + spread)
 
     def hip_height(self, x: np.ndarray) -> float:
-        """Hip height above the slope line."""
-        return self.foot_radius + (self.leg_length - self.foot_radius) * math.cos(x[0])
+        """Hip height above the slope line: R + (l - R) cos theta_st - d sin theta_st."""
+        l, R, d = self.leg_length, self.foot_radius, self.foot_offset
+        return R + (l - R) * math.cos(x[0]) - d * math.sin(x[0])
 
     def legs_state(self, x: np.ndarray) -> dict[str, float]:
         """The README's four InitialState keys for a state."""
@@ -133,7 +143,9 @@ class RigidWalker:
 
 
 class LegChain(RigidWalker):
-    """Legs hinged at one hip, the stance foot an arc of radius R rolling on the slope (compass, wheel)."""
+    """Legs hinged at one hip, the stance foot an arc of radius R rolling on the slope (compass, wheel); the arc
+    centre at l - R along the leg and d = ``foot_offset`` across it, C = (-R theta_st, R): hip = C - (l - R)
+    axis(theta_st) - d perp(theta_st)."""
 
     def __init__(
         self,
@@ -143,11 +155,13 @@ class LegChain(RigidWalker):
         foot_radius: float,
         gravity: float,
         slope: float,
+        foot_offset: float = 0.0,
     ) -> None:
         self.bodies = bodies
         self.n_q = n_q
         self.leg_length = leg_length
         self.foot_radius = foot_radius
+        self.foot_offset = foot_offset
         self.gravity = gravity
         self.slope = slope
         self.gravity_vector = gravity * np.array([math.sin(slope), -math.cos(slope)])
@@ -156,10 +170,11 @@ class LegChain(RigidWalker):
     # --- kinematics of the description -------------------------------------------------------------------
     def _hip(self, theta_st: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Hip position (contact-point origin at x = 0 for theta_st = 0), its theta_st derivative and second."""
-        l, R = self.leg_length, self.foot_radius
-        position = np.array([-R * theta_st, R]) - (l - R) * _axis(theta_st)
-        first = np.array([-R, 0.0]) - (l - R) * _axis_d(theta_st)
-        second = (l - R) * _axis(theta_st)
+        l, R, d = self.leg_length, self.foot_radius, self.foot_offset
+        axis, perp = _axis(theta_st), _axis_d(theta_st)
+        position = np.array([-R * theta_st, R]) - (l - R) * axis - d * perp
+        first = np.array([-R, 0.0]) - (l - R) * perp + d * axis
+        second = (l - R) * axis + d * perp
         return position, first, second
 
     def body_kinematics(self, q: np.ndarray, qd: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -167,12 +182,13 @@ class LegChain(RigidWalker):
         hip, hip_d, hip_dd = self._hip(q[0])
         out = []
         for body in self.bodies:
-            theta = q[body.leg]
+            axis, perp = _axis(q[body.leg]), _axis_d(q[body.leg])
+            r, r_d = body.distance * axis + body.offset * perp, body.distance * perp - body.offset * axis  # r'' = -r
             jac = np.zeros((2, self.n_q))
             jac[:, 0] = hip_d
-            jac[:, body.leg] += body.distance * _axis_d(theta)
-            bias = hip_dd * qd[0] ** 2 - body.distance * _axis(theta) * qd[body.leg] ** 2
-            out.append((hip + body.distance * _axis(theta), jac, bias))
+            jac[:, body.leg] += r_d
+            bias = hip_dd * qd[0] ** 2 - r * qd[body.leg] ** 2
+            out.append((hip + r, jac, bias))
         return out
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
@@ -221,7 +237,7 @@ class LegChain(RigidWalker):
         q, qd = x_minus[:n], x_minus[n:]
         velocities = self.body_velocities(q, qd)
         q_new, bodies_new = self.relabel(q)
-        after = LegChain(bodies_new, n, self.leg_length, self.foot_radius, self.gravity, self.slope)
+        after = LegChain(bodies_new, n, self.leg_length, self.foot_radius, self.gravity, self.slope, self.foot_offset)
         kin = after.body_kinematics(q_new, np.zeros(n))
         lhs = np.zeros((n, n))
         rhs = np.zeros(n)
@@ -252,7 +268,11 @@ class LegChain(RigidWalker):
 
 
 class CompassChain(LegChain):
-    """Compass walker: two legs (mass m at c from the hip, inertia I) and a hip point mass M_H."""
+    """Compass walker: two legs (mass m at c along and w across the leg, inertia I), a hip mass M_H, feet offset d.
+
+    The swing foot's clearance, (l - R)(cos theta_st - cos theta_sw) + d (sin theta_sw - sin theta_st) =
+    2 hypot(l - R, d) sin((theta_st + theta_sw + 2 phi) / 2) sin((theta_sw - theta_st) / 2), vanishes at the
+    mid-stance crossing (scuffing, ignored) and at the strike: the guard is theta_st + theta_sw + 2 phi."""
 
     name = "compass"
     section_names = ("stance_angle", "stance_rate", "swing_rate")
@@ -260,27 +280,30 @@ class CompassChain(LegChain):
     def __init__(self, config: Config) -> None:
         w = config.walker
         bodies = [
-            ChainBody(w.leg_mass, w.leg_inertia, 0, w.leg_com_from_hip),
-            ChainBody(w.leg_mass, w.leg_inertia, 1, w.leg_com_from_hip),
+            ChainBody(w.leg_mass, w.leg_inertia, 0, w.leg_com_from_hip, w.leg_com_offset),
+            ChainBody(w.leg_mass, w.leg_inertia, 1, w.leg_com_from_hip, w.leg_com_offset),
             ChainBody(w.hip_mass, 0.0, 0, 0.0),
         ]
-        super().__init__(bodies, 2, w.leg_length, w.foot_radius, config.gravity, config.ground.slope)
+        super().__init__(bodies, 2, w.leg_length, w.foot_radius, config.gravity, config.ground.slope, w.foot_offset)
         self.fall_leg_angle = config.simulation.fall_leg_angle
 
     def guard_phases(self) -> list[tuple[str, Guard]]:
-        # the strike (legs symmetric, swing foot ahead, so the stance leg behind the normal) is sought only
-        # after the stance leg has passed the normal: the earlier crossings are mid-stance scuffing
-        return [("stance_past_normal", lambda x: x[0]), ("heel_strike", lambda x: x[0] + x[1])]
+        # the strike is sought once the hip has passed over the stance arc centre: earlier crossings are scuffing
+        phi = self.strike_angle_offset
+        if phi == 0.0:  # the d = 0 guards exactly as they always were (golden results are bit-for-bit)
+            return [("stance_past_normal", lambda x: x[0]), ("heel_strike", lambda x: x[0] + x[1])]
+        return [("stance_past_normal", lambda x: x[0] + phi), ("heel_strike", lambda x: x[0] + x[1] + 2.0 * phi)]
 
     def relabel(self, q_minus: np.ndarray) -> tuple[np.ndarray, list[ChainBody]]:
-        swapped = [ChainBody(b.mass, b.inertia, 1 - b.leg, b.distance) for b in self.bodies[:2]]
+        swapped = [ChainBody(b.mass, b.inertia, 1 - b.leg, b.distance, b.offset) for b in self.bodies[:2]]
         return np.array([q_minus[1], q_minus[0]]), [*swapped, self.bodies[2]]
 
     def to_section(self, x_plus: np.ndarray) -> np.ndarray:
         return np.array([x_plus[0], x_plus[2], x_plus[3]])
 
     def from_section(self, z: np.ndarray) -> np.ndarray:
-        return np.array([z[0], -z[0], z[1], z[2]])
+        # just after a strike the legs are symmetric about -phi: theta_sw = -theta_st - 2 phi
+        return np.array([z[0], -z[0] - 2.0 * self.strike_angle_offset, z[1], z[2]])
 
 
 class RimlessWheel(LegChain):

@@ -56,10 +56,11 @@ def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None
                 f"the rimless wheel's stance spoke must be within pi/N = {walker.half_angle:.6g} rad of the slope "
                 "normal (else another spoke starts below the ground)",
             )
-    elif legs["stance_angle"] < 0.0:
+    elif legs["stance_angle"] + walker.strike_angle_offset < 0.0:
         raise ConfigError(
             "simulation.initial.stance_angle",
-            "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal (>= 0)",
+            "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal "
+            "(>= 0; with a walker.foot_offset d, the hip not past the arc centre: >= -atan2(d, l - R))",
         )
 
 

@@ -1,18 +1,22 @@
 """Liu's four-legged passive walker: an outer and an inner pair of legs, four disc feet (spatial, or sagittal).
 
-Each pair is one rigid body: two straight legs (mass m, centre of mass c below the hip, inertia I
-about their centre of mass for any axis across the leg, none about the leg's own axis: slender
-legs) at z' = +-w/2, a cross bar (a uniform rod of mass ``crossbar_mass`` and length w along the
-hip axle) and half the hip mass M_H on the axle. Body 0 is the outer pair (w = foot_spacing_outer),
-body 1 the inner pair (w = foot_spacing_inner); a revolute hip axle along z' joins them. The
-body's centre of mass lies d = 2 m c / M_b below the hip (M_b = 2 m + M_H/2 + crossbar_mass) and
-its inertia about it, in the body frame (x' forward, y' up the legs, z' along the axle), is
+Each pair is one rigid body: two straight legs (mass m, centre of mass c below the hip along the leg
+and u = ``leg_com_offset`` across it, forward; inertia I about their centre of mass for any axis
+across the leg, none about the leg's own axis: slender legs) at z' = +-w/2, a cross bar (a uniform
+rod of mass ``crossbar_mass`` and length w along the hip axle) and half the hip mass M_H on the
+axle. Body 0 is the outer pair (w = foot_spacing_outer), body 1 the inner pair (w =
+foot_spacing_inner); a revolute hip axle along z' joins them. The body's centre of mass lies
+d = 2 m c / M_b below the hip and e = 2 m u / M_b forward of it (M_b = 2 m + M_H/2 + crossbar_mass),
+and its inertia about it, in the body frame (x' forward, y' up the legs, z' along the axle), is
+(parallel axes, with a = u - e and M_a = M_H/2 + m_bar on the axle)
 
-    J'_xx = 2 [I + m ((c - d)^2 + w^2/4)] + (M_H/2 + m_bar) d^2 + m_bar w^2/12
-    J'_yy = m w^2/2 + m_bar w^2/12
-    J'_zz = 2 [I + m (c - d)^2] + (M_H/2 + m_bar) d^2.
+    J'_xx = 2 [I + m ((c - d)^2 + w^2/4)] + M_a d^2 + m_bar w^2/12
+    J'_yy = m w^2/2 + m_bar w^2/12 + 2 m a^2 + M_a e^2
+    J'_zz = 2 [I + m ((c - d)^2 + a^2)] + M_a (d^2 + e^2)
+    J'_xy = 2 m a (c - d) + M_a e d.
 
-Feet: discs of radius R in the legs' sagittal planes (centres at (0, -(l - R - d), +-w/2)); feet
+Feet: discs of radius R in the legs' sagittal planes (centres at (f - e, -(l - R - d), +-w/2), f =
+``foot_offset``); feet
 0, 1 are the outer pair's (z' = +w/2, -w/2), 2, 3 the inner pair's, and each foot's scuffing-guard
 partner is the other pair's foot on the same side. The walker starts like the compass walker: the
 outer pair in stance on both feet (each carrying half the weight: static penetration
@@ -51,17 +55,21 @@ from biped_sim.walkers.spatial_compass import (
 )
 
 
-def pair_properties(config: Config, spacing: float) -> tuple[float, float, np.ndarray]:
-    """(mass, hip-to-centre-of-mass distance d, inertia J' about the centre of mass) of one leg pair."""
+def pair_properties(config: Config, spacing: float) -> tuple[float, tuple[float, float], np.ndarray]:
+    """(mass, centre of mass from the hip (d below along the legs, e forward across them), inertia J' about the
+    centre of mass) of one leg pair."""
     w = config.walker
-    m, c, inertia, bar = w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.crossbar_mass
+    m, c, u, inertia, bar = w.leg_mass, w.leg_com_from_hip, w.leg_com_offset, w.leg_inertia, w.crossbar_mass
     on_axle = 0.5 * w.hip_mass + bar
     mass = 2.0 * m + on_axle
     d = 2.0 * m * c / mass
+    e = 2.0 * m * u / mass
+    a = u - e
     j_xx = 2.0 * (inertia + m * ((c - d) ** 2 + spacing**2 / 4.0)) + on_axle * d**2 + bar * spacing**2 / 12.0
-    j_yy = 0.5 * m * spacing**2 + bar * spacing**2 / 12.0
-    j_zz = 2.0 * (inertia + m * (c - d) ** 2) + on_axle * d**2
-    return mass, d, np.diag([j_xx, j_yy, j_zz])
+    j_yy = 0.5 * m * spacing**2 + bar * spacing**2 / 12.0 + (2.0 * m * a**2 + on_axle * e**2)
+    j_zz = 2.0 * (inertia + m * ((c - d) ** 2 + a**2)) + on_axle * (d**2 + e**2)
+    j_xy = 2.0 * m * a * (c - d) + on_axle * e * d
+    return mass, (d, e), np.array([[j_xx, j_xy, 0.0], [j_xy, j_yy, 0.0], [0.0, 0.0, j_zz]])
 
 
 def _leg_pairs(config: Config) -> tuple[np.ndarray, list[float], np.ndarray]:
@@ -126,10 +134,15 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     total_mass = float(masses.sum())
     stiffness = contact_stiffness(config)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
-    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, offsets[0], 1, offsets[1]))
+    hips = [(0.0 - e, d) for d, e in offsets]  # the hip in each pair's body frame (0.0, not -0.0, without offset)
+    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, hips[0], 1, hips[1]))
 
     foot_center = np.array(
-        [[0.0, -(l - R - offsets[b]), side * 0.5 * spacings[b]] for b in (0, 1) for side in (1.0, -1.0)]
+        [
+            [w.foot_offset - offsets[b][1], -(l - R - offsets[b][0]), side * 0.5 * spacings[b]]
+            for b in (0, 1)
+            for side in (1.0, -1.0)
+        ]
     )
     system = SpatialSystem(
         body_mass=masses,

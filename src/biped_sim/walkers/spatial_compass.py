@@ -29,10 +29,12 @@ X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 DISC_AXIS = Z  # the feet are discs in the body's sagittal plane
 
 
-def revolute(body_a: int, hip_a: float, body_b: int, hip_b: float) -> list[tuple[int, int, int, tuple[float, ...]]]:
-    """Revolute joint about z' at the points (0, hip_a, 0) of body a and (0, hip_b, 0) of body b."""
+def revolute(
+    body_a: int, hip_a: tuple[float, float], body_b: int, hip_b: tuple[float, float]
+) -> list[tuple[int, int, int, tuple[float, ...]]]:
+    """Revolute joint about z' at the points (x', y') = hip_a of body a and hip_b of body b, both in z' = 0."""
     return [
-        (SPHERICAL, body_a, body_b, (0.0, hip_a, 0.0, 0.0, hip_b, 0.0, 0.0)),
+        (SPHERICAL, body_a, body_b, (hip_a[0], hip_a[1], 0.0, hip_b[0], hip_b[1], 0.0, 0.0)),
         (PERPENDICULAR, body_a, body_b, (*X, *Z, 0.0)),
         (PERPENDICULAR, body_a, body_b, (*Y, *Z, 0.0)),
     ]
@@ -80,9 +82,15 @@ def build_spatial_compass(config: Config, initial: InitialState) -> BuiltModel:
     planar = build_compass(config, initial)
     ps = planar.system
     nb, nf = 2, 2
-    d = float(ps.joint_points[0, 1])
+    hip_a, hip_b = (
+        (float(ps.joint_points[0, 0]), float(ps.joint_points[0, 1])),
+        (
+            float(ps.joint_points[0, 2]),
+            float(ps.joint_points[0, 3]),
+        ),
+    )
     inertia = np.array([np.eye(3) * j for j in ps.body_inertia])
-    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, d, 1, d) + planar_to_ground(0))
+    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, hip_a, 1, hip_b) + planar_to_ground(0))
     system = SpatialSystem(
         body_mass=ps.body_mass.copy(),
         body_inertia=inertia,
