@@ -11,9 +11,10 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test,dask]"
+	$(BIN)/biped-sim warmup
 	touch $(STAMP)
 
-setup: $(STAMP)            ## create .venv and install the package (editable) with test extras
+setup: $(STAMP)            ## create .venv, install the package (editable) with test extras, compile the default walker
 
 setup-bench: $(STAMP)      ## also install MuJoCo for the benchmark comparison
 	$(BIN)/python -m pip install --quiet -e ".[bench]"

@@ -18,7 +18,7 @@ from biped_sim.simulate import simulate
 from biped_sim.sweep import load_sweep, run_sweep
 from biped_sim.sweep import runner as sweep_runner
 from biped_sim.sweep.rows import METRIC_COLUMNS, SETTING_COLUMNS
-from biped_sim.testing import TINY_SWEEP_METHODS, TINY_SWEEP_RUNS, TINY_SWEEP_SLOPES, default_walker, write_sweep
+from biped_sim.testing import TINY_SWEEP_METHODS, TINY_SWEEP_RUNS, TINY_SWEEP_SLOPES, write_sweep
 
 from .conftest import CLI, child_env, invoke, one_line_error
 
@@ -207,17 +207,3 @@ def test_bad_sweep_input_is_one_line_exit_2_and_writes_nothing(
     assert result.exit_code == 2, result.output
     assert expected in one_line_error(result.stderr)
     assert sorted(tmp_path.iterdir()) == before
-
-
-@pytest.mark.parametrize(
-    "overrides",
-    [["integrator.method=rk4", "integrator.dt=3e-3"], ["output.sample_rate=100"], ["integrator.method=radau"]],
-)
-def test_a_worker_warms_up_on_any_valid_run(overrides: list[str], monkeypatch: pytest.MonkeyPatch) -> None:
-    """The warm-up is a short copy of the run: it must pass the run's own checks (a step longer than the warm-up,
-    a sample rate too low for it once made every first run of a worker an error)."""
-    monkeypatch.setattr(sweep_runner, "_WARMED", set())
-    family = "stiff" if "radau" in overrides[0] else "explicit"
-    sweep_runner.warm_up(default_walker(*overrides))
-    warmed = sweep_runner._WARMED
-    assert warmed == {family}

@@ -1,4 +1,5 @@
-"""Where numba caches the compiled kernels: a directory keyed by a hash of the compiled code's sources.
+"""Where numba caches the compiled kernels (a directory keyed by a hash of the compiled code's sources),
+and which functions a piece of code compiles rather than loads from that cache.
 
 Numba invalidates a cached function only when its own file changes, not when a function it calls (and
 inlined) in another file does: an edited force law would otherwise keep running its old compiled code
@@ -14,9 +15,12 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numba
+from numba.core import event
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_PACKAGES = ("contact", "multibody", "integrate")
@@ -50,3 +54,24 @@ def configure_cache_dir() -> Path | None:
     cache_dir = base / f"numba-{source_hash()}"
     numba.config.CACHE_DIR = str(cache_dir)
     return cache_dir
+
+
+@contextmanager
+def recording_compilations() -> Iterator[list[str]]:
+    """Inside the block, the names (module.qualname) of the functions numba compiles, in order.
+
+    A function loaded from the on-disk cache is not compiled and is not listed: an empty list after a
+    run means that everything it needed was in the cache. Uses numba's event API ("numba:compile").
+    """
+    names: list[str] = []
+
+    class _Compilations(event.Listener):
+        def on_start(self, ev: event.Event) -> None:
+            function = ev.data["dispatcher"].py_func
+            names.append(f"{function.__module__}.{function.__qualname__}")
+
+        def on_end(self, ev: event.Event) -> None:
+            pass
+
+    with event.install_listener("numba:compile", _Compilations()):
+        yield names

@@ -20,6 +20,7 @@ from biped_sim.io.output import check_writable_dir
 from biped_sim.io.run_files import previous_run
 from biped_sim.rigid.start import NONDIMENSIONAL
 from biped_sim.simulate import RunResult, prepare_model, simulate
+from biped_sim.simulate.warmup import warm_up, warm_up_configs
 
 
 def _fmt(value: float, digits: int = 5) -> str:
@@ -129,6 +130,20 @@ def run_command(
     console.print(f"files: {out_dir}/ (trajectory.h5, summary.json, steps.csv, config.yaml)", highlight=False)
     if replaced:
         console.print(f"replaced {replaced}" + (" and its figures" if had_figures else ""), highlight=False)
+
+
+@app.command("warmup")
+@user_errors
+def warmup_command(
+    every: Annotated[
+        bool, typer.Option("--all", help="Every formulation x integrator family (every contact law is in each).")
+    ] = False,
+) -> None:
+    """Compile (or load from the cache) the default walker's kernels, so that the first run starts in seconds."""
+    for config in warm_up_configs(every):
+        done = warm_up(config)
+        if done is not None:
+            typer.echo(done.line())
 
 
 @app.command("drop-test")

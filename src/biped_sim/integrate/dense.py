@@ -81,7 +81,7 @@ def dense_eval(tab: Tableau, theta: float, h: float, y: np.ndarray, sc: Scratch,
             out[i] = y[i] + v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def locate_event(tab: Tableau, h: float, y: np.ndarray, system: tuple, sc: Scratch) -> float:
     """Earliest sign change of the event functions inside the step, as theta in (0, 1].
 

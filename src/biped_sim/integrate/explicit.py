@@ -37,6 +37,7 @@ from biped_sim.integrate.recorder import (
     STEPS_COLLAPSED,
     TOO_MANY_FORCED,
     apply_events,
+    copy_rows,
     has_room,
     record_sample,
 )
@@ -73,7 +74,7 @@ def _stop(st: np.record, status: int, t: float, reason: int = 0) -> None:
     st.reason = reason
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step_size(t: float, h: float, cfg: Settings) -> tuple[float, bool]:
     """The step to take from t: (h, whether it ends at t_end); h is the controller's proposal or dt."""
     if cfg.control:
@@ -86,7 +87,7 @@ def _step_size(t: float, h: float, cfg: Settings) -> tuple[float, bool]:
     return h, last
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _control(err: float, finite: bool, t: float, h: float, error_order: int, st: np.record) -> tuple[bool, float]:
     """Error control of a step with error norm ``err``: (accepted, next step) or (rejected, step to retry with).
 
@@ -113,7 +114,7 @@ def _control(err: float, finite: bool, t: float, h: float, error_order: int, st:
     return True, h * (10.0 if err == 0.0 else min(10.0, 0.9 * err**q_exp))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _crossed(g_old: np.ndarray, g_new: np.ndarray) -> bool:
     """Whether an event function changed sign over the step."""
     for j in range(g_new.shape[0]):
@@ -122,19 +123,19 @@ def _crossed(g_old: np.ndarray, g_new: np.ndarray) -> bool:
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sample_tolerance(t_new: float, h: float, cfg: Settings) -> float:
     """How far past t_new a sample time may be and still be taken at the end of this step."""
     return 1e-12 * max(1.0, t_new) if cfg.control else 0.5 * h
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sample_due(n_samples: int, capacity: int, t_new: float, h: float, cfg: Settings) -> bool:
     """Whether the next sample time falls in the step ending at t_new (and the sample buffer has room)."""
     return n_samples < capacity and n_samples * cfg.sample_dt <= t_new + _sample_tolerance(t_new, h, cfg)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # one call site: inlined, it compiles once with the loop
 def _locate_and_sample(loop: Loop, t: float, h: float, crossed: bool, cfg: Settings) -> tuple[float, float]:
     """Cut the accepted step at its first event (adaptive methods) and record the samples inside it.
 
@@ -165,7 +166,7 @@ def _locate_and_sample(loop: Loop, t: float, h: float, crossed: bool, cfg: Setti
     return t_new, theta_end
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # one call site: inlined, it compiles once with the loop
 def _update_at_event(loop: Loop, t: float, max_strikes: int) -> bool:
     """Apply the event at t (y is there now); returns whether the recorder has room for one more."""
     y, sc, st = loop.y, loop.sc, loop.rec.state[0]
@@ -232,15 +233,15 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
         if crossed or _sample_due(st.n_samples, rec.sample_t.shape[0], t_new, h, cfg):  # else nothing happens inside
             t_new, theta_end = _locate_and_sample(loop, t, h, crossed, cfg)
         t = t_new if not last or theta_end < 1.0 else cfg.t_end
-        y[:] = sc.y_new
+        copy_rows(y, sc.y_new)
         if theta_end < 1.0:
             st.fsal_valid = 0
         if crossed:
             room = _update_at_event(loop, t, cfg.max_strikes)
         else:
-            sc.g_old[:] = sc.g_new
+            copy_rows(sc.g_old, sc.g_new)
         if tab.kind != FIXED and st.fsal_valid == 1:
-            sc.k[0, :] = sc.k[tab.stages]
+            copy_rows(sc.k[0], sc.k[tab.stages])
         h = h_next
         if system_has_fallen(y, system):
             _stop(st, FELL, t)

@@ -121,6 +121,18 @@ def with_room(rec: Recorder, nf: int) -> Recorder:
     )
 
 
+@njit(cache=True, inline="always")
+def copy_rows(dst: np.ndarray, src: np.ndarray) -> None:
+    """dst[:] = src for a 1-D or 2-D ``src`` (C order), element by element.
+
+    Written out because numba compiles a slice assignment with a shape check whose error message
+    (string formatting of the shapes) costs about 2 s of compilation on a cold cache.
+    """
+    flat_dst, flat_src = dst.reshape(dst.size), src.reshape(src.size)
+    for i in range(flat_src.shape[0]):
+        flat_dst[i] = flat_src[i]
+
+
 @njit(cache=True)
 def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> None:
     """Store the sample (t, y, modes) if the sample buffer has room (it is sized for the whole run)."""
@@ -128,12 +140,12 @@ def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> 
     k = st.n_samples
     if k < rec.sample_t.shape[0]:
         rec.sample_t[k] = t
-        rec.sample_y[k, :] = y
-        rec.sample_modes[k, :, :] = modes
+        copy_rows(rec.sample_y[k], y)
+        copy_rows(rec.sample_modes[k], modes)
         st.n_samples = k + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _log_contact_changes(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, rec: Recorder, touching_before: np.ndarray
 ) -> None:
@@ -150,7 +162,7 @@ def _log_contact_changes(
             st.n_log = n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply_events(
     t: float,
     y: np.ndarray,
@@ -180,8 +192,8 @@ def apply_events(
             k = st.n_strikes
             rec.strike_t[k] = t
             rec.strike_foot[k] = i
-            rec.strike_y[k, :] = y
-            rec.strike_modes[k, :, :] = modes
+            copy_rows(rec.strike_y[k], y)
+            copy_rows(rec.strike_modes[k], modes)
             st.n_strikes = k + 1
             st.last_strike_foot = i
             if max_strikes > 0 and k + 1 >= max_strikes:

@@ -100,7 +100,7 @@ def _rms_norm(v: np.ndarray, scale: np.ndarray) -> float:
     return math.sqrt(s / v.shape[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def error_norm(tab: Tableau, h: float, y: np.ndarray, sc: Scratch, rtol: float, atol: float) -> float:
     """Hairer's scaled RMS error norm of the embedded estimate (dop853: combined 5th/3rd order).
 
@@ -127,7 +127,7 @@ def error_norm(tab: Tableau, h: float, y: np.ndarray, sc: Scratch, rtol: float, 
     return abs(h) * err5 / math.sqrt((err5 + 0.01 * err3) * ny)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def initial_step(
     tab: Tableau,
     t: float,

@@ -35,13 +35,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from biped_sim.config import Config, config_from_dict
+from biped_sim.config import Config
 from biped_sim.errors import ConfigError
-from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.io.atomic import write_json_atomic
 from biped_sim.io.run_files import start_run_directory
 from biped_sim.io.trajectory import trajectory_problem
 from biped_sim.simulate import simulate
+from biped_sim.simulate.warmup import warm_up
 from biped_sim.sweep.lock import sweep_lock
 from biped_sim.sweep.pool import WorkerDiedError, WorkerPool
 from biped_sim.sweep.rows import metrics_from_summary, settings_of, unfinished_metrics, write_table
@@ -50,7 +50,6 @@ from biped_sim.sweep.spec import RunSpec, Sweep
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
 FAILED_STATUSES = ("error", "diverged")
-WARM_UP_TIME = 1e-3  # s of simulated time
 
 
 def init_worker() -> None:
@@ -149,29 +148,6 @@ def _clear_unfinished(run_dir: Path) -> None:
     (run_dir / "error.json").unlink(missing_ok=True)
 
 
-_WARMED: set[str] = set()
-
-
-def warm_up(config: Config) -> None:
-    """Run ``config`` for 1 ms once per process and integrator family, so that compiling (or loading
-    the cached) numba code is not counted in the first run's wall time: wall times of a sweep
-    compare integrators, not process start-up. Rigid runs have no compiled code to warm.
-    """
-    if config.dynamics == "rigid":
-        return
-    family = "stiff" if config.integrator.method in STIFF_METHODS else "explicit"
-    if family in _WARMED:
-        return
-    # at least one step and one sample after the start, so that the short run passes the run's own checks
-    t_end = max(WARM_UP_TIME, config.integrator.dt)
-    simulate(
-        config_from_dict(
-            config.model_dump(mode="json"), [f"simulation.t_end={t_end!r}", f"output.sample_rate={1 / t_end!r}"]
-        )
-    )
-    _WARMED.add(family)
-
-
 def execute_run(task: RunTask) -> dict[str, Any]:
     """Worker: simulate one run, write its directory, return its metric columns.
 
@@ -182,7 +158,7 @@ def execute_run(task: RunTask) -> dict[str, Any]:
     _clear_unfinished(run_dir)
     try:
         config = Config.model_validate(task.config)
-        warm_up(config)
+        warm_up(config)  # compiling is not counted in the first run's wall time: a sweep compares runs
         result = simulate(config)
         result.write(run_dir)
         return metrics_from_summary(result.summary)

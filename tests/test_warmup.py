@@ -1,0 +1,101 @@
+"""The warm-up (``biped-sim warmup``, a sweep worker's first run) and what a run compiles: its own group only."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from numba import njit
+
+from biped_sim._compiled_cache import recording_compilations
+from biped_sim.multibody.dispatch import FORMULATIONS
+from biped_sim.simulate import RunResult, warmup
+from biped_sim.testing import default_walker
+
+from .conftest import child_env, invoke
+
+# modules whose compiled code a planar run with an explicit method must neither compile nor load
+OTHER_GROUPS = (
+    "biped_sim.multibody.spatial",
+    "biped_sim.multibody.spatial_kernels",
+    "biped_sim.multibody.euler_parameters",
+    "biped_sim.integrate.stiff",
+)
+
+_LOADED_BY_A_PLANAR_RUN = """
+import json, sys
+from numba.core.registry import CPUDispatcher
+from biped_sim import simulate
+from biped_sim.testing import default_walker
+
+def loaded():
+    return sorted(
+        f"{name}.{attribute}"
+        for name, module in list(sys.modules.items()) if name.startswith("biped_sim")
+        for attribute, value in vars(module).items() if isinstance(value, CPUDispatcher) and value.signatures
+    )
+
+import biped_sim.cli  # every command's module
+at_import = loaded()
+simulate(default_walker(t_end=0.01))
+print(json.dumps({"at_import": at_import, "after_run": loaded()}))
+"""
+
+
+def test_recording_compilations_lists_what_numba_compiles() -> None:
+    @njit
+    def twice(x: float) -> float:
+        return 2.0 * x
+
+    with recording_compilations() as first:
+        twice(1.0)
+    with recording_compilations() as again:
+        twice(2.0)
+    assert first == [f"{__name__}.{twice.py_func.__qualname__}"]
+    assert again == []
+
+
+def test_warmup_command_warms_the_default_walker(short_run: RunResult, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the default walker's code compiled already (the shared short run), the warm-up compiles nothing."""
+    monkeypatch.setattr(warmup, "_WARMED", set())
+    result = invoke("warmup")
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith("planar explicit (dopri5): loaded from the cache in ")
+    assert len(result.output.strip().splitlines()) == 1
+    assert invoke("warmup").output == ""  # once per process and group
+
+
+def test_warm_up_all_covers_every_formulation_and_integrator_family() -> None:
+    """Every registered formulation (the engine's registry, not the schema the configs come from) x both families."""
+    groups = {(c.formulation.kind, warmup.integrator_family(c.integrator.method)) for c in warmup.warm_up_configs(True)}
+    kinds = {formulation.name for formulation in FORMULATIONS.values()}
+    assert {"planar", "spatial"} <= kinds
+    assert groups == {(kind, family) for kind in kinds for family in ("explicit", "stiff")}
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [["integrator.method=rk4", "integrator.dt=3e-3"], ["output.sample_rate=100"], ["integrator.method=radau"]],
+)
+def test_a_worker_warms_up_on_any_valid_run(overrides: list[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """The warm-up is a short copy of the run: it must pass the run's own checks (a step longer than the warm-up,
+    a sample rate too low for it once made every first run of a worker an error)."""
+    monkeypatch.setattr(warmup, "_WARMED", set())
+    family = "stiff" if "radau" in overrides[0] else "explicit"
+    done = warmup.warm_up(default_walker(*overrides))
+    assert done is not None and (done.formulation, done.family) == ("planar", family)
+    assert warmup.warm_up(default_walker(*overrides)) is None
+
+
+def test_a_planar_explicit_run_compiles_only_its_own_group(short_run: RunResult) -> None:
+    """Nothing is compiled at import; a planar dopri5 run neither compiles nor loads the spatial formulation's
+    kernels or the stiff driver's (numba dispatchers list the signatures they compiled or loaded)."""
+    out = subprocess.run(
+        [sys.executable, "-c", _LOADED_BY_A_PLANAR_RUN], env=child_env(), capture_output=True, text=True, check=True
+    )
+    loaded = json.loads(out.stdout.strip().splitlines()[-1])
+    assert loaded["at_import"] == []
+    assert "biped_sim.integrate.explicit.advance" in loaded["after_run"]
+    assert [name for name in loaded["after_run"] if name.startswith(OTHER_GROUPS)] == []
