@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from biped_sim import config_from_dict, simulate
 from biped_sim.cli import app
-from biped_sim.config import Config, _is_number
+from biped_sim.config import Config, is_number_annotation
 from biped_sim.errors import ConfigError
 from biped_sim.simulate import prepare_model
 
@@ -33,7 +33,7 @@ def number_fields(model: type[BaseModel], prefix: str = "") -> list[str]:
         sub = [arg for arg in sections if issubclass(arg, BaseModel)]
         if sub:
             keys += number_fields(sub[0], f"{prefix}{name}.")
-        elif _is_number(annotation):
+        elif is_number_annotation(annotation):
             keys.append(f"{prefix}{name}")
     return keys
 

@@ -7,8 +7,8 @@ wall seconds), the worst step-period error against a tight reference (dop853, rt
 the speed-up over the baseline (solve_ivp RK45 over the plain-Python RHS, :mod:`.baseline`).
 Fixed-step rows first search the largest step that keeps every step period within
 :data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone in absolute and in minimal
-coordinates (hence the loop overhead), compile and start-up times in fresh processes, sweep
-throughput with 1 and 2 workers, and MuJoCo.
+coordinates (hence the loop overhead), compile and start-up times in fresh processes and sweep
+throughput with 1 and 2 workers (:mod:`.startup`), and MuJoCo.
 
 :data:`CASES` is the list of rows: another formulation, method or walker is one more entry.
 """
@@ -20,10 +20,6 @@ import math
 import os
 import platform
 import statistics
-import subprocess
-import sys
-import tempfile
-import textwrap
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -37,10 +33,10 @@ from numba import njit
 
 from biped_sim.bench.baseline import integrate_baseline
 from biped_sim.bench.rigid_map import rigid_map_bench
+from biped_sim.bench.startup import startup_times, sweep_throughput
 from biped_sim.config import Config, load_config
 from biped_sim.integrate.driver import Integration, integrate_model
 from biped_sim.multibody.dispatch import make_workspace, system_rhs
-from biped_sim.sweep import load_sweep, local_executor, run_sweep
 from biped_sim.walkers import BuiltModel, build_model
 
 PERIOD_TOLERANCE = 1e-4  # relative step-period error the fixed-step rows must meet
@@ -282,90 +278,6 @@ def rhs_cost_us(model: BuiltModel, run: Integration, min_evals: int = 500_000) -
         _rhs_loop(model.system, work, ys, modes, ydot, sweeps)
         best = min(best, time.perf_counter() - start)
     return best / (sweeps * len(ys)) * 1e6
-
-
-_STARTUP_SCRIPT = textwrap.dedent(
-    """
-    import json, sys, time
-    t0 = time.perf_counter()
-    from biped_sim import load_config
-    from biped_sim.integrate.driver import integrate_model
-    from biped_sim.walkers import build_model
-    t1 = time.perf_counter()
-    config = load_config(sys.argv[1], ["simulation.t_end=0.001"])
-    model = build_model(config)
-    t2 = time.perf_counter()
-    integrate_model(model.system, model.y0, model.modes0, config.integrator, 0.001, config.output.sample_rate)
-    t3 = time.perf_counter()
-    print(json.dumps({"at": time.time(), "import_s": t1 - t0, "build_s": t2 - t1, "first_integration_s": t3 - t2}))
-    """
-)
-
-
-def startup_run(config_path: Path, cache_dir: str | None) -> dict[str, float]:
-    """Run a fresh interpreter that integrates 1 ms; wall time from launch to the end of that first integration."""
-    env = dict(os.environ)
-    if cache_dir is not None:
-        env["NUMBA_CACHE_DIR"] = cache_dir
-    start = time.time()
-    out = subprocess.run(
-        [sys.executable, "-c", _STARTUP_SCRIPT, str(config_path)], env=env, capture_output=True, text=True, check=True
-    )
-    data = json.loads(out.stdout.strip().splitlines()[-1])
-    data["to_first_step_s"] = data.pop("at") - start
-    return data
-
-
-def startup_times(config_path: Path, cold: bool) -> dict[str, Any]:
-    """Cold (empty numba cache: everything compiles) and cached start-up, each in a new process.
-
-    Without ``cold`` the user's cache is used, primed by one discarded run (the cache is keyed by
-    the package sources, so an edited tree starts with an empty one).
-    """
-    result: dict[str, Any] = {}
-    with tempfile.TemporaryDirectory(prefix="biped-sim-bench-cache-") as tmp:
-        cache_dir = tmp if cold else None
-        first = startup_run(config_path, cache_dir)
-        if cold:
-            result["cold"] = first
-        runs = [startup_run(config_path, cache_dir) for _ in range(3)]
-        result["cached"] = min(runs, key=lambda data: data["to_first_step_s"])
-    return result
-
-
-_SWEEP_FILE = """\
-name: bench_throughput
-base: {base}
-set:
-  simulation.t_end: {t_end}
-grid:
-  ground.slope: {{from: 0.016, to: 0.024, num: {runs}}}
-"""
-
-
-def sweep_throughput(config_path: Path, runs: int, t_end: float, jobs: tuple[int, ...] = (1, 2)) -> dict[str, Any]:
-    """Runs per minute of a ``runs``-run slope sweep (the full run: simulate and write files) per worker count.
-
-    Timed from creating the process pool to the last run written, so worker start-up is included
-    (with the compiled code already in the on-disk cache, as in any sweep but the first after an edit).
-    """
-    result: dict[str, Any] = {"runs": runs, "t_end": t_end, "per_jobs": {}}
-    with tempfile.TemporaryDirectory(prefix="biped-sim-bench-sweep-") as tmp:
-        sweep_file = Path(tmp) / "sweep.yaml"
-        sweep_file.write_text(_SWEEP_FILE.format(base=config_path.resolve(), t_end=t_end, runs=runs))
-        sweep = load_sweep(sweep_file)
-        for n in jobs:
-            startup_run(config_path, None)  # the workers load, not compile: the cache is keyed by the sources
-            start = time.perf_counter()
-            with local_executor(n) as executor:
-                outcome = run_sweep(sweep, Path(tmp) / f"jobs{n}", executor, resume=False)
-            wall = time.perf_counter() - start
-            failed = outcome.progress.failed
-            result["per_jobs"][str(n)] = {"wall_s": wall, "runs_per_minute": runs / wall * 60.0, "failed": failed}
-    one, two = result["per_jobs"].get("1"), result["per_jobs"].get("2")
-    if one and two:
-        result["speedup_2_vs_1"] = two["runs_per_minute"] / one["runs_per_minute"]
-    return result
 
 
 def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: None) -> dict[str, Any]:

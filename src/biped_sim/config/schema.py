@@ -1,40 +1,29 @@
-"""Configuration schema: the one place where defaults, units and validation rules live.
-
-All quantities are SI (m, kg, s, N, Pa) and angles are radians. The schema maps one-to-one
-onto the YAML files in ``configs/``; unknown keys are errors so that a typo is never silently
-ignored. ``load_config`` reads YAML (with a YAML-1.2-style float resolver so that ``1e7`` is a
-number), applies ``--set key=value`` overrides and validates; every failure becomes a
-:class:`~biped_sim.errors.ConfigError` naming the dotted field and the reason.
-"""
+"""The configuration schema: every section, field, default, unit and validation rule (pydantic models)."""
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 import math
-import re
 import types
 import typing
-from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from biped_sim.contact.friction import FRICTION_LAWS
 from biped_sim.contact.normal import NORMAL_LAWS
-from biped_sim.errors import ConfigError
 
 
-def _is_number(annotation: Any) -> bool:
+def is_number_annotation(annotation: Any) -> bool:
     """Whether a field's type is a number (float, int, or one of them or None)."""
     if annotation in (float, int):
         return True
     if typing.get_origin(annotation) is tuple:  # a vector of numbers (simulation.pushes' impulse)
-        return all(_is_number(arg) for arg in typing.get_args(annotation))
+        return all(is_number_annotation(arg) for arg in typing.get_args(annotation))
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
-        return any(_is_number(arg) for arg in typing.get_args(annotation))
+        return any(is_number_annotation(arg) for arg in typing.get_args(annotation))
     return False
 
 
@@ -51,7 +40,11 @@ class _Strict(BaseModel):
             for name, value in data.items():
                 field = cls.model_fields.get(name)
                 numbers = value if isinstance(value, list) else [value]
-                if field is not None and _is_number(field.annotation) and any(isinstance(v, bool) for v in numbers):
+                if (
+                    field is not None
+                    and is_number_annotation(field.annotation)
+                    and any(isinstance(v, bool) for v in numbers)
+                ):
                     raise ValueError(f"{name}: expected a number, got {str(value).lower()}")
         return data
 
@@ -336,128 +329,3 @@ class Config(_Strict):
     def to_yaml(self) -> str:
         """The fully resolved config as YAML text (every default written out)."""
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
-
-
-class _Loader(yaml.SafeLoader):
-    """SafeLoader that reads ``1e7`` as a float (YAML 1.2) and ``on``/``off`` as strings."""
-
-
-_FLOAT_RE = re.compile(
-    r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-    |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-    |\.[0-9_]+(?:[eE][-+][0-9]+)?
-    |[-+]?\.(?:inf|Inf|INF)
-    |\.(?:nan|NaN|NAN))$""",
-    re.X,
-)
-_Loader.yaml_implicit_resolvers = {
-    key: [(tag, rx) for tag, rx in resolvers if tag not in ("tag:yaml.org,2002:float", "tag:yaml.org,2002:bool")]
-    for key, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
-}
-_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_RE, list("-+0123456789."))
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
-)
-
-
-def parse_yaml(text: str, source: str = "<string>") -> Any:
-    """Parse YAML text with the project's loader; a syntax error becomes a one-line ConfigError."""
-    try:
-        return yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(source, f"malformed YAML{where}: {problem}") from None
-
-
-def apply_override(data: dict[str, Any], assignment: str) -> None:
-    """Apply one ``dotted.key=value`` override (value parsed as YAML) to a raw config dict in place."""
-    if "=" not in assignment:
-        raise ConfigError("--set", f"expected KEY=VALUE, got {assignment!r}")
-    key, _, raw_value = assignment.partition("=")
-    key = key.strip()
-    if not key or any(not part for part in key.split(".")):
-        raise ConfigError("--set", f"invalid key {key!r}")
-    set_dotted(data, key, parse_yaml(raw_value, source=f"--set {key}"))
-
-
-def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
-    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed."""
-    node = data
-    parts = key.split(".")
-    for part in parts[:-1]:
-        child = node.get(part)
-        if not isinstance(child, dict):
-            child = {}
-            node[part] = child
-        node = child
-    node[parts[-1]] = value
-
-
-_UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\])$")
-
-
-def _format_validation_error(exc: ValidationError) -> ConfigError:
-    """Turn pydantic's first error into one line: dotted field and reason."""
-    err = exc.errors()[0]
-    # a union (simulation.initial) tags its members' errors with the member type: not part of the key
-    loc = ".".join(str(part) for part in err["loc"] if not _UNION_TAG.match(str(part)))
-    message = err["msg"]
-    if message.startswith("Value error, "):
-        message = message[len("Value error, ") :]
-        # validators name their own field as "field: reason"
-        field, sep, reason = message.partition(": ")
-        if sep and "." not in field and loc:
-            return ConfigError(f"{loc}.{field}", reason)
-        if sep:
-            return ConfigError(field, reason)
-    if err["type"] == "extra_forbidden":
-        message = "unknown key (not in the schema)"
-    elif err["type"] == "literal_error":
-        message = f"unknown name {err.get('input')!r}; {message[0].lower()}{message[1:]}"
-    return ConfigError(loc or "config", message)
-
-
-def config_from_dict(data: Any, overrides: list[str] | tuple[str, ...] = ()) -> Config:
-    """Validate a raw dict (plus ``KEY=VALUE`` overrides) into a :class:`Config`."""
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise ConfigError("config", "top level must be a mapping of sections")
-    data = copy.deepcopy(data)
-    for assignment in overrides:
-        apply_override(data, assignment)
-    try:
-        return Config.model_validate(data)
-    except ValidationError as exc:
-        raise _format_validation_error(exc) from None
-
-
-def read_text_file(path: str | Path, what: str = "config file") -> str:
-    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory or not text."""
-    path = Path(path)
-    if path.is_dir():
-        raise ConfigError(str(path), f"is a directory, not a {what}")
-    if not path.is_file():
-        raise ConfigError(str(path), f"no such {what}")
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(str(path), f"not a UTF-8 text file (byte {exc.start}): is it a {what}?") from None
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot read: {exc.strerror}") from None
-
-
-def load_config(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Config:
-    """Read and validate a YAML config file; raises ConfigError with a one-line reason."""
-    text = read_text_file(path)
-    return config_from_dict(parse_yaml(text, source=str(path)), overrides)
-
-
-def default_output_dir(config: Config, config_path: str | Path | None) -> Path:
-    """Run directory: ``output.dir`` if set, else results/runs/<config stem>."""
-    if config.output.dir:
-        return Path(config.output.dir)
-    stem = Path(config_path).stem if config_path else "run"
-    return Path("results") / "runs" / stem
