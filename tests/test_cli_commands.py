@@ -26,6 +26,10 @@ def test_drop_test_json_gives_the_effective_restitution_of_each_law_asked_for() 
         (["drop-test", "--restitution", "1.5"], "--restitution: 1.5 is not in (0, 1]"),
         (["converge", str(CONFIGS / "rimless_wheel.yaml")], "walker.kind: converge compares the compliant and rigid"),
         (["converge", "missing.yaml"], "missing.yaml: no such config file"),
+        (
+            ["converge", str(CONFIGS / "round_foot_walker.yaml"), "--mu-kinetic", "1", "--mu-static", "0.5"],
+            "--mu-static: must be >= the kinetic coefficient (1.0)",
+        ),
         (["bench", "--config", "missing.yaml"], "missing.yaml: no such config file"),
         (["bench", "--quick", "--config", "bad.yaml"], "malformed YAML"),
     ],

@@ -92,19 +92,32 @@ def converge_command(
     config_path: ConfigArgument,
     set_: SetOption = None,
     levels: Annotated[int, typer.Option("--levels", min=2, max=7, help="Contact settings (stiffness x10 each).")] = 5,
+    mu_kinetic: Annotated[float | None, typer.Option("--mu-kinetic", min=0.0, help="LuGre mu_k [default 1.0].")] = None,
+    mu_static: Annotated[float | None, typer.Option("--mu-static", min=0.0, help="LuGre mu_s [default 1.2].")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """The compliant gait against the rigid gait of the same walker as the contact stiffens."""
     from dataclasses import asdict
 
-    from biped_sim.studies.convergence import converge
+    from biped_sim.studies.convergence import MU_KINETIC, MU_STATIC, converge, rigid_strike_check
 
     config = load(config_path, set_)
     if config.walker.kind != "compass":
         raise ConfigError("walker.kind", "converge compares the compliant and rigid compass walker")
-    rigid, rows = converge(config, levels)
+    mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
+    mu_static = MU_STATIC if mu_static is None else mu_static
+    if mu_static < mu_kinetic:
+        raise ConfigError("--mu-static", f"must be >= the kinetic coefficient ({mu_kinetic})")
+    rigid, rows = converge(config, levels, mu_kinetic=mu_kinetic, mu_static=mu_static)
+    check = rigid_strike_check(config, rigid, mu_kinetic)
+    violations = check.violations(mu_static)
     if as_json:
-        typer.echo(json.dumps({"rigid": rigid.to_json(), "levels": [asdict(r) for r in rows]}, indent=2))
+        doc = {
+            "rigid": rigid.to_json(),
+            "rigid_strike": {**asdict(check), "violations": violations},
+            "levels": [asdict(r) for r in rows],
+        }
+        typer.echo(json.dumps(doc, indent=2))
         return
     table = Table(title=f"Compliant -> rigid, rigid step period {rigid.step_period:.8f} s")
     for column in (
@@ -131,6 +144,10 @@ def converge_command(
     console.print(table)
     smallest = min((r.touchdown_difference for r in rows if math.isfinite(r.touchdown_difference)), default=math.nan)
     console.print(f"smallest touchdown-state difference: {smallest:.2e}", highlight=False)
+    for violation in violations:
+        console.print(
+            f"warning: the rigid strike is not the stiff-contact limit: {violation}", highlight=False, soft_wrap=True
+        )
 
 
 @app.command("bifurcation")

@@ -13,12 +13,16 @@ import numpy as np
 
 from biped_sim.config import Config, config_from_dict
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
+from biped_sim.rigid.models import CompassChain, rigid_walker
+from biped_sim.rigid.strike_check import StrikeCheck, strike_check
 from biped_sim.simulate import simulate
 from biped_sim.studies.limit_cycle import TOUCHDOWN_KEYS
 from biped_sim.walkers.model import contact_stiffness
 
 CONVERGE_LEVELS = 5
 CONVERGE_STEPS = 20
+MU_KINETIC, MU_STATIC = 1.0, 1.2  # the study's LuGre friction coefficients
+BRISTLE_DAMPING = 20.0  # LuGre sigma1 [s/m per N of normal load], the same at every level (see converge)
 
 
 @dataclass
@@ -35,17 +39,41 @@ class ConvergenceRow:
     slip: float  # stance-foot slip over the last step [m]
 
 
+def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float = MU_KINETIC) -> StrikeCheck:
+    """The rigid gait's strike against the conditions under which a stiff compliant strike tends to it.
+
+    ``StrikeCheck.violations(mu_static)`` lists why the compliant gait of :func:`converge` with that friction
+    cannot converge to the rigid one (empty: it can).
+    """
+    walker = rigid_walker(config)
+    if not isinstance(walker, CompassChain):
+        raise ValueError("rigid_strike_check: the compass walker only")
+    td = rigid.touchdown  # the pre-impact state relabelled: its stance leg is the one about to land
+    x_minus = np.array([td["swing_angle"], td["stance_angle"], td["swing_rate"], td["stance_rate"]])
+    return strike_check(walker, x_minus, mu_kinetic)
+
+
 def converge(
-    config: Config, levels: int = CONVERGE_LEVELS, steps: int = CONVERGE_STEPS
+    config: Config,
+    levels: int = CONVERGE_LEVELS,
+    steps: int = CONVERGE_STEPS,
+    mu_kinetic: float = MU_KINETIC,
+    mu_static: float = MU_STATIC,
 ) -> tuple[LimitCycle, list[ConvergenceRow]]:
     """The compliant gait approaching the rigid one as the contact stiffens, dissipates and stops slipping.
 
     Level k (0-based): contact stiffness 10^k times the config's (Hertz or explicit), restitution
-    0.3 / sqrt(10)^k, and LuGre friction (mu_k 1.0, mu_s 1.2) whose bristle stiffness sigma0 = 1e4 * 10^k
-    per metre (damping sigma1 = 20 sqrt(sigma0 / 1e4)): LuGre sticks elastically instead of creeping as
-    the regularised laws do, so the slip vanishes with sigma0. Each compliant run starts on the rigid limit
-    cycle and walks ``steps`` steps; its last touchdown state and step period are compared with the rigid
-    touchdown (the pre-impact state, relabelled) and period.
+    0.3 / sqrt(10)^k, and LuGre friction (mu_k, mu_s) whose bristle stiffness sigma0 = 1e4 * 10^k per metre:
+    LuGre sticks elastically instead of creeping as the regularised laws do, so the slip vanishes with
+    sigma0. Each compliant run starts on the rigid limit cycle and walks ``steps`` steps; its last touchdown
+    state and step period are compared with the rigid touchdown (the pre-impact state, relabelled) and period.
+
+    The bristle damping sigma1 stays ``BRISTLE_DAMPING`` at every level: LuGre's force F_N (sigma0 z + sigma1
+    zdot) exceeds Coulomb's bound while the bristles deflect (zdot ~ v: the ratio reaches sigma1 |v|), and a
+    foot loaded through a strike of duration tau ~ 1/sqrt(stiffness) takes a friction impulse ~ F_N sigma1 v
+    tau: it vanishes for a fixed sigma1, not for sigma1 ~ sqrt(sigma0) (the bristles' critical damping). The
+    limit is the rigid strike only where :func:`rigid_strike_check` finds no violation (a leading foot that
+    lands slipping backwards pushes the trailing one into the ground through friction when mu_k is large).
     """
     rigid = rigid_limit_cycle(config)
     rigid_touchdown = np.array([rigid.touchdown[k] for k in TOUCHDOWN_KEYS])
@@ -58,7 +86,7 @@ def converge(
         sigma0 = 1e4 * 10.0**k
         data["contact"].update(stiffness=stiffness, materials=None, restitution=restitution)
         data["friction"].update(
-            model="lugre", mu_kinetic=1.0, mu_static=1.2, sigma0=sigma0, sigma1=20.0 * math.sqrt(sigma0 / 1e4)
+            model="lugre", mu_kinetic=mu_kinetic, mu_static=mu_static, sigma0=sigma0, sigma1=BRISTLE_DAMPING
         )
         data["simulation"].update(initial=rigid.fixed_point, max_steps=steps, t_end=max(200.0, config.simulation.t_end))
         result = simulate(config_from_dict(data))
