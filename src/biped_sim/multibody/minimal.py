@@ -27,14 +27,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from biped_sim.contact.ground import FLAT_GROUND, Ground, ground_clearance
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
     IMPACT_FLOOR,
     arc_contact,
-    ground_forces,
+    arc_energy,
+    arc_forces,
     is_loaded,
-    stored_energy,
 )
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
@@ -57,6 +58,7 @@ class MinimalSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
+    ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
 
 
 # columns of the workspace's per-body table: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos, sin phi_b
@@ -76,13 +78,19 @@ def make_workspace(system: MinimalSystem) -> Workspace:
 
 @njit(cache=True)
 def foot_arc(
-    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float
+    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float, ground: Ground
 ) -> tuple[float, float, float, float, float, float]:
-    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against the
-    ground (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
+    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against
+    ``ground`` (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
     (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_h."""
-    cx, cy = y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
-    return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius)
+    cx, cy = arc_centre(y, c, s, fx, fy)
+    return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius, ground)
+
+
+@njit(cache=True)
+def arc_centre(y: np.ndarray, c: float, s: float, fx: float, fy: float) -> tuple[float, float]:
+    """Centre of a foot arc at (fx, fy) from the hip in the frame of a body at angle phi (c, s = cos, sin phi)."""
+    return y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
 
 
 @njit(cache=True)
@@ -90,7 +98,8 @@ def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float
     """:func:`foot_arc` of foot i."""
     centre, b = system.foot_center, system.foot_body[i]
     c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
-    return foot_arc(y, HIP + system.body_mass.shape[0], b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i])
+    n = HIP + system.body_mass.shape[0]
+    return foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i], system.ground)
 
 
 @njit(cache=True)
@@ -126,21 +135,23 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
     for k in range(n):
         ydot[k] = y[n + k]
     w_normal = w_friction = 0.0
-    switches, npar, fpar = system.switches, system.normal_params, system.friction_params
+    switches, npar, fpar, ground = system.switches, system.normal_params, system.friction_params, system.ground
     floor = system.limits[IMPACT_FLOOR]
     for i in range(nf):
         b = foot_body[i]
         c, s = legs[b, COS], legs[b, SIN]
-        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], radius[i])
-        if not is_loaded(modes, i, delta):  # ground_forces would return zeros: skip the call (and its refcounts)
+        cx, cy = arc_centre(y, c, s, centre[i, 0], centre[i, 1])
+        motion = (y[0], y[1], y[n], y[n + 1], y[n + HIP + b])
+        arc = arc_contact(motion[0], motion[1], motion[2], motion[3], motion[4], cx, cy, radius[i], ground)
+        if not is_loaded(modes, i, arc[0]):  # arc_forces would return zeros: skip the call (and its refcounts)
             ydot[2 * n + i] = 0.0
             continue
-        f_n, f_t, z_dot, p_n, p_f = ground_forces(
-            switches, npar, fpar, floor, modes, i, delta, delta_dot, slip, y[2 * n + i]
+        f_x, f_y, torque, z_dot, p_n, p_f, _, _ = arc_forces(
+            motion, cx, cy, radius[i], ground, arc, switches, npar, fpar, floor, modes, i, y[2 * n + i]
         )
-        hip_x += f_t
-        hip_y += f_n
-        legs[b, TORQUE] += dx * f_n - dy * f_t
+        hip_x += f_x
+        hip_y += f_y
+        legs[b, TORQUE] += torque
         ydot[2 * n + i] = z_dot
         w_normal += p_n
         w_friction += p_f
@@ -184,14 +195,17 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
         potential -= m * (system.gravity[0] * (y[0] + ax) + system.gravity[1] * (y[1] + ay))
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
+        b, fx, fy = system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        cx, cy = arc_centre(y, c, s, fx, fy)
+        elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
     return kinetic, potential, elastic
 
 
 @njit(cache=True)
 def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
-    """Fall: hip below the height limit, or any body rotated past the leg-angle limit."""
-    if y[1] < system.limits[FALL_HIP_HEIGHT]:
+    """Fall: hip below the height limit over the ground under it, or any body rotated past the leg-angle limit."""
+    if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:
         return True
     for b in range(system.body_mass.shape[0]):
         if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
@@ -238,6 +252,7 @@ def star_system(planar: PlanarSystem) -> MinimalSystem:
         friction_params=planar.friction_params.copy(),
         switches=planar.switches.copy(),
         limits=planar.limits.copy(),
+        ground=planar.ground,
     )
 
 
@@ -260,13 +275,16 @@ def pitch(y: np.ndarray, system: MinimalSystem, body: int) -> tuple[float, float
 
 def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
     """(penetration, normal force, friction force, slip velocity) of a foot (the right-hand side's equations)."""
-    delta, delta_dot, slip, _, _, _ = foot_kinematics(y, system, foot)
-    z = y[2 * (HIP + system.body_mass.shape[0]) + foot]
-    f_n, f_t, _, _, _ = ground_forces(
+    n, b = HIP + system.body_mass.shape[0], system.foot_body[foot]
+    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+    cx, cy = arc_centre(y, c, s, system.foot_center[foot, 0], system.foot_center[foot, 1])
+    arc = foot_kinematics(y, system, foot)
+    _, _, _, _, _, _, f_n, f_t = arc_forces(
+        (y[0], y[1], y[n], y[n + 1], y[n + HIP + b]), cx, cy, system.foot_radius[foot], system.ground, arc,
         system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, foot,
-        delta, delta_dot, slip, z,
+        y[2 * n + foot],
     )  # fmt: skip
-    return delta, f_n, f_t, slip
+    return arc[0], f_n, f_t, arc[2]
 
 
 def no_violation(y: np.ndarray, system: MinimalSystem) -> tuple[float, float]:
