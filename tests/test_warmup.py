@@ -24,6 +24,9 @@ OTHER_GROUPS = (
     "biped_sim.integrate.stiff",
 )
 
+# the profile geometry and the profile implementations of the ground's functions: a flat run compiles none
+PROFILE_CODE = ("biped_sim.contact.ground.", "biped_sim.contact.response._profile_")
+
 _LOADED_BY_A_PLANAR_RUN = """
 import json, sys
 from numba.core.registry import CPUDispatcher
@@ -99,3 +102,5 @@ def test_a_planar_explicit_run_compiles_only_its_own_group(short_run: RunResult)
     assert loaded["at_import"] == []
     assert "biped_sim.integrate.explicit.advance" in loaded["after_run"]
     assert [name for name in loaded["after_run"] if name.startswith(OTHER_GROUPS)] == []
+    # the flat ground's specialisation holds no profile code: no function of the profile geometry is compiled
+    assert [name for name in loaded["after_run"] if name.startswith(PROFILE_CODE)] == []

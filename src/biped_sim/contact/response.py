@@ -5,8 +5,10 @@ lead over the partner foot); what the ground does with it is written once, here:
 
 * the per-foot discrete mode table ``modes[i]`` = (ARMED, TOUCHING, IMPACT_SPEED) and the indices of
   the kernels' ``switches`` and ``limits`` vectors;
-* :func:`arc_contact`: a foot arc against the ground (penetration, approach and slip velocities,
-  contact point): the one place where the ground's shape is;
+* :func:`arc_contact`, :func:`arc_forces`, :func:`arc_energy`: a foot arc against the ground (penetration,
+  approach and slip velocities, contact point; the forces summed over the ground's contact features;
+  their spring energy): the one place where the ground enters, resolved at compile time from the type
+  of the system's ``ground`` (:mod:`.ground`: a flat run compiles only the plane's arithmetic);
 * :func:`ground_forces`: the normal and friction forces on a loaded foot and their dissipation;
 * :func:`normal_response`: the normal force of the selected law with the approach velocity
   remembered at touchdown (floored) and the power its damping dissipates;
@@ -26,7 +28,9 @@ import numpy as np
 from numba import njit
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.ground import FlatGround, ProfileGround, ground_contact, ground_contacts, ground_window
 from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
+from biped_sim.contact.registry import by_type
 
 # columns of the per-foot discrete mode table
 ARMED, TOUCHING, IMPACT_SPEED = 0, 1, 2
@@ -66,23 +70,129 @@ def make_contact_buffers(bristles: np.ndarray) -> ContactBuffers:
 
 
 @njit(cache=True)
-def arc_contact(
-    rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float
+def _flat_arc_contact(
+    rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float, ground: FlatGround
 ) -> tuple[float, float, float, float, float, float]:
-    """A foot arc of centre (cx, cy) and ``radius`` against the ground line y = 0, normal (0, 1) (MODEL.md 3).
-
-    (rx, ry) is a reference point of the foot's body, (vx, vy) its velocity and ``omega`` the body's
-    angular velocity: the planar formulation passes the centre of mass, the minimal one the hip.
-    Returns (delta, delta_dot, slip, x_contact, dx, dy): penetration R - C_y, approach velocity
-    -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact point's position
-    along the slope, and P - r (the lever arm of the contact force about the reference point).
-    """
     px = cx
     py = cy - radius
     dx, dy = px - rx, py - ry
     vpx = vx - omega * dy
     vpy = vy + omega * dx
     return -py, -vpy, vpx, px, dx, dy
+
+
+@njit(cache=True)
+def _material_point(
+    rx: float, ry: float, vx: float, vy: float, omega: float, px: float, py: float, nx: float, ny: float
+) -> tuple[float, float, float, float]:
+    """(delta_dot, slip, dx, dy) at contact point P with normal n: -v_P.n, v_P.t with t = (n_y, -n_x), P - r."""
+    dx, dy = px - rx, py - ry
+    vpx = vx - omega * dy
+    vpy = vy + omega * dx
+    return -(vpx * nx + vpy * ny), vpx * ny - vpy * nx, dx, dy
+
+
+@njit(cache=True)
+def _profile_arc_contact(
+    rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float, ground: ProfileGround
+) -> tuple[float, float, float, float, float, float]:
+    delta, px, py, nx, ny = ground_contact(cx, cy, radius, ground.vertices, ground.ends)
+    delta_dot, slip, dx, dy = _material_point(rx, ry, vx, vy, omega, px, py, nx, ny)
+    return delta, delta_dot, slip, px, dx, dy
+
+
+arc_contact = by_type("arc_contact", "ground", {FlatGround: _flat_arc_contact, ProfileGround: _profile_arc_contact})
+arc_contact.__doc__ = """A foot arc of centre (cx, cy) and ``radius`` against ``ground`` (MODEL.md 3; :mod:`.ground`).
+
+(rx, ry) is a reference point of the foot's body, (vx, vy) its velocity and ``omega`` the body's
+angular velocity: the planar formulation passes the centre of mass, the minimal one the hip.
+Returns, for the deepest contact feature, (delta, delta_dot, slip, x_contact, dx, dy): penetration,
+approach velocity -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact
+point's position along the slope, and P - r (the lever arm of the contact force about the reference
+point). On the flat ground: the line y = 0, normal (0, 1), delta = R - C_y.
+"""
+
+
+@njit(cache=True)
+def _flat_arc_forces(
+    motion: tuple[float, float, float, float, float], cx: float, cy: float, radius: float, ground: FlatGround,
+    arc: tuple[float, float, float, float, float, float], switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray,
+    floor: float, modes: np.ndarray, i: int, z: float,
+) -> tuple[float, float, float, float, float, float, float, float]:  # fmt: skip
+    delta, delta_dot, slip, _, dx, dy = arc
+    f_n, f_t, z_dot, p_normal, p_friction = ground_forces(
+        switches, npar, fpar, floor, modes, i, delta, delta_dot, slip, z
+    )
+    return f_t, f_n, dx * f_n - dy * f_t, z_dot, p_normal, p_friction, f_n, f_t
+
+
+@njit(cache=True)
+def _profile_arc_forces(
+    motion: tuple[float, float, float, float, float], cx: float, cy: float, radius: float, ground: ProfileGround,
+    arc: tuple[float, float, float, float, float, float], switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray,
+    floor: float, modes: np.ndarray, i: int, z: float,
+) -> tuple[float, float, float, float, float, float, float, float]:  # fmt: skip
+    rx, ry, vx, vy, omega = motion
+    vertices, ends, lugre = ground.vertices, ground.ends, switches[FRICTION_MODEL] == LUGRE
+    z_dot = lugre_bristle_rate(arc[2], z, fpar) if lugre and is_loaded(modes, i, arc[0]) else 0.0
+    f_x = f_y = torque = p_normal = p_friction = f_normal = f_tangent = 0.0
+    first, count = ground_window(cx, radius, vertices)
+    for f in range(count):
+        depth, px, py, nx, ny, sign = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
+        if not is_loaded(modes, i, depth):
+            continue
+        depth_dot, v_t, dx, dy = _material_point(rx, ry, vx, vy, omega, px, py, nx, ny)
+        f_n, p_n = normal_response(switches[NORMAL_MODEL], npar, floor, modes, i, depth, depth_dot)
+        if lugre:
+            f_t = lugre_friction(v_t, z, z_dot, f_n, fpar)
+        else:
+            f_t = friction_force(switches[FRICTION_MODEL], v_t, f_n, fpar)
+        f_n, f_t, p_n = sign * f_n, sign * f_t, sign * p_n  # a valley's corner term is subtracted
+        fx_f, fy_f = f_n * nx + f_t * ny, f_n * ny - f_t * nx
+        f_x += fx_f
+        f_y += fy_f
+        torque += dx * fy_f - dy * fx_f
+        p_normal += p_n
+        p_friction += -f_t * v_t
+        f_normal += f_n
+        f_tangent += f_t
+    return f_x, f_y, torque, z_dot, p_normal, p_friction, f_normal, f_tangent
+
+
+arc_forces = by_type("arc_forces", "ground", {FlatGround: _flat_arc_forces, ProfileGround: _profile_arc_forces})
+arc_forces.__doc__ = """Contact force on a foot arc against ``ground``, summed over its contact features.
+
+``motion`` = (rx, ry, vx, vy, omega) and (cx, cy, radius) as for :func:`arc_contact`, whose result is
+``arc``; the law arrays and ``z`` as for :func:`ground_forces`. Returns (F_x, F_y, torque, zdot,
+P_normal, P_friction, F_N, F_T): the force F_N n + F_T t of each loaded feature (the corner of a valley
+counts negatively: :mod:`.ground`) and its moment about r, the powers as in :func:`ground_forces`
+(every feature uses the foot's impact speed: one contact mode per foot; the LuGre bristle follows the
+deepest feature), and the summed normal and friction forces. On the flat ground it is
+:func:`ground_forces` on ``arc`` with n = (0, 1): (F_T, F_N, dx F_N - dy F_T, ...).
+"""
+
+
+@njit(cache=True)
+def _flat_arc_energy(system: ContactSystem, modes: np.ndarray, i: int, cx: float, cy: float, radius: float,
+                     ground: FlatGround) -> float:  # fmt: skip
+    return stored_energy(system, modes, i, -(cy - radius))
+
+
+@njit(cache=True)
+def _profile_arc_energy(system: ContactSystem, modes: np.ndarray, i: int, cx: float, cy: float, radius: float,
+                        ground: ProfileGround) -> float:  # fmt: skip
+    first, count = ground_window(cx, radius, ground.vertices)
+    elastic = 0.0
+    for f in range(count):
+        feature = ground_contacts(cx, cy, radius, ground.vertices, ground.ends, first, count, f)
+        elastic += feature[5] * stored_energy(system, modes, i, feature[0])
+    return elastic
+
+
+arc_energy = by_type("arc_energy", "ground", {FlatGround: _flat_arc_energy, ProfileGround: _profile_arc_energy})
+arc_energy.__doc__ = (
+    """Energy in the contact springs of foot i, arc (cx, cy, radius), against ``ground``, summed over features."""
+)
 
 
 @njit(cache=True)
@@ -156,16 +266,17 @@ def stored_energy(system: ContactSystem, modes: np.ndarray, i: int, delta: float
 def guard_arms(guard: bool, armed: bool, delta: float, lead: float) -> bool:
     """The scuffing guard's arming rule (MODEL.md 3): whether a foot is armed after an event.
 
-    A foot is armed once it is ahead of its partner (lead > 0) and above the ground (delta < 0), and
+    A foot is armed once it is ahead of its partner (lead > 0) and not in the ground (delta <= 0), and
     disarmed when it is in the air (delta <= 0) behind its partner (lead <= 0); in between it keeps
     its state, so the swing foot's mid-stance dip below the ground is ignored. Without the guard
-    every foot is always armed.
+    every foot is always armed. The sides are those of the event functions (> 0 and <= 0): a foot
+    that leaves the ground at an event located exactly at delta = 0 is armed there.
     """
     if not guard:
         return True
     if armed:
         return not (delta <= 0.0 and lead <= 0.0)
-    return delta < 0.0 and lead > 0.0
+    return delta <= 0.0 and lead > 0.0
 
 
 @njit(cache=True)

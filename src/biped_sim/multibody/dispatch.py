@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable
-from types import FunctionType
 from typing import Any
 
 from numba import types
 from numba.extending import overload
 
+from biped_sim.contact.registry import implementation_of
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
 from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
@@ -48,19 +48,6 @@ def formulation_of(system: tuple) -> Formulation:
         raise TypeError(f"no formulation is registered for {type(system).__name__}") from None
 
 
-def _implementation(kernel: Any) -> FunctionType:
-    """The compiled ``kernel``'s Python function, without its annotations, as an overload implementation.
-
-    numba compiles the function an ``@overload`` returns as the implementation of the call, after
-    checking that its parameters equal the typing function's, annotations included
-    (``numba.core.typing.templates._validate_sigs``). Handing it the kernel's own code (not a
-    forwarding wrapper) makes a generic call exactly a call of the kernel: no extra function layer,
-    whose arguments would each cost a reference count at every right-hand-side evaluation.
-    """
-    code = kernel.py_func
-    return FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
-
-
 def _generic_kernel(kernel: str) -> Callable[..., Any]:
     """``system_<kernel>``: calls ``kernel`` of the formulation of its ``system`` argument.
 
@@ -80,7 +67,7 @@ def _generic_kernel(kernel: str) -> Callable[..., Any]:
     def typer(*args):  # type: ignore[no-untyped-def]  # typed by __signature__: numba compares it with the kernel's
         system = args[at]
         if isinstance(system, types.BaseNamedTuple) and system.instance_class in FORMULATIONS:
-            return _implementation(getattr(FORMULATIONS[system.instance_class], kernel))
+            return implementation_of(getattr(FORMULATIONS[system.instance_class], kernel))
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]

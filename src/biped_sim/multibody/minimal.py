@@ -29,14 +29,17 @@ import numpy as np
 from numba import njit
 from numba.core.dispatcher import Dispatcher
 
+from biped_sim.contact.ground import FLAT_GROUND, FlatGround, Ground, ProfileGround, ground_clearance
+from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
     IMPACT_FLOOR,
     arc_contact,
+    arc_energy,
+    arc_forces,
     ground_forces,
     is_loaded,
-    stored_energy,
 )
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
@@ -59,6 +62,7 @@ class MinimalSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
+    ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
 
 
 # columns of the workspace table's body rows: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos and
@@ -107,13 +111,19 @@ _is_loaded = _inlined(is_loaded)
 
 @njit(cache=True)
 def foot_arc(
-    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float
+    y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float, ground: Ground
 ) -> tuple[float, float, float, float, float, float]:
-    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against the
-    ground (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
+    """A foot of body b (c, s = cos, sin phi_b), arc centre (fx, fy) from the hip (body frame), against
+    ``ground`` (:func:`~biped_sim.contact.response.arc_contact` about the hip; n = len(q)):
     (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_h."""
-    cx, cy = y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
-    return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius)
+    cx, cy = arc_centre(y, c, s, fx, fy)
+    return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius, ground)
+
+
+@njit(cache=True)
+def arc_centre(y: np.ndarray, c: float, s: float, fx: float, fy: float) -> tuple[float, float]:
+    """Centre of a foot arc at (fx, fy) from the hip in the frame of a body at angle phi (c, s = cos, sin phi)."""
+    return y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
 
 
 @njit(cache=True)
@@ -121,7 +131,8 @@ def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float
     """:func:`foot_arc` of foot i."""
     centre, b = system.foot_center, system.foot_body[i]
     c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
-    return foot_arc(y, HIP + system.body_mass.shape[0], b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i])
+    n = HIP + system.body_mass.shape[0]
+    return foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i], system.ground)
 
 
 @njit(cache=True)
@@ -129,6 +140,49 @@ def foot_contact(y: np.ndarray, system: MinimalSystem, foot: int) -> tuple[float
     """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
     delta, delta_dot, _, x_contact, _, _ = foot_kinematics(y, system, foot)
     return delta, delta_dot, x_contact
+
+
+@njit(cache=True)
+def _flat_foot_force(
+    y: np.ndarray, n: int, nb: int, i: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+    ground: FlatGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
+) -> tuple[float, float, float, float, float, float]:  # fmt: skip
+    foot = nb + i
+    delta = table[foot, DELTA]
+    f_n = f_t = z_dot = p_n = p_f = 0.0  # one return (each return of an inlined body is a branch of the caller)
+    if _is_loaded(modes, i, delta):  # else ground_forces would return zeros: skip it
+        f_n, f_t, z_dot, p_n, p_f = _ground_forces(
+            switches, npar, fpar, floor, modes, i, delta, table[foot, DELTA_DOT], table[foot, SLIP],
+            table[foot, BRISTLE],
+        )  # fmt: skip
+    return f_t, f_n, table[foot, LEVER_X] * f_n - table[foot, LEVER_Y] * f_t, z_dot, p_n, p_f
+
+
+@njit(cache=True)
+def _profile_foot_force(
+    y: np.ndarray, n: int, nb: int, i: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+    ground: ProfileGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
+) -> tuple[float, float, float, float, float, float]:  # fmt: skip
+    foot = nb + i
+    b = int(table[foot, BODY])
+    cx, cy = arc_centre(y, table[b, COS], table[b, SIN], centre[i, 0], centre[i, 1])
+    motion = (y[0], y[1], y[n], y[n + 1], y[n + HIP + b])
+    arc = arc_contact(motion[0], motion[1], motion[2], motion[3], motion[4], cx, cy, radius[i], ground)
+    f_x = f_y = torque = z_dot = p_n = p_f = 0.0
+    if is_loaded(modes, i, arc[0]):  # else arc_forces would return zeros: skip it
+        f_x, f_y, torque, z_dot, p_n, p_f, _, _ = arc_forces(
+            motion, cx, cy, radius[i], ground, arc, switches, npar, fpar, floor, modes, i, table[foot, BRISTLE]
+        )
+    return f_x, f_y, torque, z_dot, p_n, p_f
+
+
+foot_force = by_type("foot_force", "ground", {FlatGround: _flat_foot_force, ProfileGround: _profile_foot_force})
+foot_force.__doc__ = """(F_x, F_y, torque about the hip, zdot, P_normal, P_friction) of foot i in the right-hand side.
+
+On the flat ground from the foot's row of the workspace table (its arc geometry, read ahead of the
+forces: see :func:`rhs`) through the inlined :func:`~biped_sim.contact.response.ground_forces`; on a
+profile through :func:`~biped_sim.contact.response.arc_forces`, summed over the foot's contact features.
+"""
 
 
 @njit(cache=True)
@@ -160,10 +214,11 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         table[b, MASS], table[b, HIP_INERTIA] = m, inertia[b] + m * (ax * ax + ay * ay)
     for k in range(n):
         ydot[k] = y[n + k]
+    ground = system.ground
     for i in range(nf):
         b, foot = foot_body[i], nb + i
         c, s = table[b, COS], table[b, SIN]
-        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], radius[i])
+        delta, delta_dot, slip, _, dx, dy = foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], radius[i], ground)
         table[foot, DELTA], table[foot, DELTA_DOT], table[foot, SLIP] = delta, delta_dot, slip
         table[foot, LEVER_X], table[foot, LEVER_Y] = dx, dy
         table[foot, BODY], table[foot, BRISTLE] = b, y[2 * n + i]
@@ -172,18 +227,13 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
     floor = system.limits[IMPACT_FLOOR]
     for i in range(nf):
         foot = nb + i
-        delta = table[foot, DELTA]
-        if not _is_loaded(modes, i, delta):  # ground_forces would return zeros: skip it
-            table[foot, BRISTLE] = 0.0
-            continue
-        f_n, f_t, z_dot, p_n, p_f = _ground_forces(
-            switches, npar, fpar, floor, modes, i, delta, table[foot, DELTA_DOT], table[foot, SLIP],
-            table[foot, BRISTLE],
+        f_x, f_y, torque, z_dot, p_n, p_f = foot_force(
+            y, n, nb, i, table, centre, radius, ground, switches, npar, fpar, floor, modes
         )  # fmt: skip
-        hip_x += f_t
-        hip_y += f_n
+        hip_x += f_x
+        hip_y += f_y
         b = int(table[foot, BODY])
-        table[b, TORQUE] += table[foot, LEVER_X] * f_n - table[foot, LEVER_Y] * f_t
+        table[b, TORQUE] += torque
         table[foot, BRISTLE] = z_dot
         w_normal += p_n
         w_friction += p_f
@@ -229,14 +279,17 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
         potential -= m * (system.gravity[0] * (y[0] + ax) + system.gravity[1] * (y[1] + ay))
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
+        b, fx, fy = system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        cx, cy = arc_centre(y, c, s, fx, fy)
+        elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
     return kinetic, potential, elastic
 
 
 @njit(cache=True)
 def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
-    """Fall: hip below the height limit, or any body rotated past the leg-angle limit."""
-    if y[1] < system.limits[FALL_HIP_HEIGHT]:
+    """Fall: hip below the height limit over the ground under it, or any body rotated past the leg-angle limit."""
+    if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:
         return True
     for b in range(system.body_mass.shape[0]):
         if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
@@ -283,6 +336,7 @@ def star_system(planar: PlanarSystem) -> MinimalSystem:
         friction_params=planar.friction_params.copy(),
         switches=planar.switches.copy(),
         limits=planar.limits.copy(),
+        ground=planar.ground,
     )
 
 
@@ -305,13 +359,16 @@ def pitch(y: np.ndarray, system: MinimalSystem, body: int) -> tuple[float, float
 
 def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
     """(penetration, normal force, friction force, slip velocity) of a foot (the right-hand side's equations)."""
-    delta, delta_dot, slip, _, _, _ = foot_kinematics(y, system, foot)
-    z = y[2 * (HIP + system.body_mass.shape[0]) + foot]
-    f_n, f_t, _, _, _ = ground_forces(
+    n, b = HIP + system.body_mass.shape[0], system.foot_body[foot]
+    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+    cx, cy = arc_centre(y, c, s, system.foot_center[foot, 0], system.foot_center[foot, 1])
+    arc = foot_kinematics(y, system, foot)
+    _, _, _, _, _, _, f_n, f_t = arc_forces(
+        (y[0], y[1], y[n], y[n + 1], y[n + HIP + b]), cx, cy, system.foot_radius[foot], system.ground, arc,
         system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, foot,
-        delta, delta_dot, slip, z,
+        y[2 * n + foot],
     )  # fmt: skip
-    return delta, f_n, f_t, slip
+    return arc[0], f_n, f_t, arc[2]
 
 
 def no_violation(y: np.ndarray, system: MinimalSystem) -> tuple[float, float]:

@@ -13,8 +13,9 @@ solved with an in-place Cholesky factorisation, then qdd = M^-1 (Q - Phi_q^T lam
 The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction]
 (named offsets: ``FORMULATION.layout_of(system)``): the dissipated work is integrated with the
 motion, so that the energy balance E(t) - E(0) + W(t) = 0 is an independent check of the
-integration. The feet are arcs against the slope line; what the ground does with them (normal
-force, dissipation, scuffing guard) is :mod:`biped_sim.contact.response`.
+integration. The feet are arcs against the system's ``ground`` (the slope line, or a profile:
+:mod:`biped_sim.contact.ground`); what the ground does with them (normal force, dissipation, scuffing
+guard) is :mod:`biped_sim.contact.response`.
 
 Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
 with the Python-side measurements and the formulation record :data:`FORMULATION`.
@@ -28,13 +29,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from biped_sim.contact.ground import FLAT_GROUND, Ground, ground_clearance
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
     IMPACT_FLOOR,
     arc_contact,
-    ground_forces,
-    stored_energy,
+    arc_energy,
+    arc_forces,
 )
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
@@ -57,6 +59,7 @@ class PlanarSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
+    ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
 
 
 class Workspace(NamedTuple):
@@ -77,16 +80,23 @@ def make_workspace(system: PlanarSystem) -> Workspace:
 
 
 @njit(cache=True)
-def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
-    """Foot i's arc against the ground (:func:`~biped_sim.contact.response.arc_contact`, about its body's centre
-    of mass): (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_body."""
+def _foot_arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float, float]:
+    """(x, y, vx, vy, omega) of foot i's body (centre of mass) and its arc's centre (C_x, C_y)."""
     nb = system.body_mass.shape[0]
     b = system.foot_body[i]
     x, yb, phi = y[3 * b], y[3 * b + 1], y[3 * b + 2]
     vx, vy, om = y[3 * nb + 3 * b], y[3 * nb + 3 * b + 1], y[3 * nb + 3 * b + 2]
     c, s = math.cos(phi), math.sin(phi)
     sx, sy = system.foot_center[i, 0], system.foot_center[i, 1]
-    return arc_contact(x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy, system.foot_radius[i])
+    return x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy
+
+
+@njit(cache=True)
+def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
+    """Foot i's arc against the ground (:func:`~biped_sim.contact.response.arc_contact`, about its body's centre
+    of mass): (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_body."""
+    x, yb, vx, vy, om, cx, cy = _foot_arc(y, system, i)
+    return arc_contact(x, yb, vx, vy, om, cx, cy, system.foot_radius[i], system.ground)
 
 
 @njit(cache=True)
@@ -99,16 +109,19 @@ def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float,
 @njit(cache=True)
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
-) -> tuple[float, float, float, float, float, float, float, float, float, float]:
-    """Contact forces on foot i and their dissipation rates: (F_N, F_T, zdot, P_normal, P_friction) of
-    :func:`~biped_sim.contact.response.ground_forces`, then delta, delta_dot, slip, dx, dy of :func:`foot_kinematics`.
+) -> tuple[float, float, float, float, float, float, float, float, float, float, float]:
+    """Contact forces on foot i and their dissipation rates: (F_x, F_y, torque, zdot, P_normal, P_friction) of
+    :func:`~biped_sim.contact.response.arc_forces` about the body's centre of mass, then delta, delta_dot, slip
+    of :func:`foot_kinematics` and the summed normal and friction forces F_N, F_T.
     """
-    delta, delta_dot, slip, _, dx, dy = foot_kinematics(y, system, i)
-    f_n, f_t, z_dot, p_normal, p_friction = ground_forces(
-        system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, i,
-        delta, delta_dot, slip, y[6 * system.body_mass.shape[0] + i],
+    x, yb, vx, vy, om, cx, cy = _foot_arc(y, system, i)
+    radius = system.foot_radius[i]
+    arc = arc_contact(x, yb, vx, vy, om, cx, cy, radius, system.ground)
+    f_x, f_y, torque, z_dot, p_normal, p_friction, f_n, f_t = arc_forces(
+        (x, yb, vx, vy, om), cx, cy, radius, system.ground, arc, system.switches, system.normal_params,
+        system.friction_params, system.limits[IMPACT_FLOOR], modes, i, y[6 * system.body_mass.shape[0] + i],
     )  # fmt: skip
-    return f_n, f_t, z_dot, p_normal, p_friction, delta, delta_dot, slip, dx, dy
+    return f_x, f_y, torque, z_dot, p_normal, p_friction, arc[0], arc[1], arc[2], f_n, f_t
 
 
 @njit(cache=True)
@@ -216,11 +229,11 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     w_normal = 0.0
     w_friction = 0.0
     for i in range(nf):
-        f_n, f_t, z_dot, p_n, p_f, _, _, _, dx, dy = foot_forces(y, system, modes, i)
+        f_x, f_y, torque, z_dot, p_n, p_f, _, _, _, _, _ = foot_forces(y, system, modes, i)
         b = system.foot_body[i]
-        force[3 * b] += f_t
-        force[3 * b + 1] += f_n
-        force[3 * b + 2] += dx * f_n - dy * f_t
+        force[3 * b] += f_x
+        force[3 * b + 1] += f_y
+        force[3 * b + 2] += torque
         ydot[2 * n + i] = z_dot
         w_normal += p_n
         w_friction += p_f
@@ -243,7 +256,8 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         potential -= m * (system.gravity[0] * y[3 * b] + system.gravity[1] * y[3 * b + 1])
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
+        _, _, _, _, _, cx, cy = _foot_arc(y, system, i)
+        elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
     return kinetic, potential, elastic
 
 
@@ -261,11 +275,11 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
 
 @njit(cache=True)
 def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
-    """Fall: hip (joint 0) below the height limit, or any body rotated past the leg-angle limit."""
+    """Fall: hip (joint 0) below the height limit over the ground under it, or a body past the leg-angle limit."""
     if system.joint_bodies.shape[0] > 0:
         jp = system.joint_points[0]
-        _, _, _, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
-        if hip_y < system.limits[FALL_HIP_HEIGHT]:
+        _, _, hip_x, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
+        if ground_clearance(hip_x, hip_y, system.ground) < system.limits[FALL_HIP_HEIGHT]:
             return True
     for b in range(system.body_mass.shape[0]):
         if abs(y[3 * b + 2]) > system.limits[FALL_LEG_ANGLE]:
@@ -283,8 +297,8 @@ def pitch(y: np.ndarray, system: PlanarSystem, body: int) -> tuple[float, float]
 
 
 def contact_channels(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
-    """(penetration, normal force, friction force, slip velocity) of a foot."""
-    f_n, f_t, _, _, _, delta, _, slip, _, _ = foot_forces(y, system, modes, foot)
+    """(penetration, normal force, friction force, slip velocity) of a foot (forces summed over its features)."""
+    _, _, _, _, _, _, delta, _, slip, f_n, f_t = foot_forces(y, system, modes, foot)
     return delta, f_n, f_t, slip
 
 

@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.contact.profile import profile_ground
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.walkers.model import (
@@ -123,6 +124,7 @@ def build_compass(config: Config, initial: InitialState) -> BuiltModel:
         friction_params=friction,
         switches=switches,
         limits=contact_limits(config),
+        ground=profile_ground(config.ground.profile, gamma),
     )
 
     static_penetration = static_contact_penetration(config, total_mass, stiffness)

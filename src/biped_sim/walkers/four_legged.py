@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.contact.profile import profile_ground
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
@@ -115,6 +116,7 @@ def build_four_legged_sagittal(config: Config, initial: InitialState) -> BuiltMo
         friction_params=friction,
         switches=switches,
         limits=contact_limits(config),
+        ground=profile_ground(config.ground.profile, config.ground.slope),
     )
     static_penetration = static_contact_penetration(config, 0.5 * total_mass, stiffness)
     coords, rates, hip_speed = sagittal_initial_state(config, initial, (offsets[0], offsets[1]), static_penetration)
