@@ -4,7 +4,7 @@ The walker is drawn from trajectory.h5 in its sagittal view: each leg from the h
 angle, the round feet as arcs (leg length and foot radius from the run's stored config, which
 feet belong to which body from the walker builder), for planar and spatial runs alike. The
 scene is drawn in the world frame (the slope frame rotated by the slope angle, so the ground
-visibly descends), and the view follows the hip. Frames are decimated to ``fps`` frames per
+visibly descends) over the ground's profile, and the view follows the hip. Frames are decimated to ``fps`` frames per
 second of playback; GIF through Pillow (matplotlib's PillowWriter), MP4 through ffmpeg when it
 is on the PATH.
 """
@@ -23,6 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from biped_sim.config import InitialState
+from biped_sim.contact.profile import profile_arrays, profile_outline
 from biped_sim.errors import ConfigError
 from biped_sim.io.output import check_writable_dir
 from biped_sim.io.trajectory import RunData
@@ -88,10 +89,7 @@ class WalkerDrawing:
         self.ax.set_xticks([])
         self.ax.set_yticks([])
         self.ax.grid(False)
-        ground_x = np.array([self.hip_track[:, 0].min() - 2 * self.l, self.hip_track[:, 0].max() + 2 * self.l])
-        ground = self.to_world @ np.vstack([ground_x, np.zeros(2)])
-        self.ax.fill_between(ground[0], ground[1], ground[1] - 2 * self.l, color="0.85", zorder=0)
-        self.ax.plot(ground[0], ground[1], color="0.3", linewidth=1.0)
+        self._draw_ground(run)
         n_bodies = self.angles.shape[1]
         self.legs = [
             self.ax.plot([], [], color=f"C{b}", linewidth=2.0, solid_capstyle="round")[0] for b in range(n_bodies)
@@ -112,6 +110,16 @@ class WalkerDrawing:
             zorder=6,
         )
         self.stamp = self.ax.text(0.03, 0.95, "", transform=self.ax.transAxes, va="top", family="monospace")
+
+    def _draw_ground(self, run: RunData) -> None:
+        """The ground profile under the hip's whole track, filled 2 l deep along the slope normal."""
+        vertices, ends = profile_arrays(run.config.ground.profile, run.config.ground.slope)
+        x_min, x_max = self.hip_track[:, 0].min() - 2 * self.l, self.hip_track[:, 0].max() + 2 * self.l
+        outline = profile_outline(vertices, ends, x_min, x_max).T
+        surface = self.to_world @ outline
+        depth = self.to_world @ (outline - np.array([[0.0], [2 * self.l]]))
+        self.ax.fill(np.r_[surface[0], depth[0, ::-1]], np.r_[surface[1], depth[1, ::-1]], color="0.85", zorder=0)
+        self.ax.plot(surface[0], surface[1], color="0.3", linewidth=1.0)
 
     def draw(self, i: int) -> None:
         """Place every artist at sample ``i``."""

@@ -24,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from biped_sim.contact.friction import FRICTION_LAWS
 from biped_sim.contact.normal import NORMAL_LAWS
+from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import ConfigError
 
 
@@ -101,9 +102,10 @@ class WalkerConfig(_Strict):
 
 
 class GroundConfig(_Strict):
-    """The slope: a plane through the origin inclined downhill by ``slope``."""
+    """The slope: a plane through the origin inclined downhill by ``slope``, shaped by ``profile`` in its frame."""
 
     slope: float = Field(0.02, gt=-math.pi / 2, lt=math.pi / 2, description="Downhill slope angle gamma [rad].")
+    profile: GroundProfile = Field(default_factory=FlatProfile, description="Shape (biped_sim.contact.profile).")
 
 
 class MaterialConfig(_Strict):
@@ -301,6 +303,8 @@ class Config(_Strict):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
         if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
             raise ValueError("walker.foot_spacing_inner: must be smaller than walker.foot_spacing_outer")
+        if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
+            raise ValueError(f"ground.profile: {reason}")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:
             raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
         if self.friction.model != "none" and math.tan(abs(self.ground.slope)) >= max(
@@ -316,6 +320,8 @@ class Config(_Strict):
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""
         data = self.model_dump(mode="json")
         data["output"].pop("dir", None)
+        if data["ground"]["profile"] == {"kind": "flat"}:  # the configs of before profiles keep their hash
+            del data["ground"]["profile"]
         text = json.dumps(data, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -13,8 +13,9 @@ solved with an in-place Cholesky factorisation, then qdd = M^-1 (Q - Phi_q^T lam
 The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction]
 (named offsets: ``FORMULATION.layout_of(system)``): the dissipated work is integrated with the
 motion, so that the energy balance E(t) - E(0) + W(t) = 0 is an independent check of the
-integration. The feet are arcs against the slope line; what the ground does with them (normal
-force, dissipation, scuffing guard) is :mod:`biped_sim.contact.response`.
+integration. The feet are arcs against the ground profile (its geometry: :mod:`biped_sim.contact.ground`);
+what the ground does with them (normal force, dissipation, scuffing guard) is
+:mod:`biped_sim.contact.response`.
 
 Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
 with the Python-side measurements and the formulation record :data:`FORMULATION`.
@@ -29,6 +30,14 @@ import numpy as np
 from numba import njit
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.ground import (
+    FLAT_ENDS,
+    FLAT_VERTICES,
+    ground_contact,
+    ground_contacts,
+    ground_height,
+    ground_window,
+)
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
@@ -60,6 +69,8 @@ class PlanarSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
+    ground_vertices: np.ndarray = FLAT_VERTICES  # (n, 2) the profile's polyline (contact.ground); none: flat
+    ground_ends: np.ndarray = FLAT_ENDS  # (2,) slopes dh/dx of the profile beyond its first and last vertex
 
 
 class Workspace(NamedTuple):
@@ -80,26 +91,49 @@ def make_workspace(system: PlanarSystem) -> Workspace:
 
 
 @njit(cache=True)
-def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
-    """Foot arc against the ground line y = 0 with normal (0, 1) (MODEL.md 3).
-
-    Returns (delta, delta_dot, slip, x_contact, dx, dy): penetration R - C_y, approach velocity
-    -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact point's
-    position along the slope, and P - r_body (the lever arm of the contact force).
-    """
+def _arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float, float]:
+    """(x, y, vx, vy, omega) of foot i's body and the centre (C_x, C_y) of its arc."""
     nb = system.body_mass.shape[0]
     b = system.foot_body[i]
     x, yb, phi = y[3 * b], y[3 * b + 1], y[3 * b + 2]
     vx, vy, om = y[3 * nb + 3 * b], y[3 * nb + 3 * b + 1], y[3 * nb + 3 * b + 2]
     c, s = math.cos(phi), math.sin(phi)
     sx, sy = system.foot_center[i, 0], system.foot_center[i, 1]
-    radius = system.foot_radius[i]
-    px = x + c * sx - s * sy
-    py = yb + s * sx + c * sy - radius
+    return x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy
+
+
+@njit(cache=True)
+def _ground(system: PlanarSystem, i: int, cx: float, cy: float) -> tuple[float, float, float, float, float]:
+    """Foot i's deepest contact feature (delta, P_x, P_y, n_x, n_y): ground.ground_contact."""
+    return ground_contact(cx, cy, system.foot_radius[i], system.ground_vertices, system.ground_ends)
+
+
+@njit(cache=True)
+def _material_point(
+    x: float, yb: float, vx: float, vy: float, om: float, px: float, py: float, nx: float, ny: float
+) -> tuple[float, float, float, float]:
+    """(delta_dot, slip, dx, dy) at contact point P with normal n of a body at (x, yb) moving at (vx, vy, om).
+
+    delta_dot = -v_P.n, slip = v_P.t with t = (n_y, -n_x), and P - r_body, the lever arm of the force.
+    """
     dx, dy = px - x, py - yb
     vpx = vx - om * dy
     vpy = vy + om * dx
-    return -py, -vpy, vpx, px, dx, dy
+    return -(vpx * nx + vpy * ny), vpx * ny - vpy * nx, dx, dy
+
+
+@njit(cache=True)
+def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
+    """Foot arc against the ground profile (MODEL.md 3; the flat ground: the line y = 0, normal (0, 1)).
+
+    Returns, for the deepest contact feature, (delta, delta_dot, slip, x_contact, dx, dy): penetration,
+    approach velocity -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact
+    point's position along the slope, and P - r_body (the lever arm of the contact force).
+    """
+    x, yb, vx, vy, om, cx, cy = _arc(y, system, i)
+    delta, px, py, nx, ny = _ground(system, i, cx, cy)
+    delta_dot, slip, dx, dy = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
+    return delta, delta_dot, slip, px, dx, dy
 
 
 @njit(cache=True)
@@ -112,29 +146,47 @@ def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float,
 @njit(cache=True)
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
-) -> tuple[float, float, float, float, float, float, float, float, float, float]:
-    """Contact forces on foot i and their dissipation rates.
+) -> tuple[float, float, float, float, float, float, float, float, float, float, float]:
+    """Contact forces on foot i and their dissipation rates, summed over its contact features.
 
-    Returns (F_N, F_T, zdot, P_normal, P_friction, delta, delta_dot, slip, dx, dy) with F_N and the
-    power P_normal lost in the normal damping from :func:`~biped_sim.contact.response.normal_response`,
-    and P_friction = -F_T v_t the power taken by friction (for LuGre this includes the small,
-    load-dependent bristle energy, which is not a potential). The force acts when the foot is armed
-    and penetrates.
+    Returns (F_x, F_y, torque, zdot, P_normal, P_friction, delta, delta_dot, slip, F_N, F_T): the force
+    F_N n + F_T t of each loaded feature and its moment about the body's centre of mass; the power
+    P_normal lost in the normal damping from :func:`~biped_sim.contact.response.normal_response` and
+    P_friction = -F_T v_t taken by friction (for LuGre this includes the small, load-dependent bristle
+    energy, which is not a potential; the bristle follows the deepest feature); the deepest feature's
+    kinematics; the summed normal and friction forces. A feature's force acts when the foot is armed
+    and the feature penetrates; every feature uses the foot's impact speed (one contact mode per foot).
     """
-    delta, delta_dot, slip, _, dx, dy = foot_kinematics(y, system, i)
-    f_n = f_t = z_dot = p_normal = p_friction = 0.0  # one return: numba then elides the reference counting
-    if is_loaded(modes, i, delta):
-        npar, floor = system.normal_params, system.limits[IMPACT_FLOOR]
-        f_n, p_normal = normal_response(system.switches[NORMAL_MODEL], npar, floor, modes, i, delta, delta_dot)
-        fpar = system.friction_params
-        if system.switches[FRICTION_MODEL] == LUGRE:
-            z = y[6 * system.body_mass.shape[0] + i]
-            z_dot = lugre_bristle_rate(slip, z, fpar)
-            f_t = lugre_friction(slip, z, z_dot, f_n, fpar)
+    x, yb, vx, vy, om, cx, cy = _arc(y, system, i)
+    delta, px, py, nx, ny = _ground(system, i, cx, cy)
+    delta_dot, slip, _, _ = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
+    f_x = f_y = torque = z_dot = p_normal = p_friction = f_normal = f_tangent = 0.0
+    npar, fpar, lugre = system.normal_params, system.friction_params, system.switches[FRICTION_MODEL] == LUGRE
+    z = y[6 * system.body_mass.shape[0] + i] if lugre else 0.0
+    if lugre and is_loaded(modes, i, delta):
+        z_dot = lugre_bristle_rate(slip, z, fpar)
+    radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
+    first, count = ground_window(cx, radius, vertices)
+    for f in range(count):
+        depth, px, py, nx, ny = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
+        if not is_loaded(modes, i, depth):
+            continue
+        depth_dot, v_t, dx, dy = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
+        floor = system.limits[IMPACT_FLOOR]
+        f_n, p_n = normal_response(system.switches[NORMAL_MODEL], npar, floor, modes, i, depth, depth_dot)
+        if lugre:
+            f_t = lugre_friction(v_t, z, z_dot, f_n, fpar)
         else:
-            f_t = friction_force(system.switches[FRICTION_MODEL], slip, f_n, fpar)
-        p_friction = -f_t * slip
-    return f_n, f_t, z_dot, p_normal, p_friction, delta, delta_dot, slip, dx, dy
+            f_t = friction_force(system.switches[FRICTION_MODEL], v_t, f_n, fpar)
+        fx_f, fy_f = f_n * nx + f_t * ny, f_n * ny - f_t * nx
+        f_x += fx_f
+        f_y += fy_f
+        torque += dx * fy_f - dy * fx_f
+        p_normal += p_n
+        p_friction += -f_t * v_t
+        f_normal += f_n
+        f_tangent += f_t
+    return f_x, f_y, torque, z_dot, p_normal, p_friction, delta, delta_dot, slip, f_normal, f_tangent
 
 
 @njit(cache=True)
@@ -242,11 +294,11 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     w_normal = 0.0
     w_friction = 0.0
     for i in range(nf):
-        f_n, f_t, z_dot, p_n, p_f, _, _, _, dx, dy = foot_forces(y, system, modes, i)
+        f_x, f_y, torque, z_dot, p_n, p_f, _, _, _, _, _ = foot_forces(y, system, modes, i)
         b = system.foot_body[i]
-        force[3 * b] += f_t
-        force[3 * b + 1] += f_n
-        force[3 * b + 2] += dx * f_n - dy * f_t
+        force[3 * b] += f_x
+        force[3 * b + 1] += f_y
+        force[3 * b + 2] += torque
         ydot[2 * n + i] = z_dot
         w_normal += p_n
         w_friction += p_f
@@ -269,7 +321,12 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         potential -= m * (system.gravity[0] * y[3 * b] + system.gravity[1] * y[3 * b + 1])
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
+        _, _, _, _, _, cx, cy = _arc(y, system, i)
+        radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
+        first, count = ground_window(cx, radius, vertices)
+        for f in range(count):
+            depth = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)[0]
+            elastic += stored_energy(system, modes, i, depth)
     return kinetic, potential, elastic
 
 
@@ -287,11 +344,11 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
 
 @njit(cache=True)
 def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
-    """Fall: hip (joint 0) below the height limit, or any body rotated past the leg-angle limit."""
+    """Fall: hip (joint 0) below the height limit over the ground under it, or a body past the leg-angle limit."""
     if system.joint_bodies.shape[0] > 0:
         jp = system.joint_points[0]
-        _, _, _, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
-        if hip_y < system.limits[FALL_HIP_HEIGHT]:
+        _, _, hip_x, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
+        if hip_y - ground_height(hip_x, system.ground_vertices, system.ground_ends) < system.limits[FALL_HIP_HEIGHT]:
             return True
     for b in range(system.body_mass.shape[0]):
         if abs(y[3 * b + 2]) > system.limits[FALL_LEG_ANGLE]:
@@ -309,8 +366,8 @@ def pitch(y: np.ndarray, system: PlanarSystem, body: int) -> tuple[float, float]
 
 
 def contact_channels(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
-    """(penetration, normal force, friction force, slip velocity) of a foot."""
-    f_n, f_t, _, _, _, delta, _, slip, _, _ = foot_forces(y, system, modes, foot)
+    """(penetration, normal force, friction force, slip velocity) of a foot (forces summed over its features)."""
+    _, _, _, _, _, _, delta, _, slip, f_n, f_t = foot_forces(y, system, modes, foot)
     return delta, f_n, f_t, slip
 
 

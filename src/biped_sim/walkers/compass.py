@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, InitialState
+from biped_sim.contact.profile import profile_arrays
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.walkers.model import (
@@ -90,6 +91,7 @@ def build_compass(config: Config, initial: InitialState) -> BuiltModel:
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
 
     foot_centre = np.array([0.0, -(l - R - d)])
+    ground_vertices, ground_ends = profile_arrays(config.ground.profile, gamma)
     system = PlanarSystem(
         body_mass=np.array([body_mass, body_mass]),
         body_inertia=np.array([inertia, inertia]),
@@ -105,6 +107,8 @@ def build_compass(config: Config, initial: InitialState) -> BuiltModel:
         friction_params=friction,
         switches=switches,
         limits=contact_limits(config),
+        ground_vertices=ground_vertices,
+        ground_ends=ground_ends,
     )
 
     static_penetration = static_contact_penetration(config, total_mass, stiffness)
