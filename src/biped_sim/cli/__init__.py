@@ -10,6 +10,7 @@ from biped_sim.cli import (
     analysis_commands,  # noqa: F401
     bench_commands,  # noqa: F401
     experiment_commands,  # noqa: F401
+    robustness_commands,  # noqa: F401
     run_commands,  # noqa: F401  (registers commands)
 )
 from biped_sim.cli.common import app
