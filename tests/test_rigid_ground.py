@@ -114,3 +114,24 @@ def test_simplest_impact_is_garcias_map_when_the_legs_are_symmetric() -> None:
     v_after = -after[2] * np.array([math.cos(after[0]), math.sin(after[0])])
     cross = leg_new[0] * v_before[1] - leg_new[1] * v_before[0]
     assert leg_new[0] * v_after[1] - leg_new[1] * v_after[0] == pytest.approx(cross, rel=1e-14)
+
+
+def test_a_flat_polyline_walks_as_the_plane(round_foot_start: list[str]) -> None:
+    # the profile's guard (the swing foot out of its mid-stance scuff, then its clearance) finds the plane's strikes
+    overrides = [*round_foot_start, "simulation.max_steps=4", "simulation.t_end=100"]
+    plane = simulate(load_config(ROUND_FOOT, overrides))
+    polyline = simulate(
+        load_config(ROUND_FOOT, [*overrides, "ground.profile={kind: polyline, x: [-1, 0.5, 9], height: [0, 0, 0]}"])
+    )
+    assert plane.status == polyline.status == "walking"
+    np.testing.assert_allclose(polyline.strike_time, plane.strike_time, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(polyline.strike_post, plane.strike_post, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("height", [0.004, 0.005])  # 0.8 and 1 % of the leg
+def test_the_mid_stance_scuff_after_a_step_down_is_not_a_strike(round_foot_start: list[str], height: float) -> None:
+    # after the step down the swing leg lags: it passes the stance leg after the stance leg has passed the
+    # normal, its foot dipping below the stance level (and leaving it exactly at the plane's strike guard)
+    result = _step_down_run(ROUND_FOOT, round_foot_start, height, 0.444, steps=5)
+    assert result.status == "walking"
+    assert np.min(np.diff(result.strike_time)) > 0.35  # the gait's period is 0.43 s; no step cut at mid-stance

@@ -2,8 +2,9 @@
 
 The rigid models keep a flat local ground under the stance foot: it rolls (round feet) or pivots (point
 feet) on the level of its own contact point, a line of the slope's direction, as on the plane. The profile
-enters at the heel strike only: the step ends when the lowest point of the swing foot's arc (the foot
-point when R = 0) comes down to the profile's height at its x,
+enters at the heel strike only: once the swing foot has left its mid-stance scuff (which the rigid models
+ignore: :mod:`biped_sim.rigid.stepping`), the step ends when the lowest point of the swing foot's arc (the
+foot point when R = 0) comes down to the profile's height at its x,
 
     clearance = level + (l - R)(cos theta_st - cos theta_sw) - h(x_swing),
     x_swing = O - R theta_st + (l - R)(sin theta_sw - sin theta_st),

@@ -8,7 +8,9 @@ time and state (the integration error), not to the step size. Falls (a leg past
 ``simulation.fall_leg_angle``, the hip on the ground) and stalls (no strike within ``MAX_STEP_TIME``
 natural periods) end the step with a status instead of a strike. Pushes stop the flow at their times and
 continue it after the velocity jump, in the same guard phase. On a ground profile the strike guard is the
-swing foot's clearance above the profile (:mod:`biped_sim.rigid.ground`); a riser hit ends the step ``tripped``.
+swing foot's clearance above the profile (:mod:`biped_sim.rigid.ground`), sought once the swing foot has left
+its mid-stance scuff (the plane's strike guard has become positive: the swing leg is ahead of the stance leg's
+mirror image, the swing foot above the stance level); a riser hit ends the step ``tripped``.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from typing import Literal
 
 import numpy as np
 
-from biped_sim.rigid.ground import ProfileStrike
+from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.pushes import hip_push
 
@@ -119,10 +121,13 @@ def rigid_step(
 
     phases = walker.guard_phases()
     if profile is not None:
-        phases = [*phases[:-1], ("heel_strike", profile.clearance)]
-    for index, (_, guard) in enumerate(phases):
+        plane_strike = phases[-1][1]
+        phases = [*phases[:-1], ("swing_foot_out", lambda y: -plane_strike(y)), ("heel_strike", profile.clearance)]
+    for index, (name, guard) in enumerate(phases):
         on_profile = profile is not None and index == len(phases) - 1
-        if on_profile and guard(x) < 0.0:
+        if name == "swing_foot_out" and guard(x) <= 0.0:
+            continue  # the swing foot is already past its mid-stance scuff
+        if on_profile and guard(x) < -RISER_TOLERANCE * walker.leg_length:  # below the profile: in a riser
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
         strike = _guard_event(guard, -1.0)
         while True:

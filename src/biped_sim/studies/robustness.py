@@ -130,7 +130,7 @@ def gait_start(config: Config) -> Gait:
     data["simulation"].update(pushes=[], max_steps=None, t_end=20.0 * (SETTLE_STEPS + GSN_STEPS) * time_scale)
     data["output"]["sample_rate"] = SAMPLE_RATE / time_scale
     d = 1 if config.dynamics == "rigid" else SETTLE_STEPS
-    if config.dynamics == "rigid":
+    if config.dynamics == "rigid" or config.simulation.initial == "rigid_limit_cycle":  # resolved once for all runs
         data["simulation"]["initial"] = rigid_limit_cycle(config).fixed_point
     base = config_from_dict(data)
     reference = simulate(_with(base, steps=d + GSN_STEPS + 2))
@@ -233,11 +233,14 @@ class Robustness:
         return doc
 
 
-def _search(gait: Gait, kind: str, sign: float) -> tuple[float, float | None]:
-    """The largest step (sign -1 down, +1 up) or push (+1 forward, -1 backward) survived."""
+def largest_disturbance(
+    gait: Gait, kind: str, sign: float, step_tolerance: float = STEP_TOLERANCE
+) -> tuple[float, float | None]:
+    """The largest step (``kind`` 'step', sign -1 down, +1 up; to ``step_tolerance`` leg lengths) or push
+    ('push', +1 forward, -1 backward) survived, with the smallest seen to fail (:func:`largest_survived`)."""
     if kind == "step":
         return largest_survived(
-            lambda h: trial(gait, "step", sign * h).survived, FIRST_STEP, MAX_STEP, STEP_TOLERANCE, False
+            lambda h: trial(gait, "step", sign * h).survived, FIRST_STEP, MAX_STEP, step_tolerance, False
         )
     return largest_survived(
         lambda p: trial(gait, "push", sign * p).survived, FIRST_PUSH, MAX_PUSH, PUSH_TOLERANCE, True
@@ -251,7 +254,7 @@ def _task(gait: Gait, task: tuple[str, float, int]) -> Any:
         return trial(gait, "random", value, seed).survived
     if kind == "gsn":
         return gait_sensitivity(gait, value)
-    return _search(gait, kind, value)
+    return largest_disturbance(gait, kind, value)
 
 
 def robustness(

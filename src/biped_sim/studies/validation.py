@@ -25,6 +25,8 @@ from biped_sim.simulate import simulate
 from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
 from biped_sim.studies.convergence import converge
 from biped_sim.studies.drop_test import drop_test_table
+from biped_sim.studies.robustness import gait_start, largest_disturbance
+from biped_sim.walkers.model import contact_stiffness
 
 ROOT = Path(__file__).resolve().parents[3]
 REFERENCES = ROOT / "configs" / "references" / "rigid_walkers.yaml"
@@ -251,6 +253,49 @@ def convergence_checks() -> tuple[list[Check], list[dict[str, Any]]]:
     ], table
 
 
+STEP_DOWN_LEVELS = 3
+STEP_DOWN_TOLERANCE = 1e-3  # [leg lengths] of the searches here (the command's is 1e-4)
+STEP_DOWN_AGREEMENT = 0.15  # relative: the stiffest compliant walker's largest step down against the rigid one's
+
+
+def step_down_checks() -> tuple[list[Check], list[dict[str, Any]]]:
+    """The largest step down the default walker survives, compliant -> rigid as the contact stiffens (and the table).
+
+    Both started on the rigid limit cycle; level k: contact stiffness 10^k times the config's, restitution
+    0.3 / sqrt(10)^k (as ``converge``; the config's Ambrosio friction, LuGre not being available on profiles).
+    """
+    config = load_config(CONFIGS / "round_foot_walker.yaml", ["simulation.initial=rigid_limit_cycle"])
+    rigid_config = config.model_copy(update={"dynamics": "rigid"})
+    rigid = largest_disturbance(gait_start(rigid_config), "step", -1.0, STEP_DOWN_TOLERANCE)[0]
+    table = []
+    for k in range(STEP_DOWN_LEVELS):
+        data = config.model_dump(mode="json")
+        stiffness = contact_stiffness(config) * 10.0**k
+        data["contact"].update(stiffness=stiffness, materials=None, restitution=0.3 / math.sqrt(10.0) ** k)
+        largest = largest_disturbance(gait_start(config_from_dict(data)), "step", -1.0, STEP_DOWN_TOLERANCE)[0]
+        table.append({"stiffness": stiffness, "compliant": largest, "rigid": rigid})
+    gaps = [abs(row["compliant"] - rigid) / rigid for row in table]
+    group = "Compliant -> rigid largest step down (round_foot_walker)"
+    return [
+        Check(
+            group,
+            "relative difference from the rigid walker's shrinks (first -> last level)",
+            "last < first",
+            " -> ".join(f"{gap:.3f}" for gap in gaps),
+            f"{STEP_DOWN_TOLERANCE:g} l searches",
+            gaps[-1] < gaps[0],
+        ),
+        Check(
+            group,
+            "stiffest compliant against rigid [leg lengths]",
+            f"{rigid:.4f}",
+            f"{table[-1]['compliant']:.4f}",
+            f"{STEP_DOWN_AGREEMENT:.0%}",
+            gaps[-1] <= STEP_DOWN_AGREEMENT,
+        ),
+    ], table
+
+
 def contact_law_checks() -> list[Check]:
     """The drop-test claims of the README: effective restitution of each normal law."""
 
@@ -315,6 +360,10 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         progress("compliant -> rigid convergence")
     conv_checks, extras["convergence"] = convergence_checks()
     checks.extend(conv_checks)
+    if progress:
+        progress("compliant -> rigid largest step down")
+    step_checks, extras["step_down"] = step_down_checks()
+    checks.extend(step_checks)
     extras["wall_time_s"] = time.perf_counter() - start
     write_report(checks, extras, refs, out_dir)
     return checks, extras
@@ -352,6 +401,17 @@ def write_report(checks: list[Check], extras: dict[str, Any], refs: dict[str, An
             f"| {r['stiffness']:.3e} | {r['restitution']:.4f} | {r['bristle_stiffness']:.0e} | "
             f"{r['touchdown_difference']:.2e} | {r['period_difference']:.2e} | {r['settled']:.1e} | {r['slip']:.1e} |"
         )
+    lines += [
+        "",
+        "## Compliant -> rigid largest step down (round_foot_walker)",
+        "",
+        "Started on the rigid limit cycle (the compliant walker after 10 steps of settling); contact stiffness K "
+        "x10 per level, restitution 0.3 / sqrt(10)^k; searches to 1e-3 leg lengths.",
+        "",
+        "| K [N/m^1.5] | compliant [l] | rigid [l] |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {r['stiffness']:.3e} | {r['compliant']:.4f} | {r['rigid']:.4f} |" for r in extras["step_down"]]
     lines += ["", "## Sources", ""]
     for key in ("garcia1998", "goswami1998"):
         lines.append(f"* {refs[key]['citation']}")
