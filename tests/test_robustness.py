@@ -11,9 +11,11 @@ from biped_sim.studies.robustness import (
     GSN_STEP,
     STEP_TOLERANCE,
     Gait,
+    Robustness,
     gait_sensitivity,
     gait_start,
     largest_survived,
+    robustness_table,
     trial,
 )
 
@@ -80,3 +82,24 @@ def test_the_command_reports_every_measure() -> None:
     assert [row["roughness"] for row in doc["rough_survival"]] == [0.001, 0.002, 0.005, 0.01]
     assert all(0.0 <= row["survival"] <= 1.0 for row in doc["rough_survival"])
     assert doc["gsn"] > 0.0
+
+
+def test_the_table_shows_the_largest_sizes_survived() -> None:
+    result = Robustness(
+        dynamics="rigid",
+        walker="rimless_wheel",
+        step_down=(0.5, None),
+        step_up=(0.0479, 0.048),
+        push_forward=(2.0, None),
+        push_backward=(0.32, 0.325),
+        rough_survival={0.001: 1.0, 0.01: 0.25},
+        gsn=22.2,
+        leg_length=1.0,
+        push_scale=3.13,
+    )
+    table = robustness_table([result])
+    (row,) = table.rows
+    assert row["step_down"] == ">= 0.5" and row["push_forward"] == ">= 2"
+    assert row["step_up"] == 0.0479 and row["rough_0.01"] == 0.25
+    assert "| rimless_wheel | rigid | >= 0.5 | 0.0479 |" in table.markdown()
+    assert json.loads(json.dumps(result.to_json()))["rough_survival"][1] == {"roughness": 0.01, "survival": 0.25}

@@ -326,7 +326,7 @@ def robustness_table(results: list[Robustness]) -> Table:
         row: dict[str, Any] = {"walker": r.walker, "dynamics": r.dynamics, "gsn": r.gsn}
         for key in ("step_down", "step_up", "push_forward", "push_backward"):
             good, bad = getattr(r, key)
-            row[key] = good if bad is not None else None  # None: survived the largest size tried
+            row[key] = good if bad is not None else f">= {good:g}"  # survived the largest size tried
         row.update({f"rough_{level:g}": fraction for level, fraction in r.rough_survival.items()})
         rows.append(row)
     notes = results[0].notes if results else []
