@@ -104,18 +104,15 @@ def _strike_times(result: RunResult) -> np.ndarray:
 
 
 def _hip_x(result: RunResult, t: float) -> float:
+    """The hip's x along the slope at time t (interpolated between samples)."""
     times = result.time if isinstance(result, RigidRunResult) else result.run.t  # type: ignore[attr-defined]
     return float(np.interp(t, times, result.hip[:, 0]))  # type: ignore[attr-defined]
 
 
 def _total_mass(config: Config) -> float:
+    """The planar walker's mass, the unit of the pushes (1 for the nondimensional walker and per kg of hub)."""
     w = config.walker
-    if w.kind == "simplest":
-        return 1.0  # the hip mass of Garcia's nondimensional walker
-    if w.kind == "rimless_wheel":
-        return 1.0  # energies and impulses per kg of hub mass
-    legs = 4 if w.kind == "four_legged" else 2
-    return legs * w.leg_mass + w.hip_mass + (2 * w.crossbar_mass if w.kind == "four_legged" else 0.0)
+    return 1.0 if w.kind in ("simplest", "rimless_wheel") else 2 * w.leg_mass + w.hip_mass
 
 
 def gait_start(config: Config) -> Gait:
