@@ -24,9 +24,11 @@ from biped_sim.contact.ground import (
     ground_window,
 )
 from biped_sim.contact.profile import StepsProfile, profile_arrays, profile_outline
+from biped_sim.contact.response import guard_arms
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import load_run
 from biped_sim.multibody.planar import foot_contact
+from biped_sim.studies.limit_cycle import compliant_limit_cycle
 from biped_sim.testing import default_walker
 
 LEVEL = np.zeros(2)
@@ -34,7 +36,7 @@ STEP_DOWN = "ground.profile={kind: steps, steps: [{at: 0.45, height: -0.005}]}"
 
 
 def touching(cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray = LEVEL) -> list[tuple]:
-    """The penetrating features of a circle, deepest first: (delta, P_x, P_y, n_x, n_y)."""
+    """The penetrating features of a circle, deepest first: (delta, P_x, P_y, n_x, n_y, sign)."""
     first, count = ground_window(cx, radius, vertices)
     features = [ground_contacts(cx, cy, radius, vertices, ends, first, count, f) for f in range(count)]
     return sorted((f for f in features if f[0] > 0.0), reverse=True)
@@ -45,7 +47,8 @@ def test_circle_on_a_sloped_segment() -> None:
     n = np.array([-0.1, 1.0]) / math.sqrt(1.01)
     on_line, radius, depth = np.array([0.5, 0.05]), 0.1, 0.002
     centre = on_line + (radius - depth) * n
-    [(delta, px, py, nx, ny)] = touching(*centre, radius, vertices)
+    [(delta, px, py, nx, ny, sign)] = touching(*centre, radius, vertices)
+    assert sign == 1.0
     assert delta == pytest.approx(depth, abs=1e-15)
     assert (px, py) == pytest.approx(tuple(on_line - depth * n), abs=1e-15)
     assert (nx, ny) == pytest.approx(tuple(n), abs=1e-15)
@@ -54,7 +57,8 @@ def test_circle_on_a_sloped_segment() -> None:
 def test_circle_on_a_convex_corner() -> None:
     # a 5 cm step down at x = 1; the centre 3 cm past the edge, 4 cm above it: 5 cm from the corner
     vertices = np.array([[1.0, 0.0], [1.0, -0.05]])
-    [(delta, px, py, nx, ny)] = touching(1.03, 0.04, 0.06, vertices)
+    [(delta, px, py, nx, ny, sign)] = touching(1.03, 0.04, 0.06, vertices)
+    assert sign == 1.0
     assert delta == pytest.approx(0.01, abs=1e-15)
     assert (nx, ny) == pytest.approx((0.6, 0.8), abs=1e-15)
     assert (px, py) == pytest.approx((0.994, -0.008), abs=1e-15)
@@ -65,19 +69,33 @@ def test_circle_in_a_concave_corner_touches_the_riser_and_the_tread() -> None:
     # a 5 cm step up at x = 1; a 4 cm foot pushed 2 mm into the riser and 1 mm into the tread
     vertices = np.array([[1.0, 0.0], [1.0, 0.05]])
     riser, tread = touching(1.0 - 0.038, 0.039, 0.04, vertices)
-    assert riser == pytest.approx((0.002, 1.002, 0.039, -1.0, 0.0), abs=1e-15)
-    assert tread == pytest.approx((0.001, 0.962, -0.001, 0.0, 1.0), abs=1e-15)
+    assert riser == pytest.approx((0.002, 1.002, 0.039, -1.0, 0.0, 1.0), abs=1e-15)
+    assert tread == pytest.approx((0.001, 0.962, -0.001, 0.0, 1.0, 1.0), abs=1e-15)  # the corner is 5.4 cm away
 
 
-def test_the_second_face_of_a_valley_comes_in_continuously() -> None:
-    # a level tread, then a 45-degree rise from x = 1; the centre crosses the edge of the rise's projection
+def contact_energy(cx: float, cy: float, radius: float, vertices: np.ndarray) -> float:
+    """The foot's contact energy over K (Hertz, n = 1.5): the sum of sign delta^2.5 / 2.5 of its features."""
+    return sum(sign * delta**2.5 / 2.5 for delta, *_, sign in touching(cx, cy, radius, vertices))
+
+
+def test_a_shallow_valley_pushes_like_a_plane_not_twice() -> None:
+    # a 1 mrad valley at x = 1, the foot over it pressed 0.1 mm in: both faces and the corner (subtracted) touch
+    vertices = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.001]])
+    radius, depth = 0.15, 1e-4
+    features = touching(1.0 - 1e-6, radius - depth, radius, vertices)
+    assert sorted(f[5] for f in features) == [-1.0, 1.0, 1.0]
+    assert contact_energy(1.0 - 1e-6, radius - depth, radius, vertices) == pytest.approx(depth**2.5 / 2.5, rel=1e-2)
+
+
+def test_the_contact_energy_is_continuous_across_a_valley() -> None:
+    # a level tread, then a 45-degree rise from x = 1: the edges of the region over both faces are x = 1 - C_y
+    # (the rise's projection begins) and x = 1 (the tread's ends); there the corner's term cancels a face's
     vertices = np.array([[0.0, 0.0], [1.0, 0.0], [1.1, 0.1]])
     radius, cy = 0.05, 0.03
-    edge = 1.0 - cy
-    before, after = (touching(cx, cy, radius, vertices) for cx in (edge - 1e-12, edge + 1e-12))
-    assert [f[0] for f in before] == pytest.approx([0.02, radius - cy * math.sqrt(2)], abs=1e-10)
-    assert [f[0] for f in after] == pytest.approx([f[0] for f in before], abs=1e-10)
-    assert after[1][3:] == pytest.approx(before[1][3:], abs=1e-10)  # the normal turns continuously too
+    for edge in (1.0 - cy, 1.0):
+        before, after = (contact_energy(cx, cy, radius, vertices) for cx in (edge - 1e-13, edge + 1e-13))
+        assert after == pytest.approx(before, rel=1e-9)
+    assert len(touching(1.0 - cy / 2, cy, radius, vertices)) == 3  # between the edges: both faces and the corner
 
 
 def test_deepest_feature_is_the_distance_to_the_polyline() -> None:
@@ -104,7 +122,7 @@ def distance_to_polyline(cx: float, cy: float, vertices: np.ndarray) -> float:
 
 def test_point_foot_inside_the_ground_touches_the_nearest_surface_only() -> None:
     vertices = np.array([[1.0, 0.0], [1.0, -0.05]])  # step down: the point is 1 mm under the upper tread
-    assert touching(0.99, -0.001, 0.0, vertices) == [pytest.approx((0.001, 0.99, -0.001, 0.0, 1.0), abs=1e-15)]
+    assert touching(0.99, -0.001, 0.0, vertices) == [pytest.approx((0.001, 0.99, -0.001, 0.0, 1.0, 1.0), abs=1e-15)]
 
 
 def test_flat_ground_and_a_flat_polyline_give_the_same_bits() -> None:
@@ -210,3 +228,23 @@ def test_animation_draws_the_profile(tmp_path: Path) -> None:
     surface = drawing.to_world.T @ np.vstack(drawing.ax.lines[0].get_data())  # back to the slope frame
     riser = surface[:, np.isclose(surface[0], 0.45)]
     np.testing.assert_allclose(riser.T, [[0.45, 0.0], [0.45, -0.005]], atol=1e-12)
+
+
+def test_compliant_limit_cycle_needs_the_flat_ground() -> None:
+    with pytest.raises(ConfigError, match=r"^ground\.profile: "):
+        compliant_limit_cycle(default_walker(STEP_DOWN))
+
+
+def test_a_foot_leaving_the_ground_at_an_event_located_exactly_at_zero_penetration_is_armed() -> None:
+    # the event functions' sides are > 0 and <= 0: an event root found at delta = 0.0 exactly is "not in the ground"
+    assert guard_arms(True, False, 0.0, 0.01)
+    assert not guard_arms(True, False, 1e-12, 0.01)
+
+
+@pytest.mark.slow
+def test_walks_on_random_ground_and_the_energy_balance_closes() -> None:
+    config = default_walker("ground.profile={kind: random, roughness: 0.0005, seed: 1}", t_end=5.0)
+    result = simulate(config)
+    assert result.status == "walking" and result.summary["n_steps"] >= 10
+    m_g_l = result.model.total_mass * config.gravity * config.walker.leg_length
+    assert np.max(np.abs(result.energy.residual)) < 1e-7 * m_g_l

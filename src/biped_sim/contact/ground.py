@@ -93,33 +93,41 @@ def _turn(vertices: np.ndarray, ends: np.ndarray, k: int) -> float:
 
 
 @njit(cache=True)
-def _feature(s: float, nx: float, ny: float, cx: float, cy: float, radius: float) -> tuple[float, ...]:
-    """(delta, P_x, P_y, n_x, n_y) of a feature at signed distance s along the normal n."""
-    return radius - s, cx - radius * nx, cy - radius * ny, nx, ny
+def _feature(
+    s: float, nx: float, ny: float, cx: float, cy: float, radius: float, sign: float = 1.0
+) -> tuple[float, float, float, float, float, float]:
+    """(delta, P_x, P_y, n_x, n_y, sign) of a feature at signed distance s along the normal n."""
+    return radius - s, cx - radius * nx, cy - radius * ny, nx, ny, sign
 
 
 @njit(cache=True)
-def _towards(cx: float, cy: float, vx: float, vy: float, radius: float) -> tuple[float, ...]:
+def _towards(
+    cx: float, cy: float, vx: float, vy: float, radius: float, sign: float
+) -> tuple[float, float, float, float, float, float]:
     """The feature of a point (vx, vy) of the profile: s = |C - V| along n = (C - V) / s."""
     rx, ry = cx - vx, cy - vy
     s = math.sqrt(rx * rx + ry * ry)
-    return _feature(s, rx / s, ry / s, cx, cy, radius)
+    return _feature(s, rx / s, ry / s, cx, cy, radius, sign)
 
 
-_NONE = (-math.inf, 0.0, 0.0, 0.0, 1.0)  # not a feature of this centre
+_NONE = (-math.inf, 0.0, 0.0, 0.0, 1.0, 1.0)  # not a feature of this centre
 
 
 @njit(cache=True)
 def ground_feature(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, f: int
-) -> tuple[float, float, float, float, float]:
-    """Feature ``f`` of the window from segment ``first`` (:func:`ground_window`): (delta, P_x, P_y, n_x, n_y).
+) -> tuple[float, float, float, float, float, float]:
+    """Feature ``f`` of the window from segment ``first`` (:func:`ground_window`): (delta, P_x, P_y, n_x, n_y, sign).
 
     Even f: segment j = first + f // 2, when C projects inside it (half-open: a point over a vertex
-    belongs to one segment) and lies on its outer side, or its distance to an end at a concave
-    corner when C projects beyond that end (so that the valley's second face comes in continuously).
-    Odd f: the convex corner between segments j and j + 1, when its normal cone holds C (it hands
-    over continuously to the segments at the cone's edges). delta = -inf: no feature.
+    belongs to one segment) and lies on its outer side. Odd f: the corner k = j + 1 between segments
+    j and j + 1. A convex corner is a feature (sign +1) when its normal cone holds C: it hands over
+    continuously to the segments at the cone's edges. A concave corner is a feature to subtract
+    (sign -1) when C projects inside both its segments, with s = |C - V|: inclusion-exclusion, so
+    that the part of the foot's overlap near the corner that both faces count is counted once (a
+    shallow valley pushes like a plane, a step's riser and its tread push each with its own force),
+    and it cancels its faces' terms at the edges of its region, so the sum is continuous.
+    delta = -inf: no feature.
     """
     n = vertices.shape[0]
     if n == 0:
@@ -127,29 +135,27 @@ def ground_feature(
     j = first + f // 2
     if f % 2 == 1:
         k = j + 1
-        if k >= n or _turn(vertices, ends, k) >= 0.0:
+        turn = _turn(vertices, ends, k) if k < n else 0.0
+        if turn == 0.0:
             return _NONE
         _, _, ix, iy, _, _ = _segment(vertices, ends, k - 1)
         _, _, ox, oy, _, _ = _segment(vertices, ends, k)
         rx, ry = cx - vertices[k, 0], cy - vertices[k, 1]
-        if rx * ix + ry * iy < 0.0 or rx * ox + ry * oy >= 0.0:  # outside its normal cone
-            return _NONE
-        return _towards(cx, cy, vertices[k, 0], vertices[k, 1], radius)
+        if turn < 0.0 and rx * ix + ry * iy >= 0.0 and rx * ox + ry * oy < 0.0:  # in the convex corner's cone
+            return _towards(cx, cy, vertices[k, 0], vertices[k, 1], radius, 1.0)
+        if turn > 0.0 and rx * ix + ry * iy < 0.0 and rx * ox + ry * oy >= 0.0:  # over both faces of a valley
+            return _towards(cx, cy, vertices[k, 0], vertices[k, 1], radius, -1.0)
+        return _NONE
     ax, ay, dx, dy, t_min, t_max = _segment(vertices, ends, j)
     t = (cx - ax) * dx + (cy - ay) * dy
-    if t < t_min:
-        return _towards(cx, cy, ax, ay, radius) if _turn(vertices, ends, j) > 0.0 else _NONE
-    if t >= t_max:
-        k = j + 1 if j >= 0 else 0
-        return _towards(cx, cy, vertices[k, 0], vertices[k, 1], radius) if _turn(vertices, ends, k) > 0.0 else _NONE
     s = (cx - ax) * (-dy) + (cy - ay) * dx
-    return _feature(s, -dy, dx, cx, cy, radius) if s >= 0.0 else _NONE
+    return _feature(s, -dy, dx, cx, cy, radius) if t_min <= t < t_max and s >= 0.0 else _NONE
 
 
 @njit(cache=True)
 def _nearest_surface(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, count: int
-) -> tuple[float, float, float, float, float]:
+) -> tuple[float, float, float, float, float, float]:
     """The feature of a centre inside the ground (a point foot): the segment whose surface is nearest above it.
 
     Without one (under a ridge beyond every segment's projection): the vertical depth, normal (0, 1).
@@ -185,12 +191,12 @@ def ground_window(cx: float, radius: float, vertices: np.ndarray) -> tuple[int, 
 @njit(cache=True)
 def ground_contacts(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, count: int, f: int
-) -> tuple[float, float, float, float, float]:
-    """Contact feature f of the window (first, count) of :func:`ground_window`: (delta, P_x, P_y, n_x, n_y).
+) -> tuple[float, float, float, float, float, float]:
+    """Contact feature f of the window (first, count) of :func:`ground_window`: (delta, P_x, P_y, n_x, n_y, sign).
 
-    A foot's contact force is the sum over these features of the force of each that penetrates
-    (delta > 0). A centre inside the ground (below the surface: a point foot) touches only the nearest
-    surface, which is feature 0.
+    A foot's contact force is the sum over these features of sign times the force of each that
+    penetrates (delta > 0), and its contact energy the same sum of their energies. A centre inside
+    the ground (below the surface: a point foot) touches only the nearest surface, feature 0.
     """
     if vertices.shape[0] > 0 and cy < ground_height(cx, vertices, ends):
         return _nearest_surface(cx, cy, radius, vertices, ends, first, count) if f == 0 else _NONE
@@ -201,7 +207,7 @@ def ground_contacts(
 def ground_contact(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray
 ) -> tuple[float, float, float, float, float]:
-    """The deepest feature of a circle against the profile: (delta, P_x, P_y, n_x, n_y).
+    """The deepest (added) feature of a circle against the profile: (delta, P_x, P_y, n_x, n_y).
 
     Its penetration is the foot's (the event function, negative in the air: R - distance within R of
     the profile, beyond that R minus the vertical clearance) and P its contact point. On the flat
@@ -211,11 +217,11 @@ def ground_contact(
     best = _NONE
     for f in range(count):
         feature = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
-        if feature[0] > best[0]:
+        if feature[5] > 0.0 and feature[0] > best[0]:
             best = feature
     if best[0] == -math.inf:
-        return _feature(cy - ground_height(cx, vertices, ends), 0.0, 1.0, cx, cy, radius)
-    return best
+        best = _feature(cy - ground_height(cx, vertices, ends), 0.0, 1.0, cx, cy, radius)
+    return best[0], best[1], best[2], best[3], best[4]
 
 
 def ground_height_at(x: float | np.ndarray, vertices: np.ndarray, ends: np.ndarray) -> np.ndarray:

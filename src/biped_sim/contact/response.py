@@ -100,16 +100,17 @@ def stored_energy(system: ContactSystem, modes: np.ndarray, i: int, delta: float
 def guard_arms(guard: bool, armed: bool, delta: float, lead: float) -> bool:
     """The scuffing guard's arming rule (MODEL.md 3): whether a foot is armed after an event.
 
-    A foot is armed once it is ahead of its partner (lead > 0) and above the ground (delta < 0), and
+    A foot is armed once it is ahead of its partner (lead > 0) and not in the ground (delta <= 0), and
     disarmed when it is in the air (delta <= 0) behind its partner (lead <= 0); in between it keeps
     its state, so the swing foot's mid-stance dip below the ground is ignored. Without the guard
-    every foot is always armed.
+    every foot is always armed. The sides are those of the event functions (> 0 and <= 0): a foot
+    that leaves the ground at an event located exactly at delta = 0 is armed there.
     """
     if not guard:
         return True
     if armed:
         return not (delta <= 0.0 and lead <= 0.0)
-    return delta < 0.0 and lead > 0.0
+    return delta <= 0.0 and lead > 0.0
 
 
 @njit(cache=True)

@@ -154,7 +154,8 @@ def foot_forces(
     P_normal lost in the normal damping from :func:`~biped_sim.contact.response.normal_response` and
     P_friction = -F_T v_t taken by friction (for LuGre this includes the small, load-dependent bristle
     energy, which is not a potential; the bristle follows the deepest feature); the deepest feature's
-    kinematics; the summed normal and friction forces. A feature's force acts when the foot is armed
+    kinematics; the summed normal and friction forces (the corner of a valley counts negatively: see
+    :mod:`biped_sim.contact.ground`). A feature's force acts when the foot is armed
     and the feature penetrates; every feature uses the foot's impact speed (one contact mode per foot).
     """
     x, yb, vx, vy, om, cx, cy = _arc(y, system, i)
@@ -168,7 +169,7 @@ def foot_forces(
     radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
     first, count = ground_window(cx, radius, vertices)
     for f in range(count):
-        depth, px, py, nx, ny = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
+        depth, px, py, nx, ny, sign = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
         if not is_loaded(modes, i, depth):
             continue
         depth_dot, v_t, dx, dy = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
@@ -178,6 +179,7 @@ def foot_forces(
             f_t = lugre_friction(v_t, z, z_dot, f_n, fpar)
         else:
             f_t = friction_force(system.switches[FRICTION_MODEL], v_t, f_n, fpar)
+        f_n, f_t, p_n = sign * f_n, sign * f_t, sign * p_n  # a valley's corner term is subtracted
         fx_f, fy_f = f_n * nx + f_t * ny, f_n * ny - f_t * nx
         f_x += fx_f
         f_y += fy_f
@@ -325,8 +327,8 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
         first, count = ground_window(cx, radius, vertices)
         for f in range(count):
-            depth = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)[0]
-            elastic += stored_energy(system, modes, i, depth)
+            feature = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
+            elastic += feature[5] * stored_energy(system, modes, i, feature[0])
     return kinetic, potential, elastic
 
 

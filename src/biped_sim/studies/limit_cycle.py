@@ -109,6 +109,8 @@ class TouchdownSection:
             raise ConfigError(
                 "walker.kind", "the compliant limit cycle needs the planar compass walker (two identical legs)"
             )
+        if config.ground.profile.kind != "flat":
+            raise ConfigError("ground.profile", "a compliant limit cycle needs the flat ground (the same every step)")
         self.system = system
         self.layout = formulation_of(system).layout_of(system)
         self.hip_in_body = system.joint_points[0, :2].copy()
