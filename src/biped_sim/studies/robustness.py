@@ -294,7 +294,8 @@ def robustness(
             f"steps to {STEP_TOLERANCE:g} leg lengths (riser halfway between the feet at the disturbed step's end), "
             f"pushes on the hip along the slope at mid-stance to {PUSH_TOLERANCE:.0%}; none tried beyond "
             f"{MAX_STEP:g} leg lengths or {MAX_PUSH:g} m_total sqrt(g l)",
-            f"rough ground: {seeds} seeds, heights every {RANDOM_SPACING:g} leg lengths from the riser's x on",
+            f"rough h [l]: the fraction of {seeds} seeds of random ground of roughness h survived (heights every "
+            f"{RANDOM_SPACING:g} leg lengths from the riser's x on)",
             f"GSN: step down of {GSN_STEP[config.dynamics]:g} leg lengths, (period / sqrt(l/g), length / l) over "
             f"{GSN_STEPS + 1} steps, per leg length (Hobbelen and Wisse 2007)",
         ],
@@ -315,9 +316,7 @@ ROBUSTNESS_COLUMNS = [
 def robustness_table(results: list[Robustness]) -> Table:
     """The robustness table (largest disturbances survived, rough-ground survival, GSN) of some walkers."""
     levels = sorted({level for r in results for level in r.rough_survival})
-    columns = ROBUSTNESS_COLUMNS + [
-        Column(f"rough_{level:g}", f"survival at roughness {level:g}", "l", ".2f") for level in levels
-    ]
+    columns = ROBUSTNESS_COLUMNS + [Column(f"rough_{level:g}", f"rough {level:g}", "l", ".2f") for level in levels]
     rows = []
     for r in results:
         row: dict[str, Any] = {"walker": r.walker, "dynamics": r.dynamics, "gsn": r.gsn}
