@@ -14,7 +14,7 @@ from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate.rigid import RigidRunResult
 
-from .conftest import CONFIGS
+from .conftest import CONFIGS, invoke, one_line_error
 
 SIMPLEST = CONFIGS / "simplest_walker.yaml"
 ROUND_FOOT = CONFIGS / "round_foot_walker.yaml"
@@ -135,3 +135,10 @@ def test_the_mid_stance_scuff_after_a_step_down_is_not_a_strike(round_foot_start
     result = _step_down_run(ROUND_FOOT, round_foot_start, height, 0.444, steps=5)
     assert result.status == "walking"
     assert np.min(np.diff(result.strike_time)) > 0.35  # the gait's period is 0.43 s; no step cut at mid-stance
+
+
+def test_the_limit_cycle_command_refuses_a_profile() -> None:
+    profile = "ground.profile={kind: steps, steps: [{at: 0.6, height: -0.001}]}"
+    result = invoke("limit-cycle", str(SIMPLEST), "--set", profile)
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr).startswith("error: ground.profile: ")
