@@ -255,10 +255,9 @@ def convergence_checks() -> tuple[list[Check], list[dict[str, Any]]]:
 
 STEP_DOWN_LEVELS = 3
 STEP_DOWN_TOLERANCE = 1e-3  # [leg lengths] of the searches here (the command's is 1e-4)
-# relative: the stiffest compliant walker's largest step down against the rigid one's, measured 14 % apart
-# (compliant below: its stance foot creeps, Ambrosio friction, LuGre not being available on profiles, and its
-# first falls are missed heel strikes after a mid-stance scuff over the riser, README "Robustness")
-STEP_DOWN_AGREEMENT = 0.2
+# relative: the stiffest compliant walker's largest step down against the rigid one's (measured: 0.0125, 0.0125
+# and 0.0131 l against 0.0131 l, searches to 1e-3 l)
+STEP_DOWN_AGREEMENT = 0.05
 
 
 def step_down_checks() -> tuple[list[Check], list[dict[str, Any]]]:
@@ -266,6 +265,7 @@ def step_down_checks() -> tuple[list[Check], list[dict[str, Any]]]:
 
     Both started on the rigid limit cycle; level k: contact stiffness 10^k times the config's, restitution
     0.3 / sqrt(10)^k (as ``converge``; the config's Ambrosio friction, LuGre not being available on profiles).
+    The compliant walker settles for 10 steps first (:func:`~biped_sim.studies.robustness.gait_start`).
     """
     config = load_config(CONFIGS / "round_foot_walker.yaml", ["simulation.initial=rigid_limit_cycle"])
     rigid_config = config.model_copy(update={"dynamics": "rigid"})
@@ -278,22 +278,21 @@ def step_down_checks() -> tuple[list[Check], list[dict[str, Any]]]:
         largest = largest_disturbance(gait_start(config_from_dict(data)), "step", -1.0, STEP_DOWN_TOLERANCE)[0]
         table.append({"stiffness": stiffness, "compliant": largest, "rigid": rigid})
     gaps = [abs(row["compliant"] - rigid) / rigid for row in table]
-    change = abs(table[-1]["compliant"] - table[-2]["compliant"])
     group = "Compliant -> rigid largest step down (round_foot_walker)"
     return [
         Check(
             group,
-            "compliant largest step down settles as the contact stiffens (last two levels) [leg lengths]",
-            f"change <= {2 * STEP_DOWN_TOLERANCE:g}",
-            " -> ".join(f"{row['compliant']:.4f}" for row in table),
-            f"{2 * STEP_DOWN_TOLERANCE:g}",
-            change <= 2 * STEP_DOWN_TOLERANCE,
+            "relative difference from the rigid walker's does not grow (first -> last level)",
+            "last <= first",
+            " -> ".join(f"{gap:.3f}" for gap in gaps),
+            f"{STEP_DOWN_TOLERANCE:g} l searches",
+            gaps[-1] <= gaps[0],
         ),
         Check(
             group,
             "stiffest compliant against rigid [leg lengths]",
             f"{rigid:.4f}",
-            f"{table[-1]['compliant']:.4f} ({gaps[-1]:.0%} apart)",
+            f"{table[-1]['compliant']:.4f}",
             f"{STEP_DOWN_AGREEMENT:.0%}",
             gaps[-1] <= STEP_DOWN_AGREEMENT,
         ),
