@@ -213,6 +213,8 @@ def ground_contact(
     the profile, beyond that R minus the vertical clearance) and P its contact point. On the flat
     ground (no vertex) it is the plane: delta = R - C_y, P = (C_x, C_y - R), n = (0, 1).
     """
+    if vertices.shape[0] == 0:
+        return radius - cy, cx - radius * 0.0, cy - radius * 1.0, 0.0, 1.0
     first, count = ground_window(cx, radius, vertices)
     best = _NONE
     for f in range(count):

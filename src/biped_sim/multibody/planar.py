@@ -91,21 +91,18 @@ def make_workspace(system: PlanarSystem) -> Workspace:
 
 
 @njit(cache=True)
-def _arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float, float]:
-    """(x, y, vx, vy, omega) of foot i's body and the centre (C_x, C_y) of its arc."""
-    nb = system.body_mass.shape[0]
-    b = system.foot_body[i]
+def _arc(
+    y: np.ndarray, nb: int, b: int, sx: float, sy: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """(x, y, vx, vy, omega) of body b (of nb) and the centre (C_x, C_y) of its foot arc at (sx, sy) in its frame.
+
+    It takes numbers, not the system: inside the right-hand side every array of a NamedTuple handed
+    to a function costs a reference-count update.
+    """
     x, yb, phi = y[3 * b], y[3 * b + 1], y[3 * b + 2]
     vx, vy, om = y[3 * nb + 3 * b], y[3 * nb + 3 * b + 1], y[3 * nb + 3 * b + 2]
     c, s = math.cos(phi), math.sin(phi)
-    sx, sy = system.foot_center[i, 0], system.foot_center[i, 1]
     return x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy
-
-
-@njit(cache=True)
-def _ground(system: PlanarSystem, i: int, cx: float, cy: float) -> tuple[float, float, float, float, float]:
-    """Foot i's deepest contact feature (delta, P_x, P_y, n_x, n_y): ground.ground_contact."""
-    return ground_contact(cx, cy, system.foot_radius[i], system.ground_vertices, system.ground_ends)
 
 
 @njit(cache=True)
@@ -130,8 +127,10 @@ def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float,
     approach velocity -v_P.n, slip velocity v_P.t of the material point at P = C - R n, the contact
     point's position along the slope, and P - r_body (the lever arm of the contact force).
     """
-    x, yb, vx, vy, om, cx, cy = _arc(y, system, i)
-    delta, px, py, nx, ny = _ground(system, i, cx, cy)
+    x, yb, vx, vy, om, cx, cy = _arc(
+        y, system.body_mass.shape[0], system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]
+    )
+    delta, px, py, nx, ny = ground_contact(cx, cy, system.foot_radius[i], system.ground_vertices, system.ground_ends)
     delta_dot, slip, dx, dy = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
     return delta, delta_dot, slip, px, dx, dy
 
@@ -158,8 +157,10 @@ def foot_forces(
     :mod:`biped_sim.contact.ground`). A feature's force acts when the foot is armed
     and the feature penetrates; every feature uses the foot's impact speed (one contact mode per foot).
     """
-    x, yb, vx, vy, om, cx, cy = _arc(y, system, i)
-    delta, px, py, nx, ny = _ground(system, i, cx, cy)
+    x, yb, vx, vy, om, cx, cy = _arc(
+        y, system.body_mass.shape[0], system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]
+    )
+    delta, px, py, nx, ny = ground_contact(cx, cy, system.foot_radius[i], system.ground_vertices, system.ground_ends)
     delta_dot, slip, _, _ = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
     f_x = f_y = torque = z_dot = p_normal = p_friction = f_normal = f_tangent = 0.0
     npar, fpar, lugre = system.normal_params, system.friction_params, system.switches[FRICTION_MODEL] == LUGRE
@@ -167,9 +168,12 @@ def foot_forces(
     if lugre and is_loaded(modes, i, delta):
         z_dot = lugre_bristle_rate(slip, z, fpar)
     radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
+    flat = vertices.shape[0] == 0
     first, count = ground_window(cx, radius, vertices)
+    depth, sign = delta, 1.0  # the flat ground's one feature is the deepest one
     for f in range(count):
-        depth, px, py, nx, ny, sign = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
+        if not flat:
+            depth, px, py, nx, ny, sign = ground_contacts(cx, cy, radius, vertices, ends, first, count, f)
         if not is_loaded(modes, i, depth):
             continue
         depth_dot, v_t, dx, dy = _material_point(x, yb, vx, vy, om, px, py, nx, ny)
@@ -323,7 +327,8 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
         potential -= m * (system.gravity[0] * y[3 * b] + system.gravity[1] * y[3 * b + 1])
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
-        _, _, _, _, _, cx, cy = _arc(y, system, i)
+        centre = system.foot_center[i]
+        _, _, _, _, _, cx, cy = _arc(y, system.body_mass.shape[0], system.foot_body[i], centre[0], centre[1])
         radius, vertices, ends = system.foot_radius[i], system.ground_vertices, system.ground_ends
         first, count = ground_window(cx, radius, vertices)
         for f in range(count):
