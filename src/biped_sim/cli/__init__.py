@@ -12,6 +12,7 @@ from biped_sim.cli import (
     bench_commands,  # noqa: F401
     experiment_commands,  # noqa: F401
     fit_commands,  # noqa: F401
+    robustness_commands,  # noqa: F401
     run_commands,  # noqa: F401  (registers commands)
 )
 from biped_sim.cli.common import app

@@ -171,15 +171,16 @@ def profile_support_error(ground: SlopedGround, dynamics: str, formulation: str,
     """Why ``ground.profile`` cannot run with these settings (a one-line reason), or None.
 
     The walker starts with its stance foot at x = 0 on level ground; profiles other than flat run in
-    the compliant planar and minimal formulations only (the spatial feet and the rigid heel strike read the plane),
-    and without LuGre friction (one bristle state per foot cannot serve two contact features).
+    the compliant planar and minimal formulations (the spatial feet read the plane), without LuGre friction (one
+    bristle state per foot cannot serve two contact features), and in the rigid models (their heel strike reads
+    the profile: :mod:`biped_sim.rigid.ground`).
     """
     profile = ground.profile
     if isinstance(profile, FlatProfile):
         return None
-    if dynamics != "compliant" or formulation == "spatial":
-        return "profiles other than flat need dynamics: compliant and formulation.kind: planar or minimal"
-    if friction == "lugre":
+    if dynamics == "compliant" and formulation == "spatial":
+        return "profiles other than flat need formulation.kind: planar or minimal (or dynamics: rigid)"
+    if dynamics == "compliant" and friction == "lugre":
         return "profiles other than flat do not support friction.model: lugre"
     vertices, ends = profile_arrays(profile, ground.slope)
     behind = vertices[vertices[:, 0] <= 0.0]

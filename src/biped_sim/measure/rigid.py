@@ -38,6 +38,7 @@ class RigidTrace:
     strike_pre: list[np.ndarray] = field(default_factory=list)
     strike_post: list[np.ndarray] = field(default_factory=list)
     step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
+    strike_levels: list[float] = field(default_factory=list)  # on a ground profile: the new stance foot's level
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # (time, work, ground normal impulse)
 
     def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
@@ -81,7 +82,8 @@ def rigid_energy_and_hip(
     Step k's models measure positions from its own origin O_k, where its contact point would be at zero stance
     angle: the contact point is at x = O_k - R theta. O_0 = R theta_0 (contact at x = 0 at the start). A step's
     length is its contact point's advance from the step's start to the next one's, so
-    O_{k+1} - R theta_{k+1}+ = O_k - R theta_k+ + length_k. Potentials shift by -(weight) sin(gamma) O_k.
+    O_{k+1} - R theta_{k+1}+ = O_k - R theta_k+ + length_k. Potentials shift by -(weight) sin(gamma) O_k, and on
+    a ground profile by (weight) cos(gamma) h_k with h_k step k's stance level (the hip rises by h_k).
     """
     R, l = walker.foot_radius, walker.leg_length
     step_start = np.vstack([start.state, *trace.strike_post])[:, 0]
@@ -100,6 +102,9 @@ def rigid_energy_and_hip(
     terms = np.array([walker.energy(x) for x in states]).reshape(len(times), 2)
     kinetic = terms[:, 0]
     potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
+    sample_level = np.concatenate([[0.0], trace.strike_levels])[step_of_sample] if trace.strike_levels else None
+    if sample_level is not None:  # a ground profile: the stance level of each sample's step
+        potential = potential + weight * math.cos(walker.slope) * sample_level
     kinetic_0, potential_0 = walker.energy(start.state)
     energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
     dissipated = dissipated_by_step[step_of_sample]
@@ -109,4 +114,6 @@ def rigid_energy_and_hip(
     residual = kinetic + potential - energy_0 + dissipated - push_work
     theta = states[:, 0]
     hip = np.column_stack([sample_origin - R * theta - (l - R) * np.sin(theta), R + (l - R) * np.cos(theta)])
+    if sample_level is not None:
+        hip[:, 1] += sample_level
     return RigidEnergy(kinetic, potential, dissipated, push_work, residual), hip

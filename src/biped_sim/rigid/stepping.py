@@ -7,7 +7,10 @@ direction, dt = -g / (grad g . f), until |g| <= 1e-14: the heel strike is locate
 time and state (the integration error), not to the step size. Falls (a leg past
 ``simulation.fall_leg_angle``, the hip on the ground) and stalls (no strike within ``MAX_STEP_TIME``
 natural periods) end the step with a status instead of a strike. Pushes stop the flow at their times and
-continue it after the velocity jump, in the same guard phase.
+continue it after the velocity jump, in the same guard phase. On a ground profile the strike guard is the
+swing foot's clearance above the profile (:mod:`biped_sim.rigid.ground`), sought once the swing foot has left
+its mid-stance scuff (the plane's strike guard has become positive: the swing leg is ahead of the stance leg's
+mirror image, the swing foot above the stance level); a riser hit ends the step ``tripped``.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from typing import Literal
 
 import numpy as np
 
+from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.pushes import hip_push
 
@@ -27,7 +31,7 @@ ATOL = 1e-12
 MAX_STEP_TIME = 20.0  # in units of sqrt(l / g)
 GUARD_TOLERANCE = 1e-14
 
-StepStatus = Literal["strike", "fell", "stalled"]
+StepStatus = Literal["strike", "fell", "stalled", "tripped"]
 
 
 @dataclass
@@ -80,6 +84,7 @@ def rigid_step(
     x_start: np.ndarray,
     sample_rate: float | None = None,
     pushes: Sequence[tuple[float, np.ndarray]] = (),
+    profile: ProfileStrike | None = None,
 ) -> RigidStep:
     """Integrate one step from a post-impact state; sample it at ``sample_rate`` (per unit time) if given.
 
@@ -87,7 +92,9 @@ def rigid_step(
     whatever the step's outcome (strike, fall or stall). ``pushes``: (time on the step's clock, impulse) in
     time order; the flow stops at each that comes before the step ends, :func:`~biped_sim.rigid.pushes.hip_push`
     makes the jump, and the same guard phase goes on (``RigidStep.pushes`` lists those applied; a sample at a
-    push's time holds the state after it).
+    push's time holds the state after it). ``profile``: the strike on a ground profile (None: the walker's own
+    guard, on the plane); a swing foot below the profile when the strike is first sought, or one that meets a
+    riser, ends the step ``tripped``.
     """
     from scipy.integrate import solve_ivp  # imported here: scipy.integrate costs 0.3 s of every CLI start-up
 
@@ -112,7 +119,16 @@ def rigid_step(
             step.samples_x = np.vstack(samples_x)
         return step
 
-    for _, guard in walker.guard_phases():
+    phases = walker.guard_phases()
+    if profile is not None:
+        plane_strike = phases[-1][1]
+        phases = [*phases[:-1], ("swing_foot_out", lambda y: -plane_strike(y)), ("heel_strike", profile.clearance)]
+    for index, (name, guard) in enumerate(phases):
+        on_profile = profile is not None and index == len(phases) - 1
+        if name == "swing_foot_out" and guard(x) <= 0.0:
+            continue  # the swing foot is already past its mid-stance scuff
+        if on_profile and guard(x) < -RISER_TOLERANCE * walker.leg_length:  # below the profile: in a riser
+            return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
         strike = _guard_event(guard, -1.0)
         while True:
             t_stop = min(pushes[len(applied)][0], t_limit) if len(applied) < len(pushes) else t_limit
@@ -133,8 +149,11 @@ def rigid_step(
             x = _push(walker, t, x, pushes[len(applied)][1], applied)
         if len(sol.t_events[0]) == 0:
             return finish(RigidStep("fell", x_start, sol.y[:, -1], None, sol.t[-1], math.nan, evals))
-        t, x = _polish(walker, guard, float(sol.t_events[0][0]), sol.y_events[0][0])
-    x_plus = walker.impact(x)
+        t, x = float(sol.t_events[0][0]), sol.y_events[0][0]
+        if on_profile and profile.tripped(x):  # type: ignore[union-attr]
+            return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
+        t, x = _polish(walker, guard, t, x)
+    x_plus = walker.impact(x) if profile is None else profile.impact(x)
     return finish(RigidStep("strike", x_start, x, x_plus, t, walker.step_length(x_start, x), evals))
 
 

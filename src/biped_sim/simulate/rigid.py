@@ -30,6 +30,11 @@ What it measures, and how it relates to a compliant run:
 * The hip position: x along the slope continuous across steps (the stance contact point advances by R dtheta
   as the foot rolls and by each step's length at a strike), y along the slope normal.
 
+On a ground profile (``ground.profile`` other than flat) each heel strike is sought against the profile's
+height at the swing foot (:mod:`biped_sim.rigid.ground`: the stance foot keeps a flat local ground at the
+level of its contact point); the potential energy and the hip include the stance level, so a step down of h
+adds m_total g h cos(gamma) to the energy budget (h along the slope normal). A riser hit is a fall.
+
 The reduced coordinates satisfy the rolling and joint constraints exactly, so the constraint violation is 0
 by construction. Units are SI except for the simplest walker, which is nondimensional (g = l = 1, hip mass
 1), and the rimless wheel, whose energies are per kg of hub mass.
@@ -51,6 +56,7 @@ from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable
+from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import rigid_step
@@ -134,6 +140,8 @@ def _walk(
     pushes = ordered_pushes(config)
     trace = RigidTrace()
     t0, x = 0.0, start.state
+    ground = rigid_ground(config)
+    profile = None if ground is None else ProfileStrike(walker, ground, Footing(walker.foot_radius * x[0], 0.0))
     evals = accepted = 0
     while True:
         step_index = len(trace.strike_time)
@@ -142,7 +150,7 @@ def _walk(
             trace.add_samples(np.array([t0]), x, step_index)  # the state the run ends on, just after a strike
             return trace, "walking" if finished else "timeout", None if finished else t0, t0, evals, accepted
         pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
-        step = rigid_step(walker, x, rate, pending)
+        step = rigid_step(walker, x, rate, pending, profile)
         trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
         evals += step.rhs_evals
         accepted += step.accepted_steps
@@ -160,6 +168,9 @@ def _walk(
         trace.strike_pre.append(step.x_minus)
         trace.strike_post.append(step.x_plus)
         trace.step_lengths.append(step.length)
+        if profile is not None:
+            profile = profile.after(step.x_minus, step.x_plus)
+            trace.strike_levels.append(profile.footing.level)
         t0, x = t_step_end, step.x_plus
         if progress is not None:
             progress(t0)

@@ -307,5 +307,7 @@ def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_st
     nearest the guess, stable or not).
     """
     if config.dynamics == "rigid":
+        if config.ground.profile.kind != "flat":  # the rigid step map reads the plane
+            raise ConfigError("ground.profile", "a rigid limit cycle needs the flat ground (the same every step)")
         return rigid_limit_cycle(config, guess, SETTLE_STEPS if settle_steps is None else settle_steps)
     return compliant_limit_cycle(config, guess, COMPLIANT_SETTLE_STEPS if settle_steps is None else settle_steps)

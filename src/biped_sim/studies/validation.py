@@ -10,49 +10,30 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict, load_config, parse_yaml
+from biped_sim.config import config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
-from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker, rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import simulate
-from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_basin
+from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config
 from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
-from biped_sim.studies.convergence import converge
 from biped_sim.studies.drop_test import drop_test_table
-from biped_sim.studies.fit import FitProblem, parse_parameter, run_fit, synthetic_reference_data
-from biped_sim.studies.fit_stats import summarize
+from biped_sim.studies.validation_studies import (
+    basin_checks,
+    convergence_checks,
+    fit_recovery_checks,
+    step_down_checks,
+)
 
 ROOT = Path(__file__).resolve().parents[3]
 REFERENCES = ROOT / "configs" / "references" / "rigid_walkers.yaml"
-CONFIGS = ROOT / "configs"
-
-
-@dataclass
-class Check:
-    """One line of the validation report."""
-
-    group: str
-    check: str
-    expected: str
-    obtained: str
-    tolerance: str
-    passed: bool
-
-    def __post_init__(self) -> None:
-        self.passed = bool(self.passed)  # numpy booleans are not JSON
-
-
-def _close(group: str, check: str, expected: float, obtained: float, tolerance: float) -> Check:
-    ok = bool(math.isfinite(obtained) and abs(obtained - expected) <= tolerance)
-    return Check(group, check, f"{expected:.14g}", f"{obtained:.14g}", f"{tolerance:g}", ok)
 
 
 def load_rigid_references(path: Path = REFERENCES) -> dict[str, Any]:
@@ -60,30 +41,17 @@ def load_rigid_references(path: Path = REFERENCES) -> dict[str, Any]:
     return parse_yaml(path.read_text(), source=str(path))
 
 
-def _simplest(slope: float) -> Config:
-    return config_from_dict(
-        {
-            "dynamics": "rigid",
-            "walker": {"kind": "simplest"},
-            "ground": {"slope": slope},
-            "simulation": {
-                "initial": {"stance_angle": 0.2, "stance_rate": -0.2, "swing_angle": -0.2, "swing_rate": -0.18}
-            },
-        }
-    )
-
-
 def garcia_checks(refs: dict[str, Any]) -> list[Check]:
     """Simplest walker at 0.009: fixed point, stability, multipliers two ways, period-doubling slope."""
 
     ref = refs["garcia1998"]
     fp = ref["fixed_point"]
-    config = _simplest(fp["slope"])
+    config = simplest_config(fp["slope"])
     cycle = rigid_limit_cycle(config)
     group = "Garcia et al. 1998, simplest walker"
     rows = [
-        _close(group, "theta* at slope 0.009", fp["stance_angle"], cycle.fixed_point["stance_angle"], 1e-8),
-        _close(group, "thetadot* at slope 0.009", fp["stance_rate"], cycle.fixed_point["stance_rate"], 1e-8),
+        close(group, "theta* at slope 0.009", fp["stance_angle"], cycle.fixed_point["stance_angle"], 1e-8),
+        close(group, "thetadot* at slope 0.009", fp["stance_rate"], cycle.fixed_point["stance_rate"], 1e-8),
         Check(
             group,
             "period-1 gait at 0.009 is stable",
@@ -144,9 +112,9 @@ def rimless_wheel_checks() -> list[Check]:
             tag = f"N={spokes}, slope {slope}"
             # MODEL.md 8 measures theta from the vertical, positive with the hub ahead: theta_README = gamma - theta
             theta_model = slope - cycle.fixed_point["stance_angle"]
-            rows.append(_close(group, f"theta* = gamma - alpha ({tag})", slope - alpha, theta_model, 1e-8))
+            rows.append(close(group, f"theta* = gamma - alpha ({tag})", slope - alpha, theta_model, 1e-8))
             rows.append(
-                _close(
+                close(
                     group,
                     f"thetadot* = cot(2a) sqrt(4 g/l sin a sin g) ({tag})",
                     rate,
@@ -155,7 +123,7 @@ def rimless_wheel_checks() -> list[Check]:
                 )
             )
             rows.append(
-                _close(
+                close(
                     group,
                     f"multiplier = cos^2(2 alpha) ({tag})",
                     math.cos(2 * alpha) ** 2,
@@ -225,36 +193,6 @@ def rigid_physics_checks() -> list[Check]:
     ]
 
 
-def convergence_checks() -> tuple[list[Check], list[dict[str, Any]]]:
-    """Compliant gait -> rigid gait of the default walker as the contact stiffens (and the table)."""
-
-    config = load_config(CONFIGS / "round_foot_walker.yaml")
-    _, rows = converge(config)
-    table = [asdict(r) for r in rows]
-    diffs = [r.touchdown_difference for r in rows]
-    periods = [abs(r.period_difference) for r in rows]
-    group = "Compliant -> rigid (round_foot_walker)"
-    finite = all(math.isfinite(d) for d in diffs)
-    return [
-        Check(
-            group,
-            "touchdown-state difference shrinks (first -> last level)",
-            "-> 0, last < first / 20",
-            " -> ".join(f"{d:.1e}" for d in diffs),
-            "-",
-            finite and diffs[-1] < diffs[0] / 20,
-        ),
-        Check(
-            group,
-            "|step period difference| shrinks (first -> last level) [s]",
-            "-> 0, last < first / 10",
-            " -> ".join(f"{d:.1e}" for d in periods),
-            "-",
-            finite and periods[-1] < periods[0] / 10,
-        ),
-    ], table
-
-
 def contact_law_checks() -> list[Check]:
     """The drop-test claims of the README: effective restitution of each normal law."""
 
@@ -264,11 +202,11 @@ def contact_law_checks() -> list[Check]:
     for r in rows:
         model, e, eff = r["model"], float(r["nominal_restitution"]), float(r["effective_restitution"])
         if model == "hertz":
-            out.append(_close(group, f"hertz is elastic (e = {e})", 1.0, eff, 1e-3))
+            out.append(close(group, f"hertz is elastic (e = {e})", 1.0, eff, 1e-3))
         elif model == "flores":
-            out.append(_close(group, f"flores tracks e = {e}", e, eff, 0.05))
+            out.append(close(group, f"flores tracks e = {e}", e, eff, 0.05))
         elif model in ("hunt_crossley", "lankarani_nikravesh") and e == 0.9:
-            out.append(_close(group, f"{model} near e = 0.9", e, eff, 0.02))
+            out.append(close(group, f"{model} near e = 0.9", e, eff, 0.02))
         elif model == "kelvin_voigt":
             out.append(
                 Check(group, f"kelvin_voigt loses less than nominal (e = {e})", f"> {e}", f"{eff:.4f}", "-", eff > e)
@@ -297,57 +235,6 @@ def energy_balance_checks() -> list[Check]:
     ]
 
 
-def basin_checks() -> list[Check]:
-    """Schwab & Wisse's basin of the simplest walker at slope 0.009, qualitatively: it holds the fixed point, is a
-    small fraction of the post-impact plane, and is a thin band (principal axes of its cells) along a falling
-    diagonal (faster starts need larger stance angles). No number is taken from the paper."""
-    config = _simplest(0.009)
-    spec = BasinSpec(config, GridAxis("stance_angle", 0.1, 0.4, 61), GridAxis("stance_rate", -0.45, -0.05, 81), 30)
-    basin = map_basin(spec, None)
-    group = "Schwab & Wisse 2001, simplest walker's basin (slope 0.009, 61 x 81 cells, 30 steps)"
-    fixed = basin.fixed_point or {"stance_angle": math.nan, "stance_rate": math.nan}
-    i = int(np.argmin(np.abs(spec.x.values - fixed["stance_angle"])))
-    j = int(np.argmin(np.abs(spec.y.values - fixed["stance_rate"])))
-    rows, cols = np.nonzero(basin.outcome != FELL)
-    points = np.vstack([spec.x.values[cols], spec.y.values[rows]])
-    fraction = len(cols) / basin.outcome.size
-    if len(cols) > 2:
-        values, vectors = np.linalg.eigh(np.cov(points))
-        aspect, direction = math.sqrt(values[1] / max(values[0], 1e-300)), vectors[:, 1]
-    else:
-        aspect, direction = math.nan, np.array([1.0, 1.0])
-    falling = float(direction[0] * direction[1])
-    return [
-        Check(
-            group,
-            "the cell at the fixed point converges",
-            "converged",
-            str(basin.outcome[j, i] == CONVERGED),
-            "-",
-            basin.outcome[j, i] == CONVERGED,
-        ),
-        Check(group, "fraction of the plane that walks", "in (0, 0.05)", f"{fraction:.4f}", "-", 0 < fraction < 0.05),
-        Check(group, "thin: length / width of the band", ">= 5", f"{aspect:.1f}", "-", aspect >= 5),
-        Check(group, "the band falls: rate decreases as angle grows", "< 0", f"{falling:.3f}", "-", falling < 0),
-    ]
-
-
-def fit_recovery_checks() -> list[Check]:
-    """``biped-sim fit`` recovers known values: the default walker's leg inertia and hip mass, fitted from a wrong
-    start to its own seven step periods plus 1 ms of noise (seed 1), within three of the fit's standard errors."""
-    truth = load_config(CONFIGS / "round_foot_walker.yaml")
-    spec = ReferenceSpec.model_validate(synthetic_reference_data(truth, 7, 1e-3, seed=1))
-    config = config_from_dict(truth.model_dump(mode="json"), ["walker.leg_inertia=0.0047", "walker.hip_mass=2.3"])
-    params = tuple(parse_parameter(t, config) for t in ("walker.leg_inertia=0.0043:0.006", "walker.hip_mass=1.5:3"))
-    result = summarize(run_fit(FitProblem(config, Reference(Path("synthetic"), spec), params)))
-    ok = result.converged and not result.identifiability.warnings
-    checks = [Check("Fit recovery", "converged, no identifiability warning", "yes", "yes" if ok else "no", "-", ok)]
-    for estimate, true in zip(result.estimates, (truth.walker.leg_inertia, truth.walker.hip_mass), strict=True):
-        se = estimate.standard_error if estimate.standard_error is not None else math.nan
-        checks.append(_close("Fit recovery", f"{estimate.key} (3 standard errors)", true, estimate.value, 3 * se))
-    return checks
-
-
 def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None) -> tuple[list[Check], dict[str, Any]]:
     """Run every check, write report.md and report.json into ``out_dir``; returns the checks and extras."""
     refs = load_rigid_references()
@@ -372,6 +259,10 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         progress("compliant -> rigid convergence")
     conv_checks, extras["convergence"] = convergence_checks()
     checks.extend(conv_checks)
+    if progress:
+        progress("compliant -> rigid largest step down")
+    step_checks, extras["step_down"] = step_down_checks()
+    checks.extend(step_checks)
     extras["wall_time_s"] = time.perf_counter() - start
     write_report(checks, extras, refs, out_dir)
     return checks, extras
@@ -409,6 +300,17 @@ def write_report(checks: list[Check], extras: dict[str, Any], refs: dict[str, An
             f"| {r['stiffness']:.3e} | {r['restitution']:.4f} | {r['bristle_stiffness']:.0e} | "
             f"{r['touchdown_difference']:.2e} | {r['period_difference']:.2e} | {r['settled']:.1e} | {r['slip']:.1e} |"
         )
+    lines += [
+        "",
+        "## Compliant -> rigid largest step down (round_foot_walker)",
+        "",
+        "Started on the rigid limit cycle (the compliant walker after 10 steps of settling); contact stiffness K "
+        "x10 per level, restitution 0.3 / sqrt(10)^k; searches to 1e-3 leg lengths.",
+        "",
+        "| K [N/m^1.5] | compliant [l] | rigid [l] |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {r['stiffness']:.3e} | {r['compliant']:.4f} | {r['rigid']:.4f} |" for r in extras["step_down"]]
     lines += ["", "## Sources", ""]
     for key in ("garcia1998", "goswami1998"):
         lines.append(f"* {refs[key]['citation']}")

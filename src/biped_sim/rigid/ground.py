@@ -1,0 +1,129 @@
+"""The rigid heel strike on a ground profile (``ground.profile``: steps, slope_change, polyline, random).
+
+The rigid models keep a flat local ground under the stance foot: it rolls (round feet) or pivots (point
+feet) on the level of its own contact point, a line of the slope's direction, as on the plane. The profile
+enters at the heel strike only: once the swing foot has left its mid-stance scuff (which the rigid models
+ignore: :mod:`biped_sim.rigid.stepping`), the step ends when the lowest point of the swing foot's arc (the
+foot point when R = 0) comes down to the profile's height at its x,
+
+    clearance = level + (l - R)(cos theta_st - cos theta_sw) - h(x_swing),
+    x_swing = O - R theta_st + (l - R)(sin theta_sw - sin theta_st),
+
+where the stance contact point is at x = O - R theta_st (``Footing.origin`` O) on the level ``Footing.level``.
+The new stance foot then stands on the level of that point. For point feet this is exact (a point foot does
+not roll); a round foot on a sloped part of the profile (slope_change, polyline) rolls on the level line
+through its contact point instead of along the profile: an approximation of the rigid model, stated here.
+
+A riser (a step up, two profile vertices at one x) is hit when the swing foot's lowest point reaches its x
+below its top: the rigid model cannot say what happens to a foot stubbed against a wall, so the step ends
+as ``tripped`` (the run counts it as a fall). So does a swing foot already below the profile when the strike
+is first sought (it crossed a riser during the mid-stance swing, whose scuffing the rigid model ignores). Only
+the lowest point is checked: the front of a round foot's arc may graze a riser unnoticed.
+
+The impact is the walker's own map (angular momentum about the new contact point and of the trailing leg
+about the hip), which holds for any leg angles; Garcia's published map for the simplest walker assumes the
+symmetric strike of flat ground, so on a profile it uses its general form (:func:`simplest_impact`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.contact.ground import ground_height
+from biped_sim.contact.profile import FlatProfile, profile_arrays
+from biped_sim.rigid.models import RigidWalker, SimplestWalker
+
+RISER_TOLERANCE = 1e-9  # a strike this close to a riser's x and below its top is a trip [leg lengths]
+
+
+@dataclass(frozen=True)
+class RigidGround:
+    """A compiled profile (:func:`biped_sim.contact.profile.profile_arrays`) and its risers (x, top)."""
+
+    vertices: np.ndarray
+    ends: np.ndarray
+
+    @property
+    def risers(self) -> np.ndarray:
+        """(k, 2): x and top height of each step up (consecutive vertices at one x, rising)."""
+        v = self.vertices
+        up = (v[1:, 0] == v[:-1, 0]) & (v[1:, 1] > v[:-1, 1])
+        return v[1:][up]
+
+    def height(self, x: float) -> float:
+        """The profile's height at x (after the step at a riser's x)."""
+        return float(ground_height(x, self.vertices, self.ends))
+
+
+def rigid_ground(config: Config) -> RigidGround | None:
+    """The config's profile for the rigid heel strike; None for flat ground (the strike of the plain models)."""
+    profile = config.ground.profile
+    if isinstance(profile, FlatProfile):
+        return None
+    return RigidGround(*profile_arrays(profile, config.ground.slope))
+
+
+@dataclass(frozen=True)
+class Footing:
+    """Where the stance foot stands: contact point at x = origin - R theta_st, on the level ``level``."""
+
+    origin: float
+    level: float
+
+
+@dataclass(frozen=True)
+class ProfileStrike:
+    """The heel strike of one step of ``walker`` on ``ground`` from ``footing``."""
+
+    walker: RigidWalker
+    ground: RigidGround
+    footing: Footing
+
+    def swing_foot(self, x: np.ndarray) -> tuple[float, float]:
+        """(x, height) of the lowest point of the swing foot's arc (the next spoke's tip for the wheel)."""
+        w = self.walker
+        arm = w.leg_length - w.foot_radius
+        stance, swing = float(x[0]), w.next_stance_angle(x)
+        foot_x = self.footing.origin - w.foot_radius * stance + arm * (math.sin(swing) - math.sin(stance))
+        return foot_x, self.footing.level + arm * (math.cos(stance) - math.cos(swing))
+
+    def clearance(self, x: np.ndarray) -> float:
+        """Height of the swing foot's lowest point above the profile below it: the strike guard."""
+        foot_x, foot_y = self.swing_foot(x)
+        return foot_y - self.ground.height(foot_x)
+
+    def tripped(self, x: np.ndarray) -> bool:
+        """The swing foot is at a riser's x below its top: it hit the riser, not the tread."""
+        foot_x, foot_y = self.swing_foot(x)
+        risers = self.ground.risers
+        near = np.abs(risers[:, 0] - foot_x) <= RISER_TOLERANCE * self.walker.leg_length
+        return bool(np.any(risers[near, 1] > foot_y + RISER_TOLERANCE * self.walker.leg_length))
+
+    def impact(self, x_minus: np.ndarray) -> np.ndarray:
+        """The post-impact state (general leg angles)."""
+        if isinstance(self.walker, SimplestWalker):
+            return simplest_impact(x_minus)
+        return self.walker.impact(x_minus)
+
+    def after(self, x_minus: np.ndarray, x_plus: np.ndarray) -> ProfileStrike:
+        """The next step's strike: the new stance foot stands where the swing foot landed."""
+        foot_x, foot_y = self.swing_foot(x_minus)
+        footing = Footing(foot_x + self.walker.foot_radius * float(x_plus[0]), foot_y)
+        return ProfileStrike(self.walker, self.ground, footing)
+
+
+def simplest_impact(x_minus: np.ndarray) -> np.ndarray:
+    """Garcia's heel strike for any leg angles (his map when theta_sw = -theta_st).
+
+    The hip mass keeps its angular momentum about the new contact point: its velocity across the new stance
+    leg stays, thetadot+ = cos(theta_sw - theta_st) thetadot-. The new swing leg's infinitesimal foot, at rest,
+    gets only an axial impulse through its massless leg, so its velocity across that leg stays zero:
+    thetadot_sw+ = cos(theta_sw - theta_st) thetadot+.
+    """
+    theta, theta_sw, theta_d, _ = x_minus
+    c = math.cos(theta_sw - theta)
+    return np.array([theta_sw, theta, c * theta_d, c * c * theta_d])

@@ -1,0 +1,330 @@
+"""How much a walker's gait survives: step down and up, pushes, rough ground, and its gait sensitivity norm.
+
+The walker is started on its gait, then disturbed once, one step ahead, and survives when it walks
+``SURVIVAL_STEPS`` further heel strikes without falling (or diverging):
+
+* rigid dynamics: from the rigid limit cycle's post-impact state
+  (:func:`~biped_sim.rigid.limit_cycle.rigid_limit_cycle`); the disturbed step is the second (step 1, from the
+  first heel strike);
+* compliant dynamics: from the config's initial state after ``SETTLE_STEPS`` heel strikes of settling; the
+  disturbed step is the one that begins at the last of them.
+
+An undisturbed reference run gives the disturbed step's start t_d and end t_d+1 (heel strikes), and the hip's
+x at t_d+1: where the disturbances are put. A step (``ground.profile`` steps) has its riser at that x, halfway
+between the feet at the touchdown that ends the disturbed step, so that the landing foot meets the new level;
+a push (``simulation.pushes``, along the slope) acts at mid-stance (t_d + t_d+1) / 2; rough ground
+(``random`` profile, heights every ``RANDOM_SPACING`` leg lengths) begins at that x.
+
+Largest disturbance survived: the size is doubled from a first guess until the walker falls, then bisected to
+``STEP_TOLERANCE`` leg lengths (steps) or ``PUSH_TOLERANCE`` relative (pushes). The result is the largest size
+seen to survive; a walker that survives some larger sizes too (survival need not be monotonic) is not searched
+beyond the first failure bracketed. Sizes beyond ``MAX_STEP`` / ``MAX_PUSH`` are not tried.
+
+Gait sensitivity norm (Hobbelen and Wisse, IEEE Trans. Robotics 23 (2007) 1213-1224): after a step down of
+e = ``GSN_STEP`` leg lengths (rigid 1e-6: Garcia's walker responds nonlinearly already at 1e-4; compliant 1e-4,
+well above the integration noise), the gait indicators g = (step period / sqrt(l / g), step length / l) of the
+disturbed step and the ``GSN_STEPS`` after it, minus the undisturbed gait's, give
+GSN = sqrt(sum_k sum_i dg_ik^2) / (e / l): a finite difference of a linear response (the tests halve e).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from concurrent.futures import Executor
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from biped_sim.config import Config, config_from_dict
+from biped_sim.errors import ConfigError
+from biped_sim.io.tables import Column, Table
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.simulate import RunResult, simulate
+from biped_sim.simulate.rigid import RigidRunResult
+
+SURVIVAL_STEPS = 10
+SETTLE_STEPS = 10
+STEP_TOLERANCE = 1e-4  # [leg lengths]
+PUSH_TOLERANCE = 1e-2  # relative
+FIRST_STEP = 0.01  # [leg lengths] first size tried
+FIRST_PUSH = 0.05  # [m_total sqrt(g l)]
+MAX_STEP = 0.5  # [leg lengths]
+MAX_PUSH = 2.0  # [m_total sqrt(g l)]
+ROUGHNESS = (0.001, 0.002, 0.005, 0.01)  # [leg lengths] standard deviation of the random heights
+SEEDS = 20
+RANDOM_SPACING = 0.1  # [leg lengths]
+GSN_STEP = {"rigid": 1e-6, "compliant": 1e-4}  # [leg lengths] small enough for a linear response
+GSN_STEPS = 30
+SAMPLE_RATE = 50.0  # samples per sqrt(l / g) (the runs' steps are read, and the hip at one time)
+
+
+@dataclass(frozen=True)
+class Gait:
+    """A walker started on its gait, and where and when its disturbed step happens."""
+
+    config: Config  # the undisturbed run (initial state resolved, flat ground, no pushes, unlimited steps)
+    disturbed_step: int  # d: the step from heel strike d (0 = the start) to d + 1
+    step_start: float  # t_d
+    step_end: float  # t_d+1
+    riser_x: float  # the hip's x at t_d+1 (slope frame)
+    period: np.ndarray  # reference step periods of steps d, d + 1, ... (GSN_STEPS + 1 of them)
+    length: np.ndarray  # and their lengths
+    leg_length: float
+    time_scale: float  # sqrt(l / g)
+    push_scale: float  # m_total sqrt(g l)
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One disturbed run: did it survive, and the gait indicators of its steps from the disturbed one on."""
+
+    survived: bool
+    period: np.ndarray
+    length: np.ndarray
+
+
+def _with(
+    config: Config, *, steps: int, ground: dict[str, Any] | None = None, push: float | None = None, t: float = 0.0
+) -> Config:
+    """The config of a run of ``steps`` heel strikes, with a ground profile and a push along the slope at t."""
+    data = config.model_dump(mode="json")
+    data["simulation"]["max_steps"] = steps
+    if ground is not None:
+        data["ground"]["profile"] = ground
+    if push is not None:
+        data["simulation"]["pushes"] = [{"time": t, "impulse": [push, 0.0]}]
+    return config_from_dict(data)
+
+
+def _strike_times(result: RunResult) -> np.ndarray:
+    """Heel-strike times with t = 0 first (strike k ends step k - 1)."""
+    return np.concatenate([[0.0], result.steps.strike_time])
+
+
+def _hip_x(result: RunResult, t: float) -> float:
+    """The hip's x along the slope at time t (interpolated between samples)."""
+    times = result.time if isinstance(result, RigidRunResult) else result.run.t  # type: ignore[attr-defined]
+    return float(np.interp(t, times, result.hip[:, 0]))  # type: ignore[attr-defined]
+
+
+def _total_mass(config: Config) -> float:
+    """The planar walker's mass, the unit of the pushes (1 for the nondimensional walker and per kg of hub)."""
+    w = config.walker
+    return 1.0 if w.kind in ("simplest", "rimless_wheel") else 2 * w.leg_mass + w.hip_mass
+
+
+def gait_start(config: Config) -> Gait:
+    """Start the walker of ``config`` on its gait (rigid limit cycle, or settled) and run the reference."""
+    if config.walker.kind == "four_legged":
+        raise ConfigError("walker.kind", "robustness needs a planar walker (ground profiles are planar only)")
+    simplest = config.walker.kind == "simplest"
+    leg, gravity = (1.0, 1.0) if simplest else (config.walker.leg_length, config.gravity)
+    time_scale = math.sqrt(leg / gravity)
+    data = config.model_dump(mode="json")
+    data["ground"].pop("profile", None)
+    data["simulation"].update(pushes=[], max_steps=None, t_end=20.0 * (SETTLE_STEPS + GSN_STEPS) * time_scale)
+    data["output"]["sample_rate"] = SAMPLE_RATE / time_scale
+    d = 1 if config.dynamics == "rigid" else SETTLE_STEPS
+    if config.dynamics == "rigid" or config.simulation.initial == "rigid_limit_cycle":  # resolved once for all runs
+        data["simulation"]["initial"] = rigid_limit_cycle(config).fixed_point
+    base = config_from_dict(data)
+    reference = simulate(_with(base, steps=d + GSN_STEPS + 2))
+    strikes = _strike_times(reference)
+    if reference.status != "walking" or len(strikes) < d + GSN_STEPS + 3:
+        raise ConfigError(
+            "simulation.initial", f"the undisturbed {config.dynamics} walker does not walk ({reference.status})"
+        )
+    return Gait(
+        config=base,
+        disturbed_step=d,
+        step_start=float(strikes[d]),
+        step_end=float(strikes[d + 1]),
+        riser_x=_hip_x(reference, float(strikes[d + 1])),
+        period=reference.steps.period[d - 1 : d + GSN_STEPS],  # row k: the step from heel strike k + 1
+        length=reference.steps.length[d - 1 : d + GSN_STEPS],
+        leg_length=leg,
+        time_scale=time_scale,
+        push_scale=_total_mass(config) * math.sqrt(gravity * leg),
+    )
+
+
+def trial(gait: Gait, kind: str, size: float, seed: int = 0, steps: int = SURVIVAL_STEPS) -> Trial:
+    """Run the gait disturbed once: ``kind`` 'step' (height [leg lengths], < 0 down), 'push' (impulse along the
+    slope [m_total sqrt(g l)], > 0 forward) or 'random' (roughness [leg lengths], ``seed``); then ``steps``
+    heel strikes after the disturbed step."""
+    d, l = gait.disturbed_step, gait.leg_length
+    strikes = d + 1 + steps
+    if kind == "step":
+        ground = {"kind": "steps", "steps": [{"at": gait.riser_x, "height": size * l}]}
+        config = _with(gait.config, steps=strikes, ground=ground)
+    elif kind == "push":
+        t_push = 0.5 * (gait.step_start + gait.step_end)
+        config = _with(gait.config, steps=strikes, push=size * gait.push_scale, t=t_push)
+    else:
+        length = 3.0 * (steps + 2) * float(np.max(gait.length))
+        ground = {
+            "kind": "random", "spacing": RANDOM_SPACING * l, "roughness": size * l, "seed": seed,
+            "start": gait.riser_x, "length": length,
+        }  # fmt: skip
+        config = _with(gait.config, steps=strikes, ground=ground)
+    result = simulate(config)
+    survived = result.status == "walking" and len(result.steps.strike_time) >= strikes
+    return Trial(survived, result.steps.period[d - 1 :], result.steps.length[d - 1 :])
+
+
+def largest_survived(
+    survives: Callable[[float], bool], first: float, cap: float, tolerance: float, relative: bool
+) -> tuple[float, float | None]:
+    """(largest size seen to survive, smallest seen to fail or None when even ``cap`` survived).
+
+    Doubling from ``first`` brackets the first failure, bisection narrows the bracket to ``tolerance``
+    (times the failing size when ``relative``). Size 0 (the undisturbed gait) is taken to survive.
+    """
+    good, bad = 0.0, first
+    while survives(bad):
+        good = bad
+        if bad >= cap:
+            return good, None
+        bad = min(2.0 * bad, cap)
+    while bad - good > (tolerance * bad if relative else tolerance):
+        middle = 0.5 * (good + bad)
+        if survives(middle):
+            good = middle
+        else:
+            bad = middle
+    return good, bad
+
+
+def gait_sensitivity(gait: Gait, e: float) -> float:
+    """GSN for a step down of ``e`` leg lengths (module docstring): nondimensional, per leg length; nan when the
+    walker falls (its gait has no response to linearise)."""
+    run = trial(gait, "step", -e, steps=GSN_STEPS)
+    if not run.survived:
+        return math.nan
+    n = GSN_STEPS + 1
+    d_period = (run.period[:n] - gait.period[:n]) / gait.time_scale
+    d_length = (run.length[:n] - gait.length[:n]) / gait.leg_length
+    return float(math.sqrt(np.sum(d_period**2) + np.sum(d_length**2)) / e)
+
+
+@dataclass
+class Robustness:
+    """What one dynamics of a walker survives (sizes in leg lengths and m_total sqrt(g l), as in :func:`trial`)."""
+
+    dynamics: str
+    walker: str
+    step_down: tuple[float, float | None]  # (largest survived, smallest failed or None: survived MAX_STEP)
+    step_up: tuple[float, float | None]
+    push_forward: tuple[float, float | None]
+    push_backward: tuple[float, float | None]
+    rough_survival: dict[float, float]  # roughness -> fraction of the seeds survived
+    gsn: float
+    leg_length: float
+    push_scale: float  # m_total sqrt(g l) in N s (nondimensional for the simplest walker)
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        doc = asdict(self)
+        doc["rough_survival"] = [{"roughness": r, "survival": f} for r, f in self.rough_survival.items()]
+        return doc
+
+
+def largest_disturbance(
+    gait: Gait, kind: str, sign: float, step_tolerance: float = STEP_TOLERANCE
+) -> tuple[float, float | None]:
+    """The largest step (``kind`` 'step', sign -1 down, +1 up; to ``step_tolerance`` leg lengths) or push
+    ('push', +1 forward, -1 backward) survived, with the smallest seen to fail (:func:`largest_survived`)."""
+    if kind == "step":
+        return largest_survived(
+            lambda h: trial(gait, "step", sign * h).survived, FIRST_STEP, MAX_STEP, step_tolerance, False
+        )
+    return largest_survived(
+        lambda p: trial(gait, "push", sign * p).survived, FIRST_PUSH, MAX_PUSH, PUSH_TOLERANCE, True
+    )
+
+
+def _task(gait: Gait, task: tuple[str, float, int]) -> Any:
+    """One independent piece of the study (a worker's job): a search, a rough-ground run or the GSN."""
+    kind, value, seed = task
+    if kind == "random":
+        return trial(gait, "random", value, seed).survived
+    if kind == "gsn":
+        return gait_sensitivity(gait, value)
+    return largest_disturbance(gait, kind, value)
+
+
+def robustness(
+    config: Config,
+    executor: Executor | None = None,
+    roughness: tuple[float, ...] = ROUGHNESS,
+    seeds: int = SEEDS,
+) -> Robustness:
+    """The robustness of the walker of ``config`` with its own dynamics (module docstring); ``executor`` runs
+    the searches, the rough-ground runs and the GSN in parallel (else one after the other)."""
+    gait = gait_start(config)
+    tasks = [
+        ("step", -1.0, 0),
+        ("step", 1.0, 0),
+        ("push", 1.0, 0),
+        ("push", -1.0, 0),
+        ("gsn", GSN_STEP[config.dynamics], 0),
+    ]
+    tasks += [("random", level, seed) for level in roughness for seed in range(seeds)]
+    if executor is None:
+        results = [_task(gait, task) for task in tasks]
+    else:
+        results = list(executor.map(_task, [gait] * len(tasks), tasks))
+    survived = results[5:]
+    rough = {level: float(np.mean(survived[i * seeds : (i + 1) * seeds])) for i, level in enumerate(roughness)}
+    start = "the rigid limit cycle" if config.dynamics == "rigid" else f"the config's start after {SETTLE_STEPS} steps"
+    return Robustness(
+        dynamics=config.dynamics,
+        walker=config.walker.kind,
+        step_down=results[0],
+        step_up=results[1],
+        push_forward=results[2],
+        push_backward=results[3],
+        rough_survival=rough,
+        gsn=results[4],
+        leg_length=gait.leg_length,
+        push_scale=gait.push_scale,
+        notes=[
+            f"started on {start}; disturbed once, one step ahead; survived = {SURVIVAL_STEPS} more heel strikes",
+            f"steps to {STEP_TOLERANCE:g} leg lengths (riser halfway between the feet at the disturbed step's end), "
+            f"pushes on the hip along the slope at mid-stance to {PUSH_TOLERANCE:.0%}; none tried beyond "
+            f"{MAX_STEP:g} leg lengths or {MAX_PUSH:g} m_total sqrt(g l)",
+            f"rough h [l]: the fraction of {seeds} seeds of random ground of roughness h survived (heights every "
+            f"{RANDOM_SPACING:g} leg lengths from the riser's x on)",
+            f"GSN: step down of {GSN_STEP[config.dynamics]:g} leg lengths, (period / sqrt(l/g), length / l) over "
+            f"{GSN_STEPS + 1} steps, per leg length (Hobbelen and Wisse 2007)",
+        ],
+    )
+
+
+ROBUSTNESS_COLUMNS = [
+    Column("walker", "walker"),
+    Column("dynamics", "dynamics"),
+    Column("step_down", "step down", "l", ".4f"),
+    Column("step_up", "step up", "l", ".4f"),
+    Column("push_forward", "push forward", "m sqrt(g l)", ".3f"),
+    Column("push_backward", "push backward", "m sqrt(g l)", ".3f"),
+    Column("gsn", "GSN", "1/l", ".3g"),
+]
+
+
+def robustness_table(results: list[Robustness]) -> Table:
+    """The robustness table (largest disturbances survived, rough-ground survival, GSN) of some walkers."""
+    levels = sorted({level for r in results for level in r.rough_survival})
+    columns = ROBUSTNESS_COLUMNS + [Column(f"rough_{level:g}", f"rough {level:g}", "l", ".2f") for level in levels]
+    rows = []
+    for r in results:
+        row: dict[str, Any] = {"walker": r.walker, "dynamics": r.dynamics, "gsn": r.gsn}
+        for key in ("step_down", "step_up", "push_forward", "push_backward"):
+            good, bad = getattr(r, key)
+            row[key] = good if bad is not None else f">= {good:g}"  # survived the largest size tried
+        row.update({f"rough_{level:g}": fraction for level, fraction in r.rough_survival.items()})
+        rows.append(row)
+    notes = results[0].notes if results else []
+    return Table("robustness", "Robustness: largest disturbance survived", columns, rows, notes)
