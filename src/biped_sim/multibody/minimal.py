@@ -143,45 +143,69 @@ def foot_contact(y: np.ndarray, system: MinimalSystem, foot: int) -> tuple[float
 
 
 @njit(cache=True)
-def _flat_foot_force(
-    y: np.ndarray, n: int, nb: int, i: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+def _flat_foot_forces(
+    y: np.ndarray, n: int, nb: int, nf: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
     ground: FlatGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
-) -> tuple[float, float, float, float, float, float]:  # fmt: skip
-    foot = nb + i
-    delta = table[foot, DELTA]
-    f_n = f_t = z_dot = p_n = p_f = 0.0  # one return (each return of an inlined body is a branch of the caller)
-    if _is_loaded(modes, i, delta):  # else ground_forces would return zeros: skip it
+    hip_x: float, hip_y: float,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    # reads only the table's foot rows (the arc geometry, ahead of the forces): no other array is live here
+    w_normal = w_friction = 0.0
+    for i in range(nf):
+        foot = nb + i
+        delta = table[foot, DELTA]
+        if not _is_loaded(modes, i, delta):  # ground_forces would return zeros: skip it
+            table[foot, BRISTLE] = 0.0
+            continue
         f_n, f_t, z_dot, p_n, p_f = _ground_forces(
             switches, npar, fpar, floor, modes, i, delta, table[foot, DELTA_DOT], table[foot, SLIP],
             table[foot, BRISTLE],
         )  # fmt: skip
-    return f_t, f_n, table[foot, LEVER_X] * f_n - table[foot, LEVER_Y] * f_t, z_dot, p_n, p_f
+        hip_x += f_t
+        hip_y += f_n
+        b = int(table[foot, BODY])
+        table[b, TORQUE] += table[foot, LEVER_X] * f_n - table[foot, LEVER_Y] * f_t
+        table[foot, BRISTLE] = z_dot
+        w_normal += p_n
+        w_friction += p_f
+    return hip_x, hip_y, w_normal, w_friction
 
 
 @njit(cache=True)
-def _profile_foot_force(
-    y: np.ndarray, n: int, nb: int, i: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+def _profile_foot_forces(
+    y: np.ndarray, n: int, nb: int, nf: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
     ground: ProfileGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
-) -> tuple[float, float, float, float, float, float]:  # fmt: skip
-    foot = nb + i
-    b = int(table[foot, BODY])
-    cx, cy = arc_centre(y, table[b, COS], table[b, SIN], centre[i, 0], centre[i, 1])
-    motion = (y[0], y[1], y[n], y[n + 1], y[n + HIP + b])
-    arc = arc_contact(motion[0], motion[1], motion[2], motion[3], motion[4], cx, cy, radius[i], ground)
-    f_x = f_y = torque = z_dot = p_n = p_f = 0.0
-    if is_loaded(modes, i, arc[0]):  # else arc_forces would return zeros: skip it
+    hip_x: float, hip_y: float,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    w_normal = w_friction = 0.0
+    for i in range(nf):
+        foot = nb + i
+        b = int(table[foot, BODY])
+        cx, cy = arc_centre(y, table[b, COS], table[b, SIN], centre[i, 0], centre[i, 1])
+        motion = (y[0], y[1], y[n], y[n + 1], y[n + HIP + b])
+        arc = arc_contact(motion[0], motion[1], motion[2], motion[3], motion[4], cx, cy, radius[i], ground)
+        if not is_loaded(modes, i, arc[0]):  # arc_forces would return zeros: skip it
+            table[foot, BRISTLE] = 0.0
+            continue
         f_x, f_y, torque, z_dot, p_n, p_f, _, _ = arc_forces(
             motion, cx, cy, radius[i], ground, arc, switches, npar, fpar, floor, modes, i, table[foot, BRISTLE]
         )
-    return f_x, f_y, torque, z_dot, p_n, p_f
+        hip_x += f_x
+        hip_y += f_y
+        table[b, TORQUE] += torque
+        table[foot, BRISTLE] = z_dot
+        w_normal += p_n
+        w_friction += p_f
+    return hip_x, hip_y, w_normal, w_friction
 
 
-foot_force = by_type("foot_force", "ground", {FlatGround: _flat_foot_force, ProfileGround: _profile_foot_force})
-foot_force.__doc__ = """(F_x, F_y, torque about the hip, zdot, P_normal, P_friction) of foot i in the right-hand side.
+foot_forces = by_type("foot_forces", "ground", {FlatGround: _flat_foot_forces, ProfileGround: _profile_foot_forces})
+foot_forces.__doc__ = """The feet's forces in the right-hand side: (Q_h x, Q_h y) with them added, and the powers
+(W_normal, W_friction rates); each foot's torque about the hip is added to its body's row of the table and its
+bristle rate written in its own row.
 
-On the flat ground from the foot's row of the workspace table (its arc geometry, read ahead of the
+On the flat ground from the feet's rows of the workspace table (their arc geometry, read ahead of the
 forces: see :func:`rhs`) through the inlined :func:`~biped_sim.contact.response.ground_forces`; on a
-profile through :func:`~biped_sim.contact.response.arc_forces`, summed over the foot's contact features.
+profile through :func:`~biped_sim.contact.response.arc_forces`, summed over each foot's contact features.
 """
 
 
@@ -222,21 +246,11 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         table[foot, DELTA], table[foot, DELTA_DOT], table[foot, SLIP] = delta, delta_dot, slip
         table[foot, LEVER_X], table[foot, LEVER_Y] = dx, dy
         table[foot, BODY], table[foot, BRISTLE] = b, y[2 * n + i]
-    w_normal = w_friction = 0.0
     switches, npar, fpar = system.switches, system.normal_params, system.friction_params
-    floor = system.limits[IMPACT_FLOOR]
-    for i in range(nf):
-        foot = nb + i
-        f_x, f_y, torque, z_dot, p_n, p_f = foot_force(
-            y, n, nb, i, table, centre, radius, ground, switches, npar, fpar, floor, modes
-        )  # fmt: skip
-        hip_x += f_x
-        hip_y += f_y
-        b = int(table[foot, BODY])
-        table[b, TORQUE] += torque
-        table[foot, BRISTLE] = z_dot
-        w_normal += p_n
-        w_friction += p_f
+    hip_x, hip_y, w_normal, w_friction = foot_forces(
+        y, n, nb, nf, table, centre, radius, ground, switches, npar, fpar, system.limits[IMPACT_FLOOR], modes,
+        hip_x, hip_y,
+    )  # fmt: skip
     for i in range(nf):
         ydot[2 * n + i] = table[nb + i, BRISTLE]
     ydot[2 * n + nf] = w_normal
