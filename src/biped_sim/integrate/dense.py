@@ -18,6 +18,35 @@ from biped_sim.multibody.events import system_event_functions
 EVENT_TIME_TOL = 1e-12  # [s] width of the bracket that locates an event
 
 
+@njit(cache=True, inline="always")
+def dop853_extra_stage_input(tab: Tableau, h: float, y: np.ndarray, sc: Scratch, e: int) -> int:
+    """DOP853's extra dense-output stage e (0, 1, 2): its input state into ``sc.y_stage``; returns the row of
+    ``sc.k`` where the caller stores f at t + c_extra[e] h of it (the 12 stages and FSAL come first)."""
+    stage = 13 + e
+    for i in range(y.shape[0]):
+        v = 0.0
+        for s in range(stage):
+            v += sc.k[s, i] * tab.a_extra[e, s]
+        sc.y_stage[i] = y[i] + h * v
+    return stage
+
+
+@njit(cache=True, inline="always")
+def dop853_coefficients(tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+    """Hairer's degree-7 interpolant of the last DOP853 step, from its 16 stages (the three extra ones included)."""
+    k = sc.k
+    for i in range(y.shape[0]):
+        dy = sc.y_new[i] - y[i]
+        sc.dense[0, i] = dy
+        sc.dense[1, i] = h * k[0, i] - dy
+        sc.dense[2, i] = 2.0 * dy - h * (k[12, i] + k[0, i])
+        for r in range(4):
+            v = 0.0
+            for s in range(16):
+                v += tab.d[r, s] * k[s, i]
+            sc.dense[3 + r, i] = h * v
+
+
 @njit(cache=True)
 def prepare_dense(
     tab: Tableau, t: float, h: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, sc: Scratch, st
@@ -38,26 +67,11 @@ def prepare_dense(
                     v += k[s, i] * tab.p[s, j]
                 sc.dense[j, i] = v
     else:
-        n_st = 12
         for e in range(3):
-            s_idx = n_st + 1 + e
-            for i in range(ny):
-                v = 0.0
-                for s in range(s_idx):
-                    v += k[s, i] * tab.a_extra[e, s]
-                sc.y_stage[i] = y[i] + h * v
-            system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[s_idx])
+            stage = dop853_extra_stage_input(tab, h, y, sc, e)
+            system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[stage])
             st.rhs_evals += 1
-        for i in range(ny):
-            dy = sc.y_new[i] - y[i]
-            sc.dense[0, i] = dy
-            sc.dense[1, i] = h * k[0, i] - dy
-            sc.dense[2, i] = 2.0 * dy - h * (k[n_st, i] + k[0, i])
-            for r in range(4):
-                v = 0.0
-                for s in range(16):
-                    v += tab.d[r, s] * k[s, i]
-                sc.dense[3 + r, i] = h * v
+        dop853_coefficients(tab, h, y, sc)
 
 
 @njit(cache=True)

@@ -128,6 +128,37 @@ def error_norm(tab: Tableau, h: float, y: np.ndarray, sc: Scratch, rtol: float, 
 
 
 @njit(cache=True, inline="always")
+def initial_step_trial(y: np.ndarray, sc: Scratch, rtol: float, atol: float, max_step: float) -> tuple[float, float]:
+    """First half of Hairer, Norsett & Wanner's starting step (Solving ODEs I, II.4): with k[0] = f(t, y),
+    the trial step h0 and ||f||; leaves the scale in ``sc.y_dense`` and the Euler trial point y + h0 f in
+    ``sc.y_stage``, where the caller evaluates f into k[1] (:func:`initial_step_size` then finishes)."""
+    ny = y.shape[0]
+    for i in range(ny):
+        sc.y_dense[i] = atol + rtol * abs(y[i])
+    d0 = _rms_norm(y, sc.y_dense)
+    d1 = _rms_norm(sc.k[0], sc.y_dense)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, max_step)
+    for i in range(ny):
+        sc.y_stage[i] = y[i] + h0 * sc.k[0, i]
+    return h0, d1
+
+
+@njit(cache=True, inline="always")
+def initial_step_size(tab: Tableau, sc: Scratch, h0: float, d1: float, max_step: float) -> float:
+    """Second half of the starting step: from k[1] = f at the trial point, the estimate of f' and the step."""
+    for i in range(sc.y_stage.shape[0]):
+        sc.y_stage[i] = sc.k[1, i] - sc.k[0, i]
+    d2 = _rms_norm(sc.y_stage, sc.y_dense) / h0
+    q = tab.error_order + 1
+    if max(d1, d2) <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / q)
+    return min(100.0 * h0, h1, max_step)
+
+
+@njit(cache=True, inline="always")
 def initial_step(
     tab: Tableau,
     t: float,
@@ -142,23 +173,7 @@ def initial_step(
     max_step: float,
 ) -> float:
     """Hairer, Norsett & Wanner's starting step (Solving ODEs I, II.4); uses k[0] = f(t, y)."""
-    ny = y.shape[0]
-    for i in range(ny):
-        sc.y_dense[i] = atol + rtol * abs(y[i])
-    d0 = _rms_norm(y, sc.y_dense)
-    d1 = _rms_norm(sc.k[0], sc.y_dense)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    h0 = min(h0, max_step)
-    for i in range(ny):
-        sc.y_stage[i] = y[i] + h0 * sc.k[0, i]
+    h0, d1 = initial_step_trial(y, sc, rtol, atol, max_step)
     system_rhs(t + h0, sc.y_stage, system, modes, work, sc.k[1])
     st.rhs_evals += 1
-    for i in range(ny):
-        sc.y_stage[i] = sc.k[1, i] - sc.k[0, i]
-    d2 = _rms_norm(sc.y_stage, sc.y_dense) / h0
-    q = tab.error_order + 1
-    if max(d1, d2) <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / q)
-    return min(100.0 * h0, h1, max_step)
+    return initial_step_size(tab, sc, h0, d1, max_step)

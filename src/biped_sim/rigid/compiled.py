@@ -26,8 +26,16 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.integrate.dense import dense_eval
-from biped_sim.integrate.stepper import Scratch, error_norm, make_scratch, propagate, stage_input
+from biped_sim.integrate.dense import dense_eval, dop853_coefficients, dop853_extra_stage_input
+from biped_sim.integrate.stepper import (
+    Scratch,
+    error_norm,
+    initial_step_size,
+    initial_step_trial,
+    make_scratch,
+    propagate,
+    stage_input,
+)
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.rigid.kernels import (
     COMPASS,
@@ -118,60 +126,19 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
 
 
 @njit(cache=True)
-def _rms(v: np.ndarray, scale: np.ndarray) -> float:
-    s = 0.0
-    for i in range(v.shape[0]):
-        s += (v[i] / scale[i]) ** 2
-    return math.sqrt(s / v.shape[0])
-
-
-@njit(cache=True)
 def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
-    ny = y.shape[0]
-    for i in range(ny):
-        sc.y_dense[i] = ATOL + RTOL * abs(y[i])
-    d0 = _rms(y, sc.y_dense)
-    d1 = _rms(sc.k[0], sc.y_dense)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    h0 = min(h0, span)
-    for i in range(ny):
-        sc.y_stage[i] = y[i] + h0 * sc.k[0, i]
+    h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
     rigid_rhs(kind, p, sc.y_stage, sc.k[1])
-    for i in range(ny):
-        sc.y_stage[i] = sc.k[1, i] - sc.k[0, i]
-    d2 = _rms(sc.y_stage, sc.y_dense) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / (tab.error_order + 1))
-    return min(100.0 * h0, h1, span)
+    return initial_step_size(tab, sc, h0, d1, span)
 
 
 @njit(cache=True)
 def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
-    """DOP853's dense-output coefficients of the last step (three extra stages; as integrate.dense)."""
-    ny = y.shape[0]
-    k = sc.k
-    n_st = 12
+    """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
-        s_idx = n_st + 1 + e
-        for i in range(ny):
-            v = 0.0
-            for s in range(s_idx):
-                v += k[s, i] * tab.a_extra[e, s]
-            sc.y_stage[i] = y[i] + h * v
-        rigid_rhs(kind, p, sc.y_stage, k[s_idx])
-    for i in range(ny):
-        dy = sc.y_new[i] - y[i]
-        sc.dense[0, i] = dy
-        sc.dense[1, i] = h * k[0, i] - dy
-        sc.dense[2, i] = 2.0 * dy - h * (k[n_st, i] + k[0, i])
-        for r in range(4):
-            v = 0.0
-            for s in range(16):
-                v += tab.d[r, s] * k[s, i]
-            sc.dense[3 + r, i] = h * v
+        rigid_rhs(kind, p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
+    dop853_coefficients(tab, h, y, sc)
 
 
 @njit(cache=True)
