@@ -27,6 +27,7 @@ from biped_sim.io.atomic import write_with
 from biped_sim.io.output import OutputKind, staged_directory
 from biped_sim.io.trajectory import RunData
 from biped_sim.studies.bifurcation import BifurcationDiagram
+from biped_sim.studies.compare import Comparison
 
 COLUMN_WIDTH_IN = 3.5
 PANEL_HEIGHT_IN = 2.1
@@ -402,6 +403,19 @@ def comparison_figure(
     if published:
         bottom.legend(frameon=False)
     return fig
+
+
+def comparisons_figure(comparisons: Sequence[Comparison]) -> Figure:
+    """:func:`comparison_figure` of model period series against their (shared) reference and its published errors."""
+    reference = comparisons[0].reference
+    return comparison_figure(
+        reference.steps,
+        reference.values,
+        reference.spec.std,
+        reference.short_name,
+        [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
+        comparisons[0].published,
+    )
 
 
 @styled

@@ -262,7 +262,7 @@ def compare_command(
 ) -> None:
     """Per-step error table (Markdown, CSV, LaTeX) and figure of model step periods against a reference."""
     from biped_sim.io.references import load_reference
-    from biped_sim.plots import comparison_figure, save_figure
+    from biped_sim.plots import comparisons_figure, save_figure
     from biped_sim.studies.compare import compare_periods, stats_table, step_table
 
     if reference is None:
@@ -283,14 +283,7 @@ def compare_command(
     series, missing = _compare_targets(target, set_, skip)
     comparisons = [compare_periods(ref, periods, label) for label, periods in series]
     tables = [step_table(comparisons), stats_table(comparisons)]
-    figure = comparison_figure(
-        ref.steps,
-        ref.values,
-        ref.spec.std,
-        ref.short_name,
-        [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
-        comparisons[0].published,
-    )
+    figure = comparisons_figure(comparisons)
     with staged_directory(out_dir, COMPARE_OUTPUT) as stage:
         for table in tables:
             table.write(stage)

@@ -113,7 +113,7 @@ def _document(result: FitResult, config_path: Path) -> dict[str, Any]:
 def _write_fit(result: FitResult, doc: dict[str, Any], directory: Path) -> None:
     """One fit's files: fit.json, fitted.yaml, its tables and the two figures."""
     from biped_sim.io.atomic import write_json_atomic, write_text_atomic
-    from biped_sim.plots import comparison_figure, save_figure
+    from biped_sim.plots import comparisons_figure, save_figure
     from biped_sim.studies.compare import stats_table, step_table
     from biped_sim.studies.fit_stats import parameter_table
 
@@ -131,15 +131,7 @@ def _write_fit(result: FitResult, doc: dict[str, Any], directory: Path) -> None:
     for table in tables:
         table.write(directory)
     for name, series in (("compare", [result.after]), ("fit_periods", [result.before, result.after])):
-        figure = comparison_figure(
-            reference.steps,
-            reference.values,
-            reference.spec.std,
-            reference.short_name,
-            [(c.label, c.model_periods, c.relative_errors) for c in series],
-            result.after.published,
-        )
-        save_figure(figure, directory, name)
+        save_figure(comparisons_figure(series), directory, name)
     write_json_atomic(directory / "fit.json", doc)
 
 

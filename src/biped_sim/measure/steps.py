@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.integrate.driver import Integration
-from biped_sim.multibody.dispatch import measures
+from biped_sim.multibody.dispatch import measures, system_foot_contact
 from biped_sim.walkers.model import BuiltModel
 
 
@@ -115,12 +115,17 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def _contact_x(y: np.ndarray, system: tuple, foot: int) -> float:
+    """A foot's contact point along the slope [m] (the formulation's ``foot_contact``, as the events read it)."""
+    return float(system_foot_contact(y, system, foot)[2])
+
+
 def _rolling_coordinate(y: np.ndarray, model: BuiltModel, foot: int) -> float:
     """x_C + R theta of a foot: constant while the arc rolls without slipping, so its change is the slip."""
     system = model.system
     m = measures(system)
     theta = m.pitch(y, system, int(system.foot_body[foot]))[0]
-    return m.contact_x(y, system, foot) + system.foot_radius[foot] * theta
+    return _contact_x(y, system, foot) + system.foot_radius[foot] * theta
 
 
 def step_table(model: BuiltModel, run: Integration) -> StepTable:
@@ -142,6 +147,6 @@ def step_table(model: BuiltModel, run: Integration) -> StepTable:
             y_next = run.strike_y[k + 1]
             period[k] = run.strike_t[k + 1] - run.strike_t[k]
             next_foot = int(run.strike_foot[k + 1])
-            length[k] = m.contact_x(y_next, system, next_foot) - m.contact_x(y, system, foot)
+            length[k] = _contact_x(y_next, system, next_foot) - _contact_x(y, system, foot)
             slip[k] = _rolling_coordinate(y_next, model, foot) - _rolling_coordinate(y, model, foot)
     return StepTable(run.strike_t.copy(), run.strike_foot.copy(), period, length, slip, *angles.T)

@@ -39,7 +39,6 @@ class Measures(NamedTuple):
     right-hand side uses (one source per equation).
     """
 
-    contact_x: Callable[..., float]  # (y, system, foot): contact point along the slope [m]
     pitch: Callable[..., tuple[float, float]]  # (y, system, body): sagittal leg angle [rad] and rate [rad/s]
     mechanical_energy: Callable[..., tuple[float, float, float]]  # (y, system, modes): kinetic, potential, elastic
     violation: Callable[..., tuple[float, ...]]  # (y, system): one norm per entry of violation_names

@@ -342,7 +342,6 @@ FORMULATION = Formulation(
     has_fallen=has_fallen,
     make_workspace=make_workspace,
     measures=Measures(
-        contact_x=lambda y, system, foot: foot_contact(y, system, foot)[2],
         pitch=pitch,
         mechanical_energy=mechanical_energy,
         violation=constraint_violation,
