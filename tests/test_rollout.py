@@ -35,13 +35,15 @@ COUNTERS = ("status", "t_final", "rhs_evals", "accepted_steps", "rejected_steps"
 
 @contextmanager
 def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """Run the engine as plain Python: every compiled function is replaced by its ``.py_func``."""
+    """Run the engine as plain Python: every compiled function (also in a tuple) is replaced by its ``.py_func``."""
     with monkeypatch.context() as patch:
         for name, module in list(sys.modules.items()):
             if name.startswith(ENGINE):
                 for attribute, value in list(vars(module).items()):
                     if isinstance(value, CPUDispatcher):
                         patch.setattr(module, attribute, value.py_func)
+                    elif isinstance(value, tuple) and value and all(isinstance(v, CPUDispatcher) for v in value):
+                        patch.setattr(module, attribute, tuple(v.py_func for v in value))  # the law registries
         for system_type, formulation in list(FORMULATIONS.items()):
             kernels = {kernel: getattr(formulation, kernel).py_func for kernel in KERNEL_SIGNATURES}
             patch.setitem(FORMULATIONS, system_type, dataclasses.replace(formulation, **kernels))

@@ -33,11 +33,15 @@ from numba.core.registry import CPUDispatcher
 from biped_sim import simulate
 from biped_sim.testing import default_walker
 
+def compiled(value):
+    entry = getattr(value, "python_entry", None)  # a kernel called from Python runs its wrapped twin
+    return isinstance(value, CPUDispatcher) and bool(value.signatures or (entry is not None and entry.signatures))
+
 def loaded():
     return sorted(
         f"{name}.{attribute}"
         for name, module in list(sys.modules.items()) if name.startswith("biped_sim")
-        for attribute, value in vars(module).items() if isinstance(value, CPUDispatcher) and value.signatures
+        for attribute, value in vars(module).items() if compiled(value)
     )
 
 import biped_sim.cli  # every command's module

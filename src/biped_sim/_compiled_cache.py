@@ -7,7 +7,7 @@ inside the cached integrator loop. Keying the cache directory on a hash of every
 code is built from makes any such edit start a fresh cache, while an edit of plain Python (plots, CLI,
 reports) keeps it. Those sources are the packages of the compiled core (whose module constants are
 frozen into the kernels too) and any other module that imports numba. Must run before any
-``@njit(cache=True)`` function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user wins.
+compiled function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user wins.
 """
 
 from __future__ import annotations

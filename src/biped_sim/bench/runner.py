@@ -29,13 +29,13 @@ from typing import Any
 import numba
 import numpy as np
 import scipy
-from numba import njit
 
 from biped_sim.bench.baseline import integrate_baseline
 from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
 from biped_sim.config import Config, load_config
 from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import make_workspace, system_rhs
 from biped_sim.walkers import BuiltModel, build_model
 
@@ -253,7 +253,7 @@ def measure_case(
     return row, model, run
 
 
-@njit(cache=True)
+@kernel
 def _rhs_loop(system: tuple, work: tuple, ys: np.ndarray, modes: np.ndarray, ydot: np.ndarray, sweeps: int) -> float:
     """Evaluate the compiled RHS on every sampled state ``sweeps`` times; returns a checksum."""
     total = 0.0

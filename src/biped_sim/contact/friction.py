@@ -6,7 +6,7 @@ parameter vector of :func:`friction_parameters`, and the returned force (along t
 opposes the slip. LuGre carries a bristle deflection ``z`` per contact in the ODE state and has
 its own pair of functions.
 
-To add a law: one ``@njit`` function, one line in ``FRICTION_LAWS``, one branch in
+To add a law: one ``@kernel`` function, one line in ``FRICTION_LAWS``, one branch in
 :func:`friction_force`.
 """
 
@@ -17,26 +17,27 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import literal_unroll, njit
+from numba import literal_unroll
 
 from biped_sim.contact.registry import registered_functions
+from biped_sim.kernel import kernel
 
 MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2 = range(10)
 N_FRICTION_PARAMS = 10
 
 
-@njit(cache=True)
+@kernel
 def _sign(v: float) -> float:
     return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
 
 
-@njit(cache=True)
+@kernel
 def no_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Frictionless contact: F_T = 0."""
     return 0.0
 
 
-@njit(cache=True)
+@kernel
 def coulomb_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Coulomb, regularised for an ODE: F_T = -mu_k F_N v / sqrt(v^2 + v0^2).
 
@@ -46,13 +47,13 @@ def coulomb_friction(v: float, f_n: float, p: np.ndarray) -> float:
     return -p[MU_K] * f_n * v / math.sqrt(v * v + p[V0] * p[V0])
 
 
-@njit(cache=True)
+@kernel
 def threlfall_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Threlfall (1978): F_T = -mu_k F_N (1 - exp(-3|v|/v0)) sgn(v)."""
     return -p[MU_K] * f_n * (1.0 - math.exp(-3.0 * abs(v) / p[V0])) * _sign(v)
 
 
-@njit(cache=True)
+@kernel
 def ambrosio_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Ambrosio (2003): F_T = -mu_k c_d F_N sgn(v), c_d = 0 below v0, linear to 1 at v1, 1 above.
 
@@ -66,7 +67,7 @@ def ambrosio_friction(v: float, f_n: float, p: np.ndarray) -> float:
     return -p[MU_K] * c_d * f_n * _sign(v)
 
 
-@njit(cache=True)
+@kernel
 def bengisu_akay_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Bengisu and Akay (1994) Stribeck law.
 
@@ -82,7 +83,7 @@ def bengisu_akay_friction(v: float, f_n: float, p: np.ndarray) -> float:
     return -mu * f_n * _sign(v)
 
 
-@njit(cache=True)
+@kernel
 def brown_mcphee_friction(v: float, f_n: float, p: np.ndarray) -> float:
     """Brown and McPhee (2016): F_T = -(F_N [mu_k tanh(4 v_r) + (mu_s - mu_k) v_r / (0.25 v_r^2 + 0.75)^2] + mu_v v).
 
@@ -93,7 +94,7 @@ def brown_mcphee_friction(v: float, f_n: float, p: np.ndarray) -> float:
     return -(f_n * mu + p[VISC] * v)
 
 
-@njit(cache=True)
+@kernel
 def lugre_bristle_rate(v: float, z: float, p: np.ndarray) -> float:
     """LuGre bristle dynamics per unit normal load: zdot = v - sigma0 |v| z / g(v).
 
@@ -108,7 +109,7 @@ def lugre_bristle_rate(v: float, z: float, p: np.ndarray) -> float:
     return v - p[SIGMA0] * abs(v) * z / g
 
 
-@njit(cache=True)
+@kernel
 def lugre_friction(v: float, z: float, z_dot: float, f_n: float, p: np.ndarray) -> float:
     """LuGre friction force F_T = -(F_N (sigma0 z + sigma1 zdot) + sigma2 v)."""
     return -(f_n * (p[SIGMA0] * z + p[SIGMA1] * z_dot) + p[SIGMA2] * v)
@@ -137,7 +138,7 @@ LUGRE = FRICTION_LAWS["lugre"].index  # the one law with state: the kernels call
 FRICTION_FUNCTIONS = registered_functions(FRICTION_LAWS, stateless_only=True)
 
 
-@njit(cache=True)
+@kernel
 def friction_force(model: int, v: float, f_n: float, p: np.ndarray) -> float:
     """Dispatch to the stateless law numbered ``model`` (its index in FRICTION_LAWS); 0 for any other number."""
     f = 0.0

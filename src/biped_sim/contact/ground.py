@@ -29,9 +29,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from biped_sim.contact.registry import by_type
+from biped_sim.kernel import kernel
 
 FLAT_VERTICES = np.zeros((0, 2))  # the flat ground: no vertex, the plane h = 0
 FLAT_ENDS = np.zeros(2)
@@ -52,7 +52,7 @@ FLAT_GROUND = FlatGround()
 Ground = FlatGround | ProfileGround
 
 
-@njit(cache=True)
+@kernel
 def _first_at_or_after(vertices: np.ndarray, x: float) -> int:
     """Index of the first vertex with x_k >= x (the vertex count when there is none)."""
     lo, hi = 0, vertices.shape[0]
@@ -65,7 +65,7 @@ def _first_at_or_after(vertices: np.ndarray, x: float) -> int:
     return lo
 
 
-@njit(cache=True)
+@kernel
 def ground_height(x: float, vertices: np.ndarray, ends: np.ndarray) -> float:
     """Height h(x) of the profile along the slope normal at slope coordinate x [m].
 
@@ -88,7 +88,7 @@ def ground_height(x: float, vertices: np.ndarray, ends: np.ndarray) -> float:
     return h0 + (h1 - h0) * (x - x0) / (x1 - x0)
 
 
-@njit(cache=True)
+@kernel
 def _segment(vertices: np.ndarray, ends: np.ndarray, j: int) -> tuple[float, float, float, float, float, float]:
     """Segment j (-1: the left ray, n - 1: the right ray): (A_x, A_y, d_x, d_y, t_min, t_max).
 
@@ -108,7 +108,7 @@ def _segment(vertices: np.ndarray, ends: np.ndarray, j: int) -> tuple[float, flo
     return ax, ay, ex / length, ey / length, 0.0, length
 
 
-@njit(cache=True)
+@kernel
 def _turn(vertices: np.ndarray, ends: np.ndarray, k: int) -> float:
     """d_(k-1) x d_k at vertex k: < 0 a convex corner (a ridge), > 0 a concave one (a valley), 0 straight."""
     _, _, ix, iy, _, _ = _segment(vertices, ends, k - 1)
@@ -116,7 +116,7 @@ def _turn(vertices: np.ndarray, ends: np.ndarray, k: int) -> float:
     return ix * oy - iy * ox
 
 
-@njit(cache=True)
+@kernel
 def _feature(
     s: float, nx: float, ny: float, cx: float, cy: float, radius: float, sign: float = 1.0
 ) -> tuple[float, float, float, float, float, float]:
@@ -124,7 +124,7 @@ def _feature(
     return radius - s, cx - radius * nx, cy - radius * ny, nx, ny, sign
 
 
-@njit(cache=True)
+@kernel
 def _towards(
     cx: float, cy: float, vx: float, vy: float, radius: float, sign: float
 ) -> tuple[float, float, float, float, float, float]:
@@ -137,7 +137,7 @@ def _towards(
 _NONE = (-math.inf, 0.0, 0.0, 0.0, 1.0, 1.0)  # not a feature of this centre
 
 
-@njit(cache=True)
+@kernel
 def ground_feature(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, f: int
 ) -> tuple[float, float, float, float, float, float]:
@@ -176,7 +176,7 @@ def ground_feature(
     return _feature(s, -dy, dx, cx, cy, radius) if t_min <= t < t_max and s >= 0.0 else _NONE
 
 
-@njit(cache=True)
+@kernel
 def _nearest_surface(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, count: int
 ) -> tuple[float, float, float, float, float, float]:
@@ -197,7 +197,7 @@ def _nearest_surface(
     return best
 
 
-@njit(cache=True)
+@kernel
 def ground_window(cx: float, radius: float, vertices: np.ndarray) -> tuple[int, int]:
     """(first, count): the features f in range(count) of :func:`ground_feature` that can touch the circle.
 
@@ -212,7 +212,7 @@ def ground_window(cx: float, radius: float, vertices: np.ndarray) -> tuple[int, 
     return first, 2 * (stop - first)
 
 
-@njit(cache=True)
+@kernel
 def ground_contacts(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray, first: int, count: int, f: int
 ) -> tuple[float, float, float, float, float, float]:
@@ -227,7 +227,7 @@ def ground_contacts(
     return ground_feature(cx, cy, radius, vertices, ends, first, f)
 
 
-@njit(cache=True)
+@kernel
 def ground_contact(
     cx: float, cy: float, radius: float, vertices: np.ndarray, ends: np.ndarray
 ) -> tuple[float, float, float, float, float]:
@@ -256,12 +256,12 @@ def ground_height_at(x: float | np.ndarray, vertices: np.ndarray, ends: np.ndarr
     return np.array([ground_height(float(v), vertices, ends) for v in xs])
 
 
-@njit(cache=True)
+@kernel
 def _flat_clearance(x: float, y: float, ground: FlatGround) -> float:
     return y
 
 
-@njit(cache=True)
+@kernel
 def _profile_clearance(x: float, y: float, ground: ProfileGround) -> float:
     return y - ground_height(x, ground.vertices, ground.ends)
 

@@ -7,7 +7,7 @@ by :func:`normal_parameters`: ``p[K, N, CHI, D]`` = stiffness, exponent, hystere
 linear damping. Laws return the unclipped force; :func:`normal_force` clips it at zero (no
 "sticky" pull) so that clipping is applied once, for every law.
 
-To add a law: write one ``@njit`` function below and add one line to ``NORMAL_LAWS`` and one
+To add a law: write one ``@kernel`` function below and add one line to ``NORMAL_LAWS`` and one
 branch to :func:`normal_force` (numba needs a static dispatch).
 """
 
@@ -18,21 +18,22 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import literal_unroll, njit
+from numba import literal_unroll
 
 from biped_sim.contact.registry import registered_functions
+from biped_sim.kernel import kernel
 
 K, N, CHI, D = 0, 1, 2, 3
 N_NORMAL_PARAMS = 4
 
 
-@njit(cache=True)
+@kernel
 def hertz_force(delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
     """Hertz (1882): F_N = K delta^n. Elastic: no energy is lost in an impact."""
     return p[K] * delta ** p[N]
 
 
-@njit(cache=True)
+@kernel
 def kelvin_voigt_force(delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
     """Kelvin-Voigt: F_N = K delta + D deltadot (linear spring and dashpot in parallel).
 
@@ -44,7 +45,7 @@ def kelvin_voigt_force(delta: float, delta_dot: float, impact_speed: float, p: n
     return p[K] * delta + p[D] * delta_dot
 
 
-@njit(cache=True)
+@kernel
 def hunt_crossley_force(delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
     """Hunt and Crossley (1975): F_N = K delta^n (1 + chi deltadot / deltadot^-), chi = 3(1 - e)/2.
 
@@ -59,13 +60,13 @@ lankarani_nikravesh_force = hunt_crossley_force
 flores_force = hunt_crossley_force
 
 
-@njit(cache=True)
+@kernel
 def elastic_force(delta: float, p: np.ndarray) -> float:
     """Conservative part K delta^n of every law (n = 1 for Kelvin-Voigt): its work is stored, not lost."""
     return p[K] * delta ** p[N]
 
 
-@njit(cache=True)
+@kernel
 def elastic_energy(delta: float, p: np.ndarray) -> float:
     """Energy stored in the contact spring: K delta^(n+1) / (n+1)."""
     return p[K] * delta ** (p[N] + 1.0) / (p[N] + 1.0)
@@ -106,7 +107,7 @@ NORMAL_LAWS: dict[str, NormalLaw] = {
 NORMAL_FUNCTIONS = registered_functions(NORMAL_LAWS)
 
 
-@njit(cache=True)
+@kernel
 def normal_force(model: int, delta: float, delta_dot: float, impact_speed: float, p: np.ndarray) -> float:
     """Dispatch to the law numbered ``model`` (its index in NORMAL_LAWS) and clip at zero."""
     f = 0.0

@@ -2,7 +2,7 @@
 
 ``normal_force`` and ``friction_force`` loop over these tuples with ``numba.literal_unroll``, which
 compiles one direct call per law (as fast as a hand-written if-chain, checked when this was written), so
-that a new law is one ``@njit`` function and one registry line: no dispatcher to edit. Numba reaches a
+that a new law is one ``@kernel`` function and one registry line: no dispatcher to edit. Numba reaches a
 tuple of compiled functions through its first-class-function machinery and says so in an
 "experimental" warning at compile time; the calls are resolved statically, so the warning is silenced
 here, for these tuples only.
@@ -19,6 +19,8 @@ from typing import Any
 from numba import types
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import overload
+
+from biped_sim.kernel import kernel_options
 
 warnings.filterwarnings(
     "ignore", message="First-class function type feature is experimental", category=NumbaExperimentalFeatureWarning
@@ -82,7 +84,9 @@ def by_type(name: str, key: str, implementations: Mapping[type, Any]) -> Callabl
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, inline="always")(typer)  # numba IR inlining: no call layer, no reference counts for it
+    overload(generic, inline="always", jit_options=kernel_options())(
+        typer
+    )  # numba IR inlining: no call layer, no reference counts for it
     generic.__name__ = generic.__qualname__ = name
     generic.__signature__ = signature  # type: ignore[attr-defined]
     return generic

@@ -25,12 +25,12 @@ from __future__ import annotations
 from typing import NamedTuple, Protocol
 
 import numpy as np
-from numba import njit
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
 from biped_sim.contact.ground import FlatGround, ProfileGround, ground_contact, ground_contacts, ground_window
 from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
 from biped_sim.contact.registry import by_type
+from biped_sim.kernel import kernel
 
 # columns of the per-foot discrete mode table
 ARMED, TOUCHING, IMPACT_SPEED = 0, 1, 2
@@ -69,7 +69,7 @@ def make_contact_buffers(bristles: np.ndarray) -> ContactBuffers:
     return ContactBuffers(np.zeros(nf, dtype=np.int64), np.zeros(2 * nf), np.zeros(nf), bristles.astype(np.int64))
 
 
-@njit(cache=True)
+@kernel
 def _flat_arc_contact(
     rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float, ground: FlatGround
 ) -> tuple[float, float, float, float, float, float]:
@@ -81,7 +81,7 @@ def _flat_arc_contact(
     return -py, -vpy, vpx, px, dx, dy
 
 
-@njit(cache=True)
+@kernel
 def _material_point(
     rx: float, ry: float, vx: float, vy: float, omega: float, px: float, py: float, nx: float, ny: float
 ) -> tuple[float, float, float, float]:
@@ -92,7 +92,7 @@ def _material_point(
     return -(vpx * nx + vpy * ny), vpx * ny - vpy * nx, dx, dy
 
 
-@njit(cache=True)
+@kernel
 def _profile_arc_contact(
     rx: float, ry: float, vx: float, vy: float, omega: float, cx: float, cy: float, radius: float, ground: ProfileGround
 ) -> tuple[float, float, float, float, float, float]:
@@ -113,7 +113,7 @@ point). On the flat ground: the line y = 0, normal (0, 1), delta = R - C_y.
 """
 
 
-@njit(cache=True)
+@kernel
 def _flat_arc_forces(
     motion: tuple[float, float, float, float, float], cx: float, cy: float, radius: float, ground: FlatGround,
     arc: tuple[float, float, float, float, float, float], switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray,
@@ -126,7 +126,7 @@ def _flat_arc_forces(
     return f_t, f_n, dx * f_n - dy * f_t, z_dot, p_normal, p_friction, f_n, f_t
 
 
-@njit(cache=True)
+@kernel
 def _profile_arc_forces(
     motion: tuple[float, float, float, float, float], cx: float, cy: float, radius: float, ground: ProfileGround,
     arc: tuple[float, float, float, float, float, float], switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray,
@@ -172,13 +172,13 @@ deepest feature), and the summed normal and friction forces. On the flat ground 
 """
 
 
-@njit(cache=True)
+@kernel
 def _flat_arc_energy(system: ContactSystem, modes: np.ndarray, i: int, cx: float, cy: float, radius: float,
                      ground: FlatGround) -> float:  # fmt: skip
     return stored_energy(system, modes, i, -(cy - radius))
 
 
-@njit(cache=True)
+@kernel
 def _profile_arc_energy(system: ContactSystem, modes: np.ndarray, i: int, cx: float, cy: float, radius: float,
                         ground: ProfileGround) -> float:  # fmt: skip
     first, count = ground_window(cx, radius, ground.vertices)
@@ -195,7 +195,7 @@ arc_energy.__doc__ = (
 )
 
 
-@njit(cache=True)
+@kernel
 def ground_forces(
     switches: np.ndarray,
     npar: np.ndarray,
@@ -228,13 +228,13 @@ def ground_forces(
     return f_n, f_t, z_dot, p_normal, p_friction
 
 
-@njit(cache=True)
+@kernel
 def is_loaded(modes: np.ndarray, i: int, delta: float) -> bool:
     """Whether the ground pushes on foot i: it is armed (scuffing guard) and penetrates."""
     return modes[i, ARMED] > 0.5 and delta > 0.0
 
 
-@njit(cache=True)
+@kernel
 def normal_response(
     model: int, npar: np.ndarray, floor: float, modes: np.ndarray, i: int, delta: float, delta_dot: float
 ) -> tuple[float, float]:
@@ -256,13 +256,13 @@ def normal_response(
     return f_n, (f_n - elastic_force(delta, npar)) * delta_dot
 
 
-@njit(cache=True)
+@kernel
 def stored_energy(system: ContactSystem, modes: np.ndarray, i: int, delta: float) -> float:
     """Energy K delta^(n+1) / (n+1) in the contact spring of foot i while it is loaded, else 0."""
     return elastic_energy(delta, system.normal_params) if is_loaded(modes, i, delta) else 0.0
 
 
-@njit(cache=True)
+@kernel
 def guard_arms(guard: bool, armed: bool, delta: float, lead: float) -> bool:
     """The scuffing guard's arming rule (MODEL.md 3): whether a foot is armed after an event.
 
@@ -279,7 +279,7 @@ def guard_arms(guard: bool, armed: bool, delta: float, lead: float) -> bool:
     return delta <= 0.0 and lead > 0.0
 
 
-@njit(cache=True)
+@kernel
 def _claim_touchdown(foot_body: np.ndarray, onset: np.ndarray, i: int) -> None:
     """Mark foot i's touchdown unless another foot of its body is touching or touched down already."""
     for j in range(onset.shape[0]):
@@ -288,7 +288,7 @@ def _claim_touchdown(foot_body: np.ndarray, onset: np.ndarray, i: int) -> None:
     onset[i] = TOUCHDOWN
 
 
-@njit(cache=True)
+@kernel
 def update_contact_modes(y: np.ndarray, system: ContactSystem, modes: np.ndarray, contact: ContactBuffers) -> bool:
     """Apply the scuffing guard and contact onset/separation bookkeeping at an event (MODEL.md 3).
 

@@ -12,6 +12,7 @@ from numba import njit
 
 from biped_sim.integrate.stepper import Scratch
 from biped_sim.integrate.tableaus import DOPRI5, Tableau
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_rhs
 from biped_sim.multibody.events import system_event_functions
 
@@ -47,7 +48,7 @@ def dop853_coefficients(tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> N
             sc.dense[3 + r, i] = h * v
 
 
-@njit(cache=True)
+@kernel
 def prepare_dense(
     tab: Tableau, t: float, h: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, sc: Scratch, st
 ) -> None:
@@ -74,7 +75,7 @@ def prepare_dense(
         dop853_coefficients(tab, h, y, sc)
 
 
-@njit(cache=True)
+@kernel
 def dense_eval(tab: Tableau, theta: float, h: float, y: np.ndarray, sc: Scratch, out: np.ndarray) -> None:
     """out = the interpolated state at t + theta h of the last step (from y at t)."""
     ny = y.shape[0]

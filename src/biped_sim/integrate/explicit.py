@@ -43,6 +43,7 @@ from biped_sim.integrate.recorder import (
 )
 from biped_sim.integrate.stepper import Loop, error_norm, initial_step, propagate, stage_input
 from biped_sim.integrate.tableaus import FIXED
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_has_fallen, system_rhs
 from biped_sim.multibody.events import system_event_functions
 
@@ -66,7 +67,7 @@ class Settings(NamedTuple):
     max_strikes: int  # heel strikes that complete the run (0: no limit)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: a compiled function would be compiled once per literal status
 def _stop(st: np.record, status: int, t: float, reason: int = 0) -> None:
     """End the integration with ``status`` (FELL or DIVERGED, and why) at time t (``st``: the loop-state record)."""
     st.status = status
@@ -146,19 +147,16 @@ def _locate_and_sample(loop: Loop, t: float, h: float, crossed: bool, cfg: Setti
     tab, system, work, _, y, modes, sc, rec = loop
     st = rec.state[0]
     theta_end = 1.0
-    dense_ready = crossed and cfg.control
-    if dense_ready:
+    if cfg.control:  # an event or a sample is inside the step: both read the dense output
         prepare_dense(tab, t, h, y, system, modes, work, sc, st)
-        theta_end = locate_event(tab, h, y, system, sc)
-        if theta_end < 1.0:
-            dense_eval(tab, theta_end, h, y, sc, sc.y_new)
+        if crossed:
+            theta_end = locate_event(tab, h, y, system, sc)
+            if theta_end < 1.0:
+                dense_eval(tab, theta_end, h, y, sc, sc.y_new)
     t_new = t + h if theta_end >= 1.0 else t + theta_end * h
     while _sample_due(st.n_samples, rec.sample_t.shape[0], t_new, h, cfg):
         ts = st.n_samples * cfg.sample_dt
         if cfg.control:
-            if not dense_ready:
-                prepare_dense(tab, t, h, y, system, modes, work, sc, st)
-                dense_ready = True
             dense_eval(tab, min((ts - t) / h, 1.0), h, y, sc, sc.y_dense)
             record_sample(rec, ts, sc.y_dense, modes)
         else:
@@ -177,7 +175,7 @@ def _update_at_event(loop: Loop, t: float, max_strikes: int) -> bool:
     return has_room(loop.rec, loop.modes.shape[0])
 
 
-@njit(cache=True)
+@kernel(reference_counts=False)
 def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
     """Integrate from the recorder's time to t_end, a stop, ``step_budget`` steps or a full buffer (in place).
 

@@ -21,8 +21,10 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 
 from biped_sim.contact.response import TOUCHDOWN, TOUCHING, ContactBuffers
+from biped_sim.kernel import kernel
 from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
 
 # status codes
@@ -92,7 +94,7 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
     )
 
 
-@njit(cache=True)
+@register_jitable(inline="always")  # plain Python for the driver's check per chunk of steps, inlined in the loop
 def has_room(rec: Recorder, nf: int) -> bool:
     """Whether one more event fits: it logs at most one row and makes at most one heel strike per foot."""
     st = rec.state[0]
@@ -133,7 +135,7 @@ def copy_rows(dst: np.ndarray, src: np.ndarray) -> None:
         flat_dst[i] = flat_src[i]
 
 
-@njit(cache=True)
+@kernel
 def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> None:
     """Store the sample (t, y, modes) if the sample buffer has room (it is sized for the whole run)."""
     st = rec.state[0]

@@ -22,6 +22,7 @@ from numba import njit
 from biped_sim.contact.response import ContactBuffers
 from biped_sim.integrate.recorder import Recorder
 from biped_sim.integrate.tableaus import DOPRI5, MAX_STAGES, Tableau
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_rhs
 
 
@@ -91,7 +92,7 @@ def propagate(b: np.ndarray, stages: int, h: float, y: np.ndarray, k: np.ndarray
     return finite
 
 
-@njit(cache=True)
+@kernel
 def _rms_norm(v: np.ndarray, scale: np.ndarray) -> float:
     """sqrt(mean((v / scale)^2))."""
     s = 0.0

@@ -17,7 +17,6 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 from scipy.integrate import solve_ivp
 
 from biped_sim.config import IntegratorConfig
@@ -36,6 +35,7 @@ from biped_sim.integrate.recorder import (
     record_sample,
     with_room,
 )
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system_has_fallen, system_rhs
 from biped_sim.multibody.events import event_count, system_event_functions
 
@@ -52,7 +52,7 @@ class StoppedError(Exception):
         self.reason = reason
 
 
-@njit(cache=True)
+@kernel
 def finite_difference_jacobian(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, f0: np.ndarray, jac: np.ndarray
 ) -> None:

@@ -21,6 +21,7 @@ from numba.extending import overload
 
 from biped_sim.contact.registry import implementation_of
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
+from biped_sim.kernel import kernel_options
 from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
 
@@ -71,7 +72,7 @@ def _generic_kernel(kernel: str) -> Callable[..., Any]:
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic)(typer)
+    overload(generic, jit_options=kernel_options())(typer)
     generic.__name__ = generic.__qualname__ = f"system_{kernel}"
     generic.__doc__ = f"``{kernel}`` of the formulation of ``system`` (compiled: resolved by type)."
     generic.__signature__ = signature  # type: ignore[attr-defined]

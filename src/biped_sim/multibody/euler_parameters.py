@@ -20,10 +20,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from biped_sim.kernel import kernel
 
 
-@njit(cache=True)
+@kernel
 def rotate(p: tuple, s: tuple) -> tuple[float, float, float]:
     """A(p) s."""
     e0, e1, e2, e3 = p
@@ -36,13 +37,13 @@ def rotate(p: tuple, s: tuple) -> tuple[float, float, float]:
     return c * s0 + es * e1 + 2.0 * e0 * x0, c * s1 + es * e2 + 2.0 * e0 * x1, c * s2 + es * e3 + 2.0 * e0 * x2
 
 
-@njit(cache=True)
+@kernel
 def rotate_t(p: tuple, f: tuple) -> tuple[float, float, float]:
     """A(p)^T f (A of the conjugate parameters)."""
     return rotate((p[0], -p[1], -p[2], -p[3]), f)
 
 
-@njit(cache=True)
+@kernel
 def _b_terms(p: tuple, s: tuple) -> tuple[float, float, float, float]:
     """(e.s, e0 s + e x s): the parts of B(p, s) that do not depend on what it multiplies."""
     e0, e1, e2, e3 = p
@@ -55,7 +56,7 @@ def _b_terms(p: tuple, s: tuple) -> tuple[float, float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def b_mul(p: tuple, s: tuple, x: tuple) -> tuple[float, float, float]:
     """B(p, s) x = 2 [(e0 s + e x s) x0 + (e.s) xv + e (s.xv) - s (e.xv) - e0 (s x xv)]."""
     e0, e1, e2, e3 = p
@@ -74,7 +75,7 @@ def b_mul(p: tuple, s: tuple, x: tuple) -> tuple[float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def b_tmul(p: tuple, s: tuple, f: tuple) -> tuple[float, float, float, float]:
     """B(p, s)^T f = 2 [(e0 s + e x s).f, (e.s) f + s (e.f) - e (s.f) + e0 (s x f)]."""
     e0, e1, e2, e3 = p
@@ -91,7 +92,7 @@ def b_tmul(p: tuple, s: tuple, f: tuple) -> tuple[float, float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def g_mul(p: tuple, x: tuple) -> tuple[float, float, float]:
     """G(p) x = -e x0 + e0 xv - e x xv (omega' = 2 G pdot)."""
     e0, e1, e2, e3 = p
@@ -103,7 +104,7 @@ def g_mul(p: tuple, x: tuple) -> tuple[float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def g_tmul(p: tuple, w: tuple) -> tuple[float, float, float, float]:
     """G(p)^T w = (-e.w, e0 w + e x w)."""
     e0, e1, e2, e3 = p
@@ -116,7 +117,7 @@ def g_tmul(p: tuple, w: tuple) -> tuple[float, float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def e_mul(p: tuple, x: tuple) -> tuple[float, float, float]:
     """E(p) x = -e x0 + e0 xv + e x xv (omega = 2 E pdot)."""
     e0, e1, e2, e3 = p
@@ -128,31 +129,31 @@ def e_mul(p: tuple, x: tuple) -> tuple[float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def position(y: np.ndarray, b: int) -> tuple[float, float, float]:
     """r of body b (rdot at index nb + b): its first three state entries."""
     return y[7 * b], y[7 * b + 1], y[7 * b + 2]
 
 
-@njit(cache=True)
+@kernel
 def parameters(y: np.ndarray, b: int) -> tuple[float, float, float, float]:
     """p of body b (pdot at index nb + b): its Euler parameters (e0, e1, e2, e3)."""
     return y[7 * b + 3], y[7 * b + 4], y[7 * b + 5], y[7 * b + 6]
 
 
-@njit(cache=True)
+@kernel
 def vec3(a: np.ndarray, row: int, k: int) -> tuple[float, float, float]:
     """a[row, k:k + 3] as a tuple."""
     return a[row, k], a[row, k + 1], a[row, k + 2]
 
 
-@njit(cache=True)
+@kernel
 def dot3(a: tuple, b: tuple) -> float:
     """a.b of two 3-vectors."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True)
+@kernel
 def inertia_mul(j: np.ndarray, b: int, w: tuple) -> tuple[float, float, float]:
     """J[b] w for a stack of 3 x 3 matrices J (inertias or their inverses)."""
     return (
@@ -162,7 +163,7 @@ def inertia_mul(j: np.ndarray, b: int, w: tuple) -> tuple[float, float, float]:
     )
 
 
-@njit(cache=True)
+@kernel
 def point_state(
     y: np.ndarray, nb: int, b: int, s: tuple
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -175,7 +176,7 @@ def point_state(
     return (r[0] + a[0], r[1] + a[1], r[2] + a[2]), (v[0] + w[0], v[1] + w[1], v[2] + w[2])
 
 
-@njit(cache=True)
+@kernel
 def g_col(p: tuple, j: int) -> tuple[float, float, float]:
     """Column j of G(p) = [-e, e0 I - e~]."""
     e0, e1, e2, e3 = p
@@ -188,13 +189,13 @@ def g_col(p: tuple, j: int) -> tuple[float, float, float]:
     return -e2, e1, e0
 
 
-@njit(cache=True)
+@kernel
 def unit4(j: int) -> tuple[float, float, float, float]:
     """The unit 4-vector along axis j (a column of the identity: Jacobian columns by products)."""
     return (1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, 1.0 if j == 3 else 0.0)
 
 
-@njit(cache=True)
+@kernel
 def attitude(y: np.ndarray, nb: int, b: int) -> tuple[float, float, float, float]:
     """(pitch, roll, yaw, omega_z) of body b.
 

@@ -13,9 +13,9 @@ contact point), so a new formulation gets its events for free.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from biped_sim.contact.response import ContactBuffers, update_contact_modes
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_foot_contact
 
 
@@ -24,7 +24,7 @@ def event_count(system: tuple) -> int:
     return 2 * int(system.foot_body.shape[0])
 
 
-@njit(cache=True)
+@kernel
 def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
     """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner)."""
     for i in range(system.foot_body.shape[0]):
@@ -34,13 +34,13 @@ def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
         g[2 * i + 1] = x_i - system_foot_contact(y, system, partner)[2] if partner >= 0 else 1.0
 
 
-@njit(cache=True)
+@kernel
 def system_approach_velocity(y: np.ndarray, system: tuple, foot: int) -> float:
     """Normal approach velocity deltadot of a foot."""
     return system_foot_contact(y, system, foot)[1]
 
 
-@njit(cache=True)
+@kernel
 def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
     """Whether a foot's contact point is downhill of its partner's (a foot without a partner always leads)."""
     partner = system.foot_partner[foot]
@@ -49,7 +49,7 @@ def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
     return system_foot_contact(y, system, foot)[2] > system_foot_contact(y, system, partner)[2]
 
 
-@njit(cache=True)
+@kernel
 def system_update_modes(y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
     """Scuffing guard and contact bookkeeping at an event; sets contact.onset; True when a mode changed."""
     system_event_functions(y, system, contact.gates)

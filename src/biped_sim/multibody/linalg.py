@@ -5,10 +5,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from biped_sim.kernel import kernel
 
 
-@njit(cache=True)
+@kernel
 def cholesky_solve(a: np.ndarray, b: np.ndarray, m: int) -> None:
     """Solve a x = b in place for a symmetric positive definite m x m matrix (x overwrites b).
 

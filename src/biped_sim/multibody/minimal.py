@@ -41,6 +41,7 @@ from biped_sim.contact.response import (
     ground_forces,
     is_loaded,
 )
+from biped_sim.kernel import kernel
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 
@@ -109,7 +110,7 @@ _ground_forces = _inlined(ground_forces)
 _is_loaded = _inlined(is_loaded)
 
 
-@njit(cache=True)
+@kernel
 def foot_arc(
     y: np.ndarray, n: int, b: int, c: float, s: float, fx: float, fy: float, radius: float, ground: Ground
 ) -> tuple[float, float, float, float, float, float]:
@@ -120,13 +121,13 @@ def foot_arc(
     return arc_contact(y[0], y[1], y[n], y[n + 1], y[n + HIP + b], cx, cy, radius, ground)
 
 
-@njit(cache=True)
+@kernel
 def arc_centre(y: np.ndarray, c: float, s: float, fx: float, fy: float) -> tuple[float, float]:
     """Centre of a foot arc at (fx, fy) from the hip in the frame of a body at angle phi (c, s = cos, sin phi)."""
     return y[0] + c * fx - s * fy, y[1] + s * fx + c * fy
 
 
-@njit(cache=True)
+@kernel
 def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
     """:func:`foot_arc` of foot i."""
     centre, b = system.foot_center, system.foot_body[i]
@@ -135,14 +136,14 @@ def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float
     return foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i], system.ground)
 
 
-@njit(cache=True)
+@kernel
 def foot_contact(y: np.ndarray, system: MinimalSystem, foot: int) -> tuple[float, float, float]:
     """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
     delta, delta_dot, _, x_contact, _, _ = foot_kinematics(y, system, foot)
     return delta, delta_dot, x_contact
 
 
-@njit(cache=True)
+@kernel
 def _flat_foot_forces(
     y: np.ndarray, n: int, nb: int, nf: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
     ground: FlatGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
@@ -170,7 +171,7 @@ def _flat_foot_forces(
     return hip_x, hip_y, w_normal, w_friction
 
 
-@njit(cache=True)
+@kernel
 def _profile_foot_forces(
     y: np.ndarray, n: int, nb: int, nf: int, table: np.ndarray, centre: np.ndarray, radius: np.ndarray,
     ground: ProfileGround, switches: np.ndarray, npar: np.ndarray, fpar: np.ndarray, floor: float, modes: np.ndarray,
@@ -209,7 +210,7 @@ profile through :func:`~biped_sim.contact.response.arc_forces`, summed over each
 """
 
 
-@njit(cache=True)
+@kernel
 def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free).
 
@@ -276,7 +277,7 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         ydot[n + HIP + b] = (table[b, TORQUE] - m * (ax * acc_y - ay * acc_x)) / table[b, HIP_INERTIA]
 
 
-@njit(cache=True)
+@kernel
 def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
     nb = system.body_mass.shape[0]
@@ -300,7 +301,7 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
     return kinetic, potential, elastic
 
 
-@njit(cache=True)
+@kernel
 def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
     """Fall: hip below the height limit over the ground under it, or any body rotated past the leg-angle limit."""
     if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:

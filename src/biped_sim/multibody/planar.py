@@ -27,7 +27,6 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from biped_sim.contact.ground import FLAT_GROUND, Ground, ground_clearance
 from biped_sim.contact.response import (
@@ -38,6 +37,7 @@ from biped_sim.contact.response import (
     arc_energy,
     arc_forces,
 )
+from biped_sim.kernel import kernel
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
 
@@ -79,7 +79,7 @@ def make_workspace(system: PlanarSystem) -> Workspace:
     return Workspace(np.zeros((m, n)), np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n))
 
 
-@njit(cache=True)
+@kernel
 def _foot_arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float, float]:
     """(x, y, vx, vy, omega) of foot i's body (centre of mass) and its arc's centre (C_x, C_y)."""
     nb = system.body_mass.shape[0]
@@ -91,7 +91,7 @@ def _foot_arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float
     return x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy
 
 
-@njit(cache=True)
+@kernel
 def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
     """Foot i's arc against the ground (:func:`~biped_sim.contact.response.arc_contact`, about its body's centre
     of mass): (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_body."""
@@ -99,14 +99,14 @@ def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float,
     return arc_contact(x, yb, vx, vy, om, cx, cy, system.foot_radius[i], system.ground)
 
 
-@njit(cache=True)
+@kernel
 def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float, float, float]:
     """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
     delta, delta_dot, _, x_contact, _, _ = foot_kinematics(y, system, foot)
     return delta, delta_dot, x_contact
 
 
-@njit(cache=True)
+@kernel
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float, float]:
@@ -124,7 +124,7 @@ def foot_forces(
     return f_x, f_y, torque, z_dot, p_normal, p_friction, arc[0], arc[1], arc[2], f_n, f_t
 
 
-@njit(cache=True)
+@kernel
 def _body_point(y: np.ndarray, b: int, sx: float, sy: float) -> tuple[float, float, float, float]:
     """(A s)_x, (A s)_y and the global point r + A s of body b."""
     c, s = math.cos(y[3 * b + 2]), math.sin(y[3 * b + 2])
@@ -133,7 +133,7 @@ def _body_point(y: np.ndarray, b: int, sx: float, sy: float) -> tuple[float, flo
     return ax, ay, y[3 * b] + ax, y[3 * b + 1] + ay
 
 
-@njit(cache=True)
+@kernel
 def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[float, float, float, float]:
     """Phi and Phidot of revolute joint j: (Phi_x, Phi_y, Phidot_x, Phidot_y)."""
     nb = system.body_mass.shape[0]
@@ -153,13 +153,13 @@ def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[f
     return pax - pbx, pay - pby, vax - vbx, vay - vby
 
 
-@njit(cache=True)
+@kernel
 def _inverse_mass(system: PlanarSystem, c: int) -> float:
     body = c // 3
     return 1.0 / system.body_inertia[body] if c % 3 == 2 else 1.0 / system.body_mass[body]
 
 
-@njit(cache=True)
+@kernel
 def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspace, qdd: np.ndarray) -> None:
     """Accelerations from the augmented system with Baumgarte stabilisation (forces in work.force)."""
     nb = system.body_mass.shape[0]
@@ -213,7 +213,7 @@ def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspa
         qdd[c] = v * _inverse_mass(system, c)
 
 
-@njit(cache=True)
+@kernel
 def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
     nb = system.body_mass.shape[0]
@@ -242,7 +242,7 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
-@njit(cache=True)
+@kernel
 def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
     nb = system.body_mass.shape[0]
@@ -261,7 +261,7 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     return kinetic, potential, elastic
 
 
-@njit(cache=True)
+@kernel
 def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, float]:
     """Euclidean norms ||Phi|| and ||Phidot|| over all joints."""
     pos = 0.0
@@ -273,7 +273,7 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
     return math.sqrt(pos), math.sqrt(vel)
 
 
-@njit(cache=True)
+@kernel
 def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
     """Fall: hip (joint 0) below the height limit over the ground under it, or a body past the leg-angle limit."""
     if system.joint_bodies.shape[0] > 0:

@@ -39,8 +39,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from biped_sim.kernel import kernel
 from biped_sim.multibody.euler_parameters import (
     b_mul,
     b_tmul,
@@ -119,7 +119,7 @@ def make_workspace(system: SpatialSystem) -> Workspace:
 # ---------------------------------------------------------------- constraints
 
 
-@njit(cache=True)
+@kernel
 def constraint_terms(
     y: np.ndarray, system: SpatialSystem, c: int, phi_q: np.ndarray, fill: bool
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
@@ -203,7 +203,7 @@ def constraint_terms(
     return dot3(n, x_a) - system.con_vecs[c, 6], 0.0, 0.0, dot3(n, v_a), 0.0, 0.0, gamma, 0.0, 0.0
 
 
-@njit(cache=True)
+@kernel
 def normalisation(y: np.ndarray, nb: int, b: int) -> tuple[float, float, float]:
     """Phi = p.p - 1, Phidot = 2 p.pdot, gamma_c = -2 pdot.pdot of body b."""
     p = parameters(y, b)
@@ -214,7 +214,7 @@ def normalisation(y: np.ndarray, nb: int, b: int) -> tuple[float, float, float]:
     return pp - 1.0, 2.0 * ppd, -2.0 * pdpd
 
 
-@njit(cache=True)
+@kernel
 def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
     """minv[b] = (G^T J'^-1 G + p p^T / j) / (4 |p|^4): inverse of 4 G^T J' G + 4 j p p^T."""
     jinv = system.body_inertia_inv
@@ -231,7 +231,7 @@ def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
                 minv[b, k, i] = v
 
 
-@njit(cache=True)
+@kernel
 def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Workspace, qdd: np.ndarray) -> None:
     """Accelerations from the augmented system with Baumgarte stabilisation (forces in work.force)."""
     nb = system.body_mass.shape[0]
@@ -291,7 +291,7 @@ def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Worksp
         qdd[c] = v
 
 
-@njit(cache=True)
+@kernel
 def constraint_violation(y: np.ndarray, system: SpatialSystem, phi_q: np.ndarray) -> tuple[float, float, float]:
     """||Phi|| and ||Phidot|| over the joints, and ||p.p - 1|| over the bodies (Euler normalisation)."""
     pos = 0.0

@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
 from biped_sim.contact.response import (
@@ -35,6 +34,7 @@ from biped_sim.contact.response import (
     normal_response,
     stored_energy,
 )
+from biped_sim.kernel import kernel
 from biped_sim.multibody.euler_parameters import (
     attitude,
     b_mul,
@@ -61,7 +61,7 @@ from biped_sim.multibody.spatial import (
 )
 
 
-@njit(cache=True)
+@kernel
 def foot_kinematics(
     y: np.ndarray, system: SpatialSystem, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
@@ -100,14 +100,14 @@ def foot_kinematics(
     return -py, -(v[1] + w[1]), v[0] + w[0], v[2] + w[2], px, pz, s[0], s[1], s[2]
 
 
-@njit(cache=True)
+@kernel
 def foot_contact(y: np.ndarray, system: SpatialSystem, foot: int) -> tuple[float, float, float]:
     """(delta, delta_dot, x_contact) of a foot: what the events and the mode update read (foot_kinematics)."""
     kin = foot_kinematics(y, system, foot)
     return kin[0], kin[1], kin[4]
 
 
-@njit(cache=True)
+@kernel
 def foot_forces(
     y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float, float, float, float, float]:
@@ -141,7 +141,7 @@ def foot_forces(
     return f_n, f_x, f_z, zdx, zdz, p_normal, p_friction, delta, delta_dot, vx, vz, s0, s1, s2
 
 
-@njit(cache=True)
+@kernel
 def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
     nb = system.body_mass.shape[0]
@@ -185,7 +185,7 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
 # ---------------------------------------------------------------- energy and falls
 
 
-@njit(cache=True)
+@kernel
 def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; kinetic = m rdot^2/2 + omega'.J' omega'/2, omega' = 2 G pdot."""
     nb = system.body_mass.shape[0]
@@ -205,7 +205,7 @@ def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -
     return kinetic, potential, elastic
 
 
-@njit(cache=True)
+@kernel
 def has_fallen(y: np.ndarray, system: SpatialSystem) -> bool:
     """Fall: the hip (point s_a of primitive 0) below the height limit, or a body's legs tilted past the limit angle."""
     nb = system.body_mass.shape[0]

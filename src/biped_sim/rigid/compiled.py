@@ -24,7 +24,6 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from biped_sim.integrate.dense import dense_eval, dop853_coefficients, dop853_extra_stage_input
 from biped_sim.integrate.stepper import (
@@ -37,6 +36,7 @@ from biped_sim.integrate.stepper import (
     stage_input,
 )
 from biped_sim.integrate.tableaus import Tableau, tableau
+from biped_sim.kernel import kernel
 from biped_sim.rigid.kernels import (
     COMPASS,
     SIMPLEST,
@@ -108,7 +108,7 @@ def compile_walker(walker: RigidWalker) -> CompiledWalker:
     return CompiledWalker(kind, params, tableau("dop853"), make_scratch(ny, 1, N_EVENTS), np.zeros(4), t_limit)
 
 
-@njit(cache=True)
+@kernel
 def _events(kind: int, p: np.ndarray, phase: int, y: np.ndarray, out: np.ndarray) -> int:
     """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
     out[0] = guard(kind, p, phase, y)
@@ -118,14 +118,14 @@ def _events(kind: int, p: np.ndarray, phase: int, y: np.ndarray, out: np.ndarray
     return n + 1
 
 
-@njit(cache=True)
+@kernel
 def _crossed(j: int, g_old: float, g_new: float) -> bool:
     """Event j crossed over the step: the guard (j = 0) downward only, a fall function either way (as scipy)."""
     down = g_old >= 0.0 and g_new <= 0.0
     return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
 
 
-@njit(cache=True)
+@kernel
 def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
@@ -133,7 +133,7 @@ def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.nda
     return initial_step_size(tab, sc, h0, d1, span)
 
 
-@njit(cache=True)
+@kernel
 def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
@@ -141,12 +141,12 @@ def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarr
     dop853_coefficients(tab, h, y, sc)
 
 
-@njit(cache=True)
+@kernel
 def _event_value(kind: int, p: np.ndarray, phase: int, j: int, y: np.ndarray) -> float:
     return guard(kind, p, phase, y) if j == 0 else fall_check(kind, p, j - 1, y)
 
 
-@njit(cache=True)
+@kernel
 def _root(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, j: int, t: float, h: float, y: np.ndarray):
     """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
     lo, hi = 0.0, 1.0
@@ -176,7 +176,7 @@ def _root(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, j: in
     return lo if abs(g_lo) < abs(g_hi) else hi
 
 
-@njit(cache=True)
+@kernel
 def _phase(cw: CompiledWalker, phase: int, t: float, y: np.ndarray, counters: np.ndarray) -> tuple[int, float]:
     """Integrate from (t, y) to the phase's guard, a fall or the time limit; y ends at the event (in place)."""
     kind, p, tab, sc = cw.kind, cw.params, cw.tab, cw.sc
@@ -228,7 +228,7 @@ def _phase(cw: CompiledWalker, phase: int, t: float, y: np.ndarray, counters: np
     return STALLED, t
 
 
-@njit(cache=True)
+@kernel
 def _polish(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
     """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2); returns the new t."""
     kind, p, sc = cw.kind, cw.params, cw.sc
@@ -252,7 +252,7 @@ def _polish(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, counters: n
     return t
 
 
-@njit(cache=True)
+@kernel
 def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_plus: np.ndarray, counters: np.ndarray):
     """One step from a post-impact state: (status, duration); x_minus = the state at its end, x_plus after
     the strike (left untouched unless the status is STRIKE)."""
@@ -267,7 +267,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     return STRIKE, t
 
 
-@njit(cache=True)
+@kernel
 def walk_kernel(
     cw: CompiledWalker, starts: np.ndarray, max_steps: int, status: np.ndarray, steps: np.ndarray, last: np.ndarray
 ) -> None:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from biped_sim.kernel import kernel
 
 SIMPLEST, COMPASS, WHEEL = 0, 1, 2
 P_NQ, P_L, P_R, P_D, P_G, P_SLOPE, P_FALL, P_HALF, P_NB, P_BODIES = range(10)
@@ -28,7 +29,7 @@ BODY_FIELDS = 5  # mass, inertia, leg, distance, offset
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of l counts as a fall (as rigid/stepping.py)
 
 
-@njit(cache=True)
+@kernel
 def _hip_derivatives(p: np.ndarray, theta: float) -> tuple[float, float, float, float]:
     """d(hip)/d(theta_st) and d2(hip)/d(theta_st)^2 (x, y each) for the rolling stance foot."""
     lr, r, d = p[P_L] - p[P_R], p[P_R], p[P_D]
@@ -36,7 +37,7 @@ def _hip_derivatives(p: np.ndarray, theta: float) -> tuple[float, float, float, 
     return -r - lr * c + d * s, -lr * s - d * c, lr * s + d * c, -lr * c + d * s
 
 
-@njit(cache=True)
+@kernel
 def _body_terms(p: np.ndarray, b: int, q: np.ndarray, qd: np.ndarray, leg: int) -> tuple:
     """Body b's Jacobian columns (j0x, j0y, j1x, j1y) and bias acceleration Jdot qd (bx, by), carried by ``leg``."""
     base = P_BODIES + BODY_FIELDS * b
@@ -52,7 +53,7 @@ def _body_terms(p: np.ndarray, b: int, q: np.ndarray, qd: np.ndarray, leg: int) 
     return hx, hy, cx, cy, bx, by
 
 
-@njit(cache=True)
+@kernel
 def _solve(m00: float, m01: float, m11: float, f0: float, f1: float, n: int) -> tuple[float, float]:
     """Solution of the symmetric 1x1 or 2x2 system M a = f."""
     if n == 1:
@@ -61,7 +62,7 @@ def _solve(m00: float, m01: float, m11: float, f0: float, f1: float, n: int) -> 
     return (m11 * f0 - m01 * f1) / det, (m00 * f1 - m01 * f0) / det
 
 
-@njit(cache=True)
+@kernel
 def _chain_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """Kane's equations M(q) qdd = sum_b J_b^T m_b (g - Jdot_b qd), M = sum_b m_b J_b^T J_b + I_b e_b e_b^T."""
     n = int(p[P_NQ])
@@ -88,7 +89,7 @@ def _chain_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
         out[3] = a1
 
 
-@njit(cache=True)
+@kernel
 def _simplest_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """Garcia's equations (MODEL.md 8); x = (theta, theta_sw, thetadot, thetadot_sw), phi = theta - theta_sw."""
     theta, theta_sw, theta_d, theta_sw_d = x[0], x[1], x[2], x[3]
@@ -101,7 +102,7 @@ def _simplest_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     out[3] = theta_dd - phi_dd
 
 
-@njit(cache=True)
+@kernel
 def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt of the walker ``kind``."""
     if kind == SIMPLEST:
@@ -110,7 +111,7 @@ def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
         _chain_rhs(p, x, out)
 
 
-@njit(cache=True)
+@kernel
 def strike_angle_offset(kind: int, p: np.ndarray) -> float:
     """phi = atan2(d, l - R): the offset foot's arc centre leans phi from the leg axis (0 without an offset)."""
     if kind != COMPASS or p[P_D] == 0.0:
@@ -118,7 +119,7 @@ def strike_angle_offset(kind: int, p: np.ndarray) -> float:
     return math.atan2(p[P_D], p[P_L] - p[P_R])
 
 
-@njit(cache=True)
+@kernel
 def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
     """Phase 0: the hip passing over the stance arc centre (x[0] + phi); phase 1: the heel strike (downward zero).
 
@@ -134,7 +135,7 @@ def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
     return x[0] + x[1] if phi == 0.0 else x[0] + x[1] + 2.0 * phi
 
 
-@njit(cache=True)
+@kernel
 def guard_rate(kind: int, p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarray) -> float:
     """Time derivative of :func:`guard` along the flow f = dx/dt."""
     if phase == 0 or kind == WHEEL:
@@ -142,19 +143,19 @@ def guard_rate(kind: int, p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarra
     return f[0] + f[1]
 
 
-@njit(cache=True)
+@kernel
 def first_phase(kind: int) -> int:
     """The wheel's step has only the strike phase; the bipeds first wait for the stance leg to pass the normal."""
     return 1 if kind == WHEEL else 0
 
 
-@njit(cache=True)
+@kernel
 def n_fall_checks(kind: int, p: np.ndarray) -> int:
     """Fall functions: one per leg angle, then the hip height."""
     return (2 if kind == SIMPLEST else int(p[P_NQ])) + 1
 
 
-@njit(cache=True)
+@kernel
 def fall_check(kind: int, p: np.ndarray, i: int, x: np.ndarray) -> float:
     """Fall function i (positive while standing): fall angle - |leg angle i|, or hip height - 0.05 l."""
     n = n_fall_checks(kind, p) - 1
@@ -165,7 +166,7 @@ def fall_check(kind: int, p: np.ndarray, i: int, x: np.ndarray) -> float:
     return height - FALL_HIP_FRACTION * p[P_L]
 
 
-@njit(cache=True)
+@kernel
 def _simplest_impact(x: np.ndarray, out: np.ndarray) -> None:
     """MODEL.md 8: theta+ = -theta-, thetadot+ = cos 2theta thetadot-, phi+ = -2 theta-,
     phidot+ = cos 2theta (1 - cos 2theta) thetadot-; theta_sw = theta - phi."""
@@ -178,7 +179,7 @@ def _simplest_impact(x: np.ndarray, out: np.ndarray) -> None:
     out[3] = theta_d_p - c2 * (1.0 - c2) * theta_d
 
 
-@njit(cache=True)
+@kernel
 def _chain_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, out: np.ndarray) -> None:
     """Plastic strike: (J'^T M J') qd+ = J'^T M v-, v- = J qd- the bodies' velocities before; legs relabelled."""
     n = int(p[P_NQ])
@@ -217,7 +218,7 @@ def _chain_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, o
         out[3] = a1
 
 
-@njit(cache=True)
+@kernel
 def rigid_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, out: np.ndarray) -> None:
     """out = the post-impact state (new stance leg first) from the pre-impact state x (q_work: 4 scratch floats)."""
     if kind == SIMPLEST:
