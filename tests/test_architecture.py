@@ -118,4 +118,5 @@ def test_compiled_cache_key_ignores_modules_without_compiled_code(name: str) -> 
     compiled = {module_name(path) for path in compiled_sources()}
     assert f"biped_sim.{name}" in sources()  # the module exists: a renamed one would pass below for nothing
     assert "biped_sim.multibody.planar" in compiled  # the key does cover the compiled core
+    assert "biped_sim.rigid.kernels" in compiled  # and compiled code outside it (its kernels import no numba)
     assert f"biped_sim.{name}" not in compiled

@@ -6,7 +6,7 @@ inlined) in another file does: an edited force law would otherwise keep running 
 inside the cached integrator loop. Keying the cache directory on a hash of every source that compiled
 code is built from makes any such edit start a fresh cache, while an edit of plain Python (plots, CLI,
 reports) keeps it. Those sources are the packages of the compiled core (whose module constants are
-frozen into the kernels too) and any other module that imports numba. Must run before any
+frozen into the kernels too) and any other module that imports numba or the kernel decorator. Must run before any
 compiled function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user wins.
 """
 
@@ -24,7 +24,7 @@ from numba.core import event
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_PACKAGES = ("contact", "multibody", "integrate")
-_IMPORTS_NUMBA = re.compile(r"^\s*(from numba\b|import numba\b)", re.M)
+_COMPILES = re.compile(r"^\s*(from numba\b|import numba\b|from biped_sim\.kernel import)", re.M)
 
 
 def compiled_sources() -> list[Path]:
@@ -32,7 +32,7 @@ def compiled_sources() -> list[Path]:
     paths = []
     for path in sorted(PACKAGE.rglob("*.py")):
         in_core = path.relative_to(PACKAGE).parts[0] in COMPILED_PACKAGES
-        if in_core or _IMPORTS_NUMBA.search(path.read_text()):
+        if in_core or _COMPILES.search(path.read_text()):
             paths.append(path)
     return paths
 

@@ -21,7 +21,6 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
-from numba.extending import register_jitable
 
 from biped_sim.contact.response import TOUCHDOWN, TOUCHING, ContactBuffers
 from biped_sim.kernel import kernel
@@ -94,7 +93,7 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
     )
 
 
-@register_jitable(inline="always")  # plain Python for the driver's check per chunk of steps, inlined in the loop
+@kernel
 def has_room(rec: Recorder, nf: int) -> bool:
     """Whether one more event fits: it logs at most one row and makes at most one heel strike per foot."""
     st = rec.state[0]
