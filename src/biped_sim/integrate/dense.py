@@ -13,7 +13,6 @@ from numba import njit
 from biped_sim.integrate.stepper import Scratch
 from biped_sim.integrate.tableaus import DOPRI5, Tableau
 from biped_sim.kernel import kernel
-from biped_sim.multibody.dispatch import system_rhs
 from biped_sim.multibody.events import system_event_functions
 
 EVENT_TIME_TOL = 1e-12  # [s] width of the bracket that locates an event
@@ -49,30 +48,23 @@ def dop853_coefficients(tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> N
 
 
 @kernel
-def prepare_dense(
-    tab: Tableau, t: float, h: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, sc: Scratch, st
-) -> None:
-    """Dense-output coefficients of the last step (dop853 needs three extra stages).
+def dense_coefficients(tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+    """Dense-output coefficients of the last step, from its stages in ``sc.k`` (dop853: the three extra ones too).
 
     dopri5: Shampine's quartic, y(t + theta h) = y + h sum_j (sum_s k[s] p[s, j]) theta^(j+1);
-    dop853: Hairer's degree-7 interpolant from the 12 stages, the FSAL stage and three extra ones.
-    ``st`` is the recorder's loop-state record (it counts the evaluations).
+    dop853: Hairer's degree-7 interpolant from the 12 stages, the FSAL stage and three extra ones
+    (:func:`dop853_extra_stage_input`; the loop evaluates them, so that only it calls the right-hand side).
     """
-    ny = y.shape[0]
-    k = sc.k
-    if tab.kind == DOPRI5:
-        for j in range(4):
-            for i in range(ny):
-                v = 0.0
-                for s in range(tab.stages + 1):
-                    v += k[s, i] * tab.p[s, j]
-                sc.dense[j, i] = v
-    else:
-        for e in range(3):
-            stage = dop853_extra_stage_input(tab, h, y, sc, e)
-            system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, k[stage])
-            st.rhs_evals += 1
+    if tab.kind != DOPRI5:
         dop853_coefficients(tab, h, y, sc)
+        return
+    k = sc.k
+    for j in range(4):
+        for i in range(y.shape[0]):
+            v = 0.0
+            for s in range(tab.stages + 1):
+                v += k[s, i] * tab.p[s, j]
+            sc.dense[j, i] = v
 
 
 @kernel

@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.integrate.dense import dense_eval, locate_event, prepare_dense
+from biped_sim.integrate.dense import dense_coefficients, dense_eval, dop853_extra_stage_input, locate_event
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
@@ -42,7 +42,7 @@ from biped_sim.integrate.recorder import (
     record_sample,
 )
 from biped_sim.integrate.stepper import Loop, error_norm, initial_step, propagate, stage_input
-from biped_sim.integrate.tableaus import FIXED
+from biped_sim.integrate.tableaus import DOPRI5, FIXED
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_has_fallen, system_rhs
 from biped_sim.multibody.events import system_event_functions
@@ -148,7 +148,12 @@ def _locate_and_sample(loop: Loop, t: float, h: float, crossed: bool, cfg: Setti
     st = rec.state[0]
     theta_end = 1.0
     if cfg.control:  # an event or a sample is inside the step: both read the dense output
-        prepare_dense(tab, t, h, y, system, modes, work, sc, st)
+        if tab.kind != DOPRI5:  # DOP853's interpolant needs three more stages
+            for e in range(3):
+                stage = dop853_extra_stage_input(tab, h, y, sc, e)
+                system_rhs(t + tab.c_extra[e] * h, sc.y_stage, system, modes, work, sc.k[stage])
+                st.rhs_evals += 1
+        dense_coefficients(tab, h, y, sc)
         if crossed:
             theta_end = locate_event(tab, h, y, system, sc)
             if theta_end < 1.0:
