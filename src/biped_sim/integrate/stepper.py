@@ -5,10 +5,10 @@ a_sj k[j]) of every method live in its rows, with the FSAL stage f(t + h, y_new)
 methods in row ``tab.stages`` (it is the next step's k[0]). Error control follows Hairer, Norsett &
 Wanner (Solving ODEs I, II.4) as scipy does, so dopri5 takes scipy RK45's steps. What one call of
 the loop works on is one :class:`Loop`; the pieces called at every step take the arrays they use
-one by one instead: in compiled code every array of a tuple handed to a function costs an atomic
-reference-count update at its entry and exit, which at 1e5 steps per second would cost a tenth of
-the run time. For the same reason the loop itself calls the right-hand side for each stage
-(:func:`stage_input`, :func:`propagate` are the arithmetic of a step).
+one by one instead, and the loop itself calls the right-hand side for each stage (:func:`stage_input`,
+:func:`propagate` are the arithmetic of a step), inlined in it. The loop counts no references
+(:func:`biped_sim.kernel.kernel`): the arrays it hands on carry no memory-info pointer, so the
+kernels it calls skip their own count updates too (an atomic one per array argument, at entry and exit).
 """
 
 from __future__ import annotations
