@@ -134,9 +134,10 @@ def notes(result: dict[str, Any]) -> list[str]:
     startup = result.get("startup", {})
     if "cold" in startup:
         cold = startup["cold"]
+        compiling = cold["build_s"] + cold["first_integration_s"]
         lines.append(
-            f"Cold first run (empty numba cache): {cold['to_first_step_s']:.1f} s from the shell to the first "
-            f"integration step (compiling: {cold['build_s'] + cold['first_integration_s']:.1f} s)."
+            f"Cold first run (empty numba cache, median of {cold.get('runs', 1)}): {cold['to_first_step_s']:.1f} s "
+            f"from the shell to the first integration step (compiling: {compiling:.1f} s)."
         )
     if "cached" in startup:
         cached = startup["cached"]

@@ -37,7 +37,7 @@ from biped_sim.integrate.recorder import (
     STEPS_COLLAPSED,
     TOO_MANY_FORCED,
     apply_events,
-    copy_rows,
+    copy_vector,
     has_room,
     record_sample,
 )
@@ -236,15 +236,15 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
         if crossed or _sample_due(st.n_samples, rec.sample_t.shape[0], t_new, h, cfg):  # else nothing happens inside
             t_new, theta_end = _locate_and_sample(loop, t, h, crossed, cfg)
         t = t_new if not last or theta_end < 1.0 else cfg.t_end
-        copy_rows(y, sc.y_new)
+        copy_vector(y, sc.y_new)
         if theta_end < 1.0:
             st.fsal_valid = 0
         if crossed:
             room = _update_at_event(loop, t, cfg.max_strikes)
         else:
-            copy_rows(sc.g_old, sc.g_new)
+            copy_vector(sc.g_old, sc.g_new)
         if tab.kind != FIXED and st.fsal_valid == 1:
-            copy_rows(sc.k[0], sc.k[tab.stages])
+            copy_vector(sc.k[0], sc.k[tab.stages])
         h = h_next
         if system_has_fallen(y, system):
             _stop(st, FELL, t)

@@ -123,15 +123,22 @@ def with_room(rec: Recorder, nf: int) -> Recorder:
 
 
 @njit(cache=True, inline="always")
-def copy_rows(dst: np.ndarray, src: np.ndarray) -> None:
-    """dst[:] = src for a 1-D or 2-D ``src`` (C order), element by element.
+def copy_vector(dst: np.ndarray, src: np.ndarray) -> None:
+    """dst[:] = src for 1-D arrays, element by element.
 
     Written out because numba compiles a slice assignment with a shape check whose error message
     (string formatting of the shapes) costs about 2 s of compilation on a cold cache.
     """
-    flat_dst, flat_src = dst.reshape(dst.size), src.reshape(src.size)
-    for i in range(flat_src.shape[0]):
-        flat_dst[i] = flat_src[i]
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, inline="always")
+def copy_matrix(dst: np.ndarray, src: np.ndarray) -> None:
+    """dst[:, :] = src for 2-D arrays, element by element (as :func:`copy_vector`)."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @kernel
@@ -141,8 +148,8 @@ def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> 
     k = st.n_samples
     if k < rec.sample_t.shape[0]:
         rec.sample_t[k] = t
-        copy_rows(rec.sample_y[k], y)
-        copy_rows(rec.sample_modes[k], modes)
+        copy_vector(rec.sample_y[k], y)
+        copy_matrix(rec.sample_modes[k], modes)
         st.n_samples = k + 1
 
 
@@ -193,8 +200,8 @@ def apply_events(
             k = st.n_strikes
             rec.strike_t[k] = t
             rec.strike_foot[k] = i
-            copy_rows(rec.strike_y[k], y)
-            copy_rows(rec.strike_modes[k], modes)
+            copy_vector(rec.strike_y[k], y)
+            copy_matrix(rec.strike_modes[k], modes)
             st.n_strikes = k + 1
             st.last_strike_foot = i
             if max_strikes > 0 and k + 1 >= max_strikes:
