@@ -84,9 +84,8 @@ def by_type(name: str, key: str, implementations: Mapping[type, Any]) -> Callabl
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, inline="always", jit_options=kernel_options())(
-        typer
-    )  # numba IR inlining: no call layer, no reference counts for it
+    # numba IR inlining: no call layer, no reference counts for it
+    overload(generic, inline="always", jit_options=kernel_options())(typer)
     generic.__name__ = generic.__qualname__ = name
     generic.__signature__ = signature  # type: ignore[attr-defined]
     return generic
