@@ -4,10 +4,10 @@ numba compiles each jitted function with a CPython wrapper (and a C one) that un
 when Python calls it. The engine's kernels are called from compiled code, almost never from Python,
 and take the formulation's system and the loop's buffers: NamedTuples of dozens of arrays, whose
 unboxing code is large and is compiled, optimised and turned into machine code for every kernel.
-A :class:`Kernel` has no wrapper, which changes nothing at run time and shortens a first run's
+A :class:`Kernel` has no wrapper, which costs compiled callers nothing and shortens a first run's
 compilation (``make bench``: the cold first run). Python can still call it (a test, the driver, a
-user): the call goes to a twin with the wrapper, compiled on first use and cached under its own
-name, so both callers share one source.
+user): the call goes through one more Python frame to a twin with the wrapper, compiled on first use
+and cached under its own name, so both callers share one source.
 
 ``kernel(reference_counts=False)`` also turns numba's reference counting off inside the function, for
 a loop that holds many arrays and allocates none (numba refuses to compile an allocation there). The
