@@ -89,6 +89,29 @@ def dense_eval(tab: Tableau, theta: float, h: float, y: np.ndarray, sc: Scratch,
 
 
 @njit(cache=True, inline="always")
+def illinois_point(lo: float, hi: float, g_lo: float, g_hi: float) -> float:
+    """The next point of the Illinois method in the bracket [lo, hi] (regula falsi; bisection when it leaves it)."""
+    mid = lo - g_lo * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
+    return mid if lo < mid < hi else 0.5 * (lo + hi)
+
+
+@njit(cache=True, inline="always")
+def illinois_update(
+    lo: float, hi: float, g_lo: float, g_hi: float, side: int, mid: float, g: float, replaces_lo: bool
+) -> tuple[float, float, float, float, int]:
+    """The bracket after the value g at mid: it replaces the ``lo`` end or the ``hi`` end (the caller's sign
+    test). An end kept twice in a row has its value halved (Illinois), so the bracket shrinks from both sides.
+    ``side`` is -1 or 1 after a replaced lo or hi end (0 at the start). Returns (lo, hi, g_lo, g_hi, side)."""
+    if replaces_lo:
+        if side == -1:
+            g_hi *= 0.5
+        return mid, hi, g, g_hi, -1
+    if side == 1:
+        g_lo *= 0.5
+    return lo, mid, g_lo, g, 1
+
+
+@njit(cache=True, inline="always")
 def locate_event(tab: Tableau, h: float, y: np.ndarray, system: tuple, sc: Scratch) -> float:
     """Earliest sign change of the event functions inside the step, as theta in (0, 1].
 
@@ -106,22 +129,10 @@ def locate_event(tab: Tableau, h: float, y: np.ndarray, system: tuple, sc: Scrat
         for _ in range(100):
             if (hi - lo) * h <= EVENT_TIME_TOL:
                 break
-            denom = g_hi - g_lo
-            mid = lo - g_lo * (hi - lo) / denom if denom != 0.0 else 0.5 * (lo + hi)
-            if not (lo < mid < hi):
-                mid = 0.5 * (lo + hi)
+            mid = illinois_point(lo, hi, g_lo, g_hi)
             dense_eval(tab, mid, h, y, sc, sc.y_dense)
             system_event_functions(sc.y_dense, system, sc.g_mid)
             g = sc.g_mid[j]
-            if (g > 0.0) == (g_lo > 0.0):
-                lo, g_lo = mid, g
-                if side == -1:
-                    g_hi *= 0.5
-                side = -1
-            else:
-                hi, g_hi = mid, g
-                if side == 1:
-                    g_lo *= 0.5
-                side = 1
+            lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, (g > 0.0) == (g_lo > 0.0))
         theta_event = min(theta_event, hi)
     return theta_event

@@ -25,7 +25,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from biped_sim.integrate.dense import dense_eval, dop853_coefficients, dop853_extra_stage_input
+from biped_sim.integrate.dense import (
+    dense_eval,
+    dop853_coefficients,
+    dop853_extra_stage_input,
+    illinois_point,
+    illinois_update,
+)
 from biped_sim.integrate.stepper import (
     Scratch,
     error_norm,
@@ -158,21 +164,11 @@ def _root(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, j: in
     for _ in range(200):
         if hi - lo <= tol or g_lo == 0.0:
             break
-        mid = lo - g_lo * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
-        if not (lo < mid < hi):
-            mid = 0.5 * (lo + hi)
+        mid = illinois_point(lo, hi, g_lo, g_hi)
         dense_eval(tab, mid, h, y, sc, sc.y_dense)
         g = _event_value(kind, p, phase, j, sc.y_dense)
-        if (g > 0.0) == (g_lo > 0.0) and g != 0.0:
-            lo, g_lo = mid, g
-            if side == -1:
-                g_hi *= 0.5
-            side = -1
-        else:
-            hi, g_hi = mid, g
-            if side == 1:
-                g_lo *= 0.5
-            side = 1
+        same_sign = (g > 0.0) == (g_lo > 0.0) and g != 0.0
+        lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, same_sign)
     return lo if abs(g_lo) < abs(g_hi) else hi
 
 
