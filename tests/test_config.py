@@ -97,3 +97,14 @@ def test_non_positive_physical_quantities_are_rejected(field: str, value: float)
     with pytest.raises(ConfigError) as info:
         config_from_dict({}, [f"{field}={value!r}"])
     assert info.value.field == field
+
+
+def test_derive_sets_dotted_keys_and_validates_the_variant() -> None:
+    from biped_sim.config import derive
+
+    base = load_config(DEFAULT_CONFIG)
+    variant = derive(base, {"ground.slope": 0.0125, "contact.model": "hunt_crossley"})
+    assert (variant.ground.slope, variant.contact.model) == (0.0125, "hunt_crossley")
+    assert variant.walker == base.walker and base.ground.slope != 0.0125  # the base is untouched
+    with pytest.raises(ConfigError, match=r"walker\.leg_length"):
+        derive(base, {"walker.leg_length": -1.0})

@@ -207,3 +207,12 @@ def test_bad_sweep_input_is_one_line_exit_2_and_writes_nothing(
     assert result.exit_code == 2, result.output
     assert expected in one_line_error(result.stderr)
     assert sorted(tmp_path.iterdir()) == before
+
+
+def test_study_executor_is_serial_for_one_local_job_and_a_pool_otherwise() -> None:
+    from biped_sim.sweep import study_executor
+
+    with study_executor("local", 1) as serial:
+        assert serial is None
+    with study_executor("local", 2) as pool:
+        assert pool is not None and pool.submit(abs, -3).result() == 3

@@ -19,6 +19,7 @@ from biped_sim.sweep.runner import (
     make_executor,
     pending_runs,
     run_sweep,
+    study_executor,
 )
 from biped_sim.sweep.spec import RangeSpec, RunSpec, Sweep, SweepSpec, check_buildable, expand, load_sweep
 
@@ -40,4 +41,5 @@ __all__ = [
     "pending_runs",
     "read_sweep",
     "run_sweep",
+    "study_executor",
 ]

@@ -128,6 +128,20 @@ def make_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterato
         raise ConfigError("--executor", f"unknown executor {kind!r}; expected local or dask")
 
 
+@contextlib.contextmanager
+def study_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterator[Executor | None]:
+    """A study's executor: None (run in this process, no pool) for one local job, else :func:`make_executor`'s.
+
+    Studies take ``executor: Executor | None`` and run serially on None: one job gains nothing from a
+    pool and would pay its start-up and each worker's compilation.
+    """
+    if kind == "local" and jobs == 1 and scheduler is None:
+        yield None
+        return
+    with make_executor(kind, jobs, scheduler) as executor:
+        yield executor
+
+
 @dataclass(frozen=True)
 class RunTask:
     """What a worker needs for one run (plain data: pickles to any process or cluster node)."""
