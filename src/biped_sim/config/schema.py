@@ -327,8 +327,6 @@ class Config(_Strict):
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""
         data = self.model_dump(mode="json")
         data["output"].pop("dir", None)
-        if data["ground"]["profile"] == {"kind": "flat"}:  # the configs of before profiles keep their hash
-            del data["ground"]["profile"]
         text = json.dumps(data, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
