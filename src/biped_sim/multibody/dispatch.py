@@ -16,12 +16,8 @@ import inspect
 from collections.abc import Callable
 from typing import Any
 
-from numba import types
-from numba.extending import overload
-
-from biped_sim.contact.registry import implementation_of
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
-from biped_sim.kernel import kernel_options
+from biped_sim.kernel import overload_by_type
 from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
 
@@ -52,9 +48,9 @@ def formulation_of(system: tuple) -> Formulation:
 def _generic_kernel(kernel: str) -> Callable[..., Any]:
     """``system_<kernel>``: calls ``kernel`` of the formulation of its ``system`` argument.
 
-    Compiled, numba resolves the call at compile time from the type of ``system`` (the typing
-    function below) and compiles the formulation's kernel in its place; in Python it looks the
-    kernel up in the registry. Both functions show the parameters of ``KERNEL_SIGNATURES``.
+    Compiled, numba resolves the call at compile time from the type of ``system``
+    (:func:`~biped_sim.kernel.overload_by_type`) and compiles the formulation's kernel in its place; in
+    Python it looks the kernel up in the registry. Both functions show the parameters of ``KERNEL_SIGNATURES``.
     """
     parameters = KERNEL_SIGNATURES[kernel]
     at = parameters.index("system")
@@ -65,17 +61,14 @@ def _generic_kernel(kernel: str) -> Callable[..., Any]:
     def generic(*args: Any) -> Any:
         return getattr(formulation_of(args[at]), kernel)(*args)
 
-    def typer(*args):  # type: ignore[no-untyped-def]  # typed by __signature__: numba compares it with the kernel's
-        system = args[at]
-        if isinstance(system, types.BaseNamedTuple) and system.instance_class in FORMULATIONS:
-            return implementation_of(getattr(FORMULATIONS[system.instance_class], kernel))
-        return None
+    def kernel_of(system_type: type) -> Any:
+        formulation = FORMULATIONS.get(system_type)
+        return None if formulation is None else getattr(formulation, kernel)
 
-    typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, jit_options=kernel_options())(typer)
     generic.__name__ = generic.__qualname__ = f"system_{kernel}"
     generic.__doc__ = f"``{kernel}`` of the formulation of ``system`` (compiled: resolved by type)."
     generic.__signature__ = signature  # type: ignore[attr-defined]
+    overload_by_type(generic, "system", kernel_of, inline=False)
     return generic
 
 

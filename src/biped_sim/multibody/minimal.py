@@ -22,12 +22,9 @@ builders' output) into this formulation, so both describe the same walker by con
 from __future__ import annotations
 
 import math
-from types import FunctionType
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
-from numba.core.dispatcher import Dispatcher
 
 from biped_sim.contact.ground import FLAT_GROUND, FlatGround, Ground, ProfileGround, ground_clearance
 from biped_sim.contact.registry import by_type
@@ -41,7 +38,7 @@ from biped_sim.contact.response import (
     ground_forces,
     is_loaded,
 )
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 
@@ -86,28 +83,11 @@ def make_workspace(system: MinimalSystem) -> Workspace:
     return Workspace(np.zeros((system.body_mass.shape[0] + system.foot_body.shape[0], N_COLUMNS)))
 
 
-def _inlined(kernel: Dispatcher) -> Dispatcher:
-    """The compiled ``kernel`` (same source) made to be inlined where it is called, with its compiled callees.
-
-    The contact response is written once for every formulation (:mod:`biped_sim.contact.response`) as
-    ordinary compiled functions. Called from this right-hand side, a call passes every array as seven
-    machine words, and the call and the reference counts numba adds around it cost about 0.05 us per
-    loaded foot (measured: 0.41 against 0.36 us per evaluation of the default walker, bench method).
-    Inlined (numba's ``inline="always"``), that cost goes. The copy runs the kernel's own code object,
-    so each equation keeps one source; the laws reached through the registry tuples (``literal_unroll``)
-    are direct calls that LLVM inlines already.
-    """
-    function = kernel.py_func
-    names = dict(function.__globals__)
-    for name in function.__code__.co_names:
-        if isinstance(names.get(name), Dispatcher):
-            names[name] = _inlined(names[name])
-    code = FunctionType(function.__code__, names, function.__name__, function.__defaults__, function.__closure__)
-    return njit(inline="always")(code)
-
-
-_ground_forces = _inlined(ground_forces)
-_is_loaded = _inlined(is_loaded)
+# the contact response is written once for every formulation as ordinary kernels; inlined here, the call and the
+# reference counts around it go (about 0.05 us per loaded foot and evaluation); the laws reached through the
+# registry tuples are direct calls that LLVM inlines already
+_ground_forces = inlined(ground_forces)
+_is_loaded = inlined(is_loaded)
 
 
 @kernel
