@@ -2,7 +2,7 @@
 
 Every formulation is one :class:`~biped_sim.multibody.formulation.Formulation` record, registered
 below with one line. Compiled code calls the generic ``system_*`` kernels (one per entry of
-``KERNEL_SIGNATURES``: ``system_rhs``, ``system_foot_contact``, ``system_has_fallen``);
+``KERNEL_SIGNATURES``: ``system_rhs``, ``system_foot_contact``, ``system_fall``, ``system_audit``);
 :func:`_generic_kernel` makes each of them and registers a numba ``@overload`` that resolves the call
 at compile time from the type of ``system`` (the formulation's NamedTuple class), so one loop source
 serves every formulation and each specialisation is cached on disk. Called from Python, the same
@@ -74,7 +74,8 @@ def _generic_kernel(kernel: str) -> Callable[..., Any]:
 
 system_rhs = _generic_kernel("rhs")
 system_foot_contact = _generic_kernel("foot_contact")
-system_has_fallen = _generic_kernel("has_fallen")
+system_fall = _generic_kernel("fall")
+system_audit = _generic_kernel("audit")
 
 
 def measures(system: tuple) -> Measures:

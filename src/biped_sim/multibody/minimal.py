@@ -31,7 +31,10 @@ from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
+    HIP_TOO_LOW,
     IMPACT_FLOOR,
+    LEG_TOO_FAR,
+    STANDING,
     arc_contact,
     arc_energy,
     arc_forces,
@@ -282,14 +285,22 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
 
 
 @kernel
-def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
-    """Fall: hip below the height limit over the ground under it, or any body rotated past the leg-angle limit."""
+def fall(y: np.ndarray, system: MinimalSystem) -> int:
+    """HIP_TOO_LOW: hip below the height limit over the ground under it; LEG_TOO_FAR: a body rotated past the
+    leg-angle limit; else STANDING."""
     if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:
-        return True
+        return HIP_TOO_LOW
     for b in range(system.body_mass.shape[0]):
         if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
-            return True
-    return False
+            return LEG_TOO_FAR
+    return STANDING
+
+
+@kernel
+def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
+    """(mechanical energy [J], 0): the coordinates hold the hip joints exactly, so there is no drift."""
+    kinetic, potential, elastic = mechanical_energy(y, system, modes)
+    return kinetic + potential + elastic, 0.0
 
 
 # ---------------------------------------------------------------- conversion and post-processing (Python side)
@@ -399,7 +410,8 @@ FORMULATION = Formulation(
     system_type=MinimalSystem,
     rhs=rhs,
     foot_contact=foot_contact,
-    has_fallen=has_fallen,
+    fall=fall,
+    audit=audit,
     make_workspace=make_workspace,
     measures=Measures(
         pitch=pitch,
