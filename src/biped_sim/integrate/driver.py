@@ -44,6 +44,7 @@ FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 STIFF_METHODS = ("radau", "bdf")  # scipy's implicit methods over the compiled right-hand side
 TIMEOUT_REASON = "simulation.max_wall_time reached"
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged", TIMEOUT: "timeout"}
+STRIKES_PER_SECOND = 50  # the strike buffers' first size per simulated second (they grow; a walker takes ~2)
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
 PUSH_COLUMNS = ("time", "first_sample", "work")  # a push record: when, the first sample after it, its work [J]
 
@@ -97,7 +98,7 @@ def recorder_for(
     """(recorder, sample interval) for an integration to ``t_end`` (samples sized for it; strikes and log grow)."""
     interval = sample_interval(integrator, sample_rate)
     n_samples = math.floor(t_end / interval + 1e-9) + 2
-    n_strikes = (max_strikes if max_strikes else int(t_end * 50) + 16) + nf  # has_room holds until max_strikes
+    n_strikes = min(max_strikes or math.inf, int(t_end * STRIKES_PER_SECOND) + 16) + nf  # grown when needed
     return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval
 
 

@@ -145,7 +145,7 @@ def copy_vector(dst: np.ndarray, src: np.ndarray) -> None:
     """dst[:] = src for 1-D arrays, element by element.
 
     Written out because numba compiles a slice assignment with a shape check whose error message
-    (string formatting of the shapes) costs about 2 s of compilation on a cold cache.
+    (string formatting of the shapes) is a large part of a cold compilation.
     """
     for i in range(src.shape[0]):
         dst[i] = src[i]

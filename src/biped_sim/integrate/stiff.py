@@ -198,12 +198,7 @@ def integrate_scipy(
         blown = _check_steps(sol, system, modes, work, rec, checks)  # the accepted step where a check failed
         if blown is not None:
             t_stop, hit_event = float(sol.t[blown]), False
-        while st.n_samples < rec.sample_t.shape[0] and st.n_samples * interval <= t_stop:
-            ts = st.n_samples * interval
-            if ts > t:
-                record_sample(rec, ts, sol.sol(ts), modes)
-            else:
-                record_sample(rec, ts, y, modes)
+        _record_samples(rec, sol, t, t_stop, y, modes, interval)
         y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1 if blown is None else blown]
         t = t_stop
         if blown is not None:
@@ -211,11 +206,7 @@ def integrate_scipy(
         rec = with_room(rec, nf)
         if hit_event and apply_events(t, y, system, modes, contact, rec, touching_before, max_strikes):
             st.n_events += 1
-        criterion = system_fall(y, system)
-        if criterion and work is not None:
-            blowup.fall(t, y, system, modes, work, rec.state, checks, criterion)
-        elif criterion:
-            st.status, st.stop_time, st.reason = FELL, t, criterion
+        _stop_if_fallen(t, y, system, modes, work, rec, checks)
         if progress is not None:
             progress(t)
         if not math.isfinite(t):
@@ -225,6 +216,31 @@ def integrate_scipy(
     st.rhs_evals += nfev
     st.time = t
     return rec
+
+
+def _stop_if_fallen(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple | None, rec: Recorder, checks: blowup.Scales
+) -> None:
+    """End the run at a fall (FELL and its criterion; the blow-up checks' verdict when they run)."""
+    criterion = system_fall(y, system)
+    if criterion and work is not None:
+        blowup.fall(t, y, system, modes, work, rec.state, checks, criterion)
+    elif criterion:
+        st = rec.state[0]
+        st.status, st.stop_time, st.reason = FELL, t, criterion
+
+
+def _record_samples(
+    rec: Recorder, sol: Any, t: float, t_stop: float, y: np.ndarray, modes: np.ndarray, interval: float
+) -> None:
+    """The samples of a solve_ivp segment from t (state ``y``) to ``t_stop``, from its dense output."""
+    st = rec.state[0]
+    while st.n_samples < rec.sample_t.shape[0] and st.n_samples * interval <= t_stop:
+        ts = st.n_samples * interval
+        if ts > t:
+            record_sample(rec, ts, sol.sol(ts), modes)
+        else:
+            record_sample(rec, ts, y, modes)
 
 
 def _check_steps(
