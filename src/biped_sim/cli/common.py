@@ -17,7 +17,7 @@ import typing
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any, NoReturn, TypeVar
 
 import typer
 from rich.markup import escape
@@ -129,11 +129,6 @@ def option_flags(command: Callable[..., Any]) -> dict[str, str]:
     return flags
 
 
-def interrupt_code(exc: KeyboardInterrupt) -> int:
-    """130 for Ctrl-C, 143 for SIGTERM."""
-    return TERMINATED if isinstance(exc, Terminated) else INTERRUPTED
-
-
 def _terminate(signum: int, frame: object) -> None:
     raise Terminated
 
@@ -148,7 +143,21 @@ def sigterm_as_interrupt() -> Iterator[None]:
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if signal.getsignal(signal.SIGTERM) is _terminate:  # not ignored by end_interrupted meanwhile
+            signal.signal(signal.SIGTERM, previous)
+
+
+def end_interrupted(exc: KeyboardInterrupt, message: str | None = None) -> NoReturn:
+    """Exit after Ctrl-C (130) or SIGTERM (143) with one line (``message`` after 'interrupted: ' or 'terminated: ').
+
+    Later Ctrl-C's and SIGTERMs are ignored from here on: the command has stopped its work already, and a
+    second Ctrl-C during the exit must not end the process by the signal instead of the exit code.
+    """
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_IGN)
+    how = "terminated" if isinstance(exc, Terminated) else "interrupted"
+    typer.echo(f"{how}: {message}" if message else how, err=True)
+    sys.exit(TERMINATED if isinstance(exc, Terminated) else INTERRUPTED)
 
 
 def user_errors(func: F) -> F:
@@ -168,8 +177,7 @@ def user_errors(func: F) -> F:
         except OSError as exc:
             fail(os_error_line(exc), 2 if exc.errno in LOCATION_ERRNOS else 1)
         except KeyboardInterrupt as exc:
-            typer.echo("terminated" if isinstance(exc, Terminated) else "interrupted", err=True)
-            sys.exit(interrupt_code(exc))
+            end_interrupted(exc)
 
     return wrapper  # type: ignore[return-value]
 

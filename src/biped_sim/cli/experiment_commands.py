@@ -22,7 +22,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from biped_sim.cli.common import SetOption, Terminated, app, fail, interrupt_code, user_errors
+from biped_sim.cli.common import SetOption, app, end_interrupted, fail, user_errors
 from biped_sim.errors import ConfigError
 from biped_sim.io.output import OutputKind, check_output_dir, check_writable_dir, staged_directory
 
@@ -135,9 +135,7 @@ def sweep_command(
         with make_executor(executor, workers, scheduler) as pool, SweepReporter(console, quiet) as reporter:
             outcome = run_sweep(sweep, sweep_dir, pool, resume=resume, on_progress=reporter)
     except KeyboardInterrupt as exc:
-        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
-        typer.echo(f"{how}: finished runs are kept in {sweep_dir}/; the same command runs the rest", err=True)
-        raise typer.Exit(interrupt_code(exc)) from None
+        end_interrupted(exc, f"finished runs are kept in {sweep_dir}/; the same command runs the rest")
     counts = ", ".join(f"{n} {status}" for status, n in sorted(outcome.progress.statuses.items()))
     console.print(
         f"sweep {sweep.spec.name}: {len(sweep.runs)} runs, {outcome.progress.skipped} already finished"
