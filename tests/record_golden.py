@@ -49,27 +49,29 @@ def arithmetic_here() -> dict[str, Any]:
     }
 
 
-def record(names: list[str], path: Path = GOLDEN_PATH) -> list[str]:
-    """Re-simulate ``names`` (all cases when empty), write the file; returns the cases whose summary changed."""
+def record(names: list[str], path: Path = GOLDEN_PATH) -> dict[str, list[str]]:
+    """Re-simulate ``names`` (all cases when empty) and write the file; returns, per case re-recorded, the recorded
+    keys whose values changed (bit for bit) and, as ``+key``, the keys the summary has gained."""
     golden = read_golden(path)
     unknown = sorted(set(names) - set(golden["cases"]))
     if unknown:
         raise SystemExit(f"unknown golden case(s): {', '.join(unknown)}; known: {', '.join(golden['cases'])}")
-    moved = []
+    changes = {}
     for name in names or list(golden["cases"]):
         case = golden["cases"][name]
         summary = simulated_summary(case)
-        if summary != case["summary"]:
-            moved.append(name)
+        moved = [key for key, value in case["summary"].items() if summary.get(key) != value]
+        changes[name] = moved + [f"+{key}" for key in summary if key not in case["summary"]]
         case["summary"] = summary
     golden["recorded_on"] = arithmetic_here()
     path.write_text(json.dumps(golden, indent=1) + "\n")
-    return moved
+    return changes
 
 
 def main(argv: list[str]) -> None:
-    moved = record(argv)
-    print(f"{GOLDEN_PATH}: " + (f"re-recorded {', '.join(moved)}" if moved else "nothing moved"))
+    for name, changed in record(argv).items():
+        print(f"{name}: {', '.join(changed) if changed else 'nothing moved'}")
+    print(f"written: {GOLDEN_PATH}")
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 
 from .conftest import ROOT
-from .record_golden import read_golden, simulated_summary
+from .record_golden import GOLDEN_PATH, read_golden, record, simulated_summary
 
 GOLDEN = read_golden()
 CASES = GOLDEN["cases"]
@@ -95,6 +95,15 @@ def test_a_class_tolerates_what_it_says_and_no_more() -> None:
     assert set(differences(moved, case)) == {"step_times", "rhs_evals", "n_steps", "energy_residual_max"}
     assert set(differences(ulps, {**case, "arithmetic": "compiled"})) == {"step_times", "rhs_evals",
                                                                           "energy_residual_max"}  # fmt: skip
+
+
+def test_re_recording_a_compiled_case_moves_nothing(tmp_path: Path) -> None:
+    """``python -m tests.record_golden CASE`` on a copy: the case's summary again, bit for bit, the rest kept."""
+    copy = tmp_path / "golden.json"
+    copy.write_text(GOLDEN_PATH.read_text())
+    assert record(["rk4_short"], copy) == {"rk4_short": []}
+    again = read_golden(copy)
+    assert again["cases"] == GOLDEN["cases"] and again["classes"] == GOLDEN["classes"]
 
 
 @pytest.mark.parametrize(
