@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CONFIG ?= configs/round_foot_walker.yaml
 
-.PHONY: setup setup-bench run test validate bench lint format sweep-demo clean
+.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,6 +25,13 @@ run: $(STAMP)              ## simulate the default walker; print its step table 
 test: $(STAMP)             ## the fast test tier (pytest's default: -m 'not slow'; about a minute)
 	$(BIN)/python -m pytest -q
 
+# numpy's SIMD dispatch limited to AVX2 (numpy >= 2.4's feature names) and OpenBLAS's kernels to Haswell: the
+# arithmetic of an older x86 CPU, for the scipy/BLAS/LAPACK paths (tests must pass on any x86 CPU)
+OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CORETYPE=Haswell
+
+test-older-cpu: $(STAMP)   ## the fast tier as on an older (AVX2) CPU
+	$(OLDER_CPU) $(BIN)/python -m pytest -q
+
 validate: $(STAMP)         ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
 	$(BIN)/python -m pytest -q -m slow
@@ -35,6 +42,9 @@ bench: $(STAMP)            ## performance benchmark (writes results/bench/)
 sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its report (results/sweeps/slopes_integrators/)
 	$(BIN)/biped-sim sweep configs/sweeps/slopes_integrators.yaml
 	$(BIN)/biped-sim report results/sweeps/slopes_integrators
+
+golden: $(STAMP)           ## re-record tests/data/golden_summaries.json (after a change that moves numbers on purpose)
+	$(BIN)/python -m tests.record_golden
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests

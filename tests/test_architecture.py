@@ -120,3 +120,42 @@ def test_compiled_cache_key_ignores_modules_without_compiled_code(name: str) -> 
     assert "biped_sim.multibody.planar" in compiled  # the key does cover the compiled core
     assert "biped_sim.rigid.kernels" in compiled  # and compiled code outside it (its kernels import no numba)
     assert f"biped_sim.{name}" not in compiled
+
+
+# the fit's modules are rewritten on their own (they still name options and edit dumped configs)
+FIT_MODULES = ("biped_sim.studies.fit", "biped_sim.studies.fit_stats")
+
+
+def _calls(path: Path) -> list[ast.Call]:
+    return [node for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, ast.Call)]
+
+
+def _called(call: ast.Call) -> str:
+    return call.func.id if isinstance(call.func, ast.Name) else getattr(call.func, "attr", "")
+
+
+def test_the_api_names_arguments_and_config_keys_not_command_line_options() -> None:
+    """An error raised below the CLI names what a Python caller passed; the CLI maps it to its option."""
+    flagged = [
+        f"{name}:{call.lineno}"
+        for name, path in sources().items()
+        if not name.startswith(("biped_sim.cli", *FIT_MODULES))
+        for call in _calls(path)
+        if _called(call) in ("ConfigError", "ArgumentError")
+        and call.args
+        and isinstance(call.args[0], ast.Constant)
+        and str(call.args[0].value).startswith("--")
+    ]
+    assert flagged == []
+
+
+def test_a_config_variant_is_made_by_derive_only() -> None:
+    """No module but the config's own edits a dumped config and validates it again: ``config.derive`` does."""
+    editing = [
+        name
+        for name, path in sources().items()
+        if not name.startswith(("biped_sim.config", "biped_sim.cli.fit_commands", *FIT_MODULES))
+        and "config_from_dict(" in path.read_text()
+        and "model_dump(" in path.read_text()
+    ]
+    assert editing == []

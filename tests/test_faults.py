@@ -17,7 +17,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -497,14 +497,27 @@ def test_killing_one_worker_fails_only_its_run_and_resume_runs_it_again(six_runs
 
 
 @pytest.mark.slow
-def test_ctrl_c_cancels_the_queue_and_leaves_a_consistent_sweep(six_runs: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("stop", "code", "word"),
+    [
+        (lambda process: os.killpg(process.pid, signal.SIGINT), 130, "interrupted"),  # Ctrl-C: the foreground group
+        (lambda process: process.send_signal(signal.SIGTERM), 143, "terminated"),  # a scheduler or Dask: the process
+    ],
+    ids=["ctrl-c", "sigterm"],
+)
+def test_an_interrupt_cancels_the_queue_and_leaves_a_consistent_sweep(
+    six_runs: Path, tmp_path: Path, stop: Callable[[subprocess.Popen[str]], None], code: int, word: str
+) -> None:
     out = tmp_path / "out"
     process, workers = start_sweep(six_runs, out)
-    os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C at a terminal does: the whole foreground group
+    stop(process)
     _, stderr = process.communicate(timeout=60)
-    assert process.returncode == 130, stderr
-    assert "Traceback" not in stderr and stderr.strip().splitlines()[-1].startswith("interrupted: ")
-    assert all(is_dead(pid) for pid in workers)
+    assert process.returncode == code, stderr
+    assert "Traceback" not in stderr and stderr.strip().splitlines()[-1].startswith(f"{word}: ")
+    deadline = time.monotonic() + 10
+    while not all(is_dead(pid) for pid in workers):
+        assert time.monotonic() < deadline, "workers outlived the sweep"
+        time.sleep(0.05)
     finished = {p.parent.name for p in out.glob("runs/*/summary.json")}
     time.sleep(2)
     assert {p.parent.name for p in out.glob("runs/*/summary.json")} == finished  # nothing queued went on running
@@ -514,6 +527,18 @@ def test_ctrl_c_cancels_the_queue_and_leaves_a_consistent_sweep(six_runs: Path, 
         name: "walking" if name in finished else "pending" for name in table["run"]
     }
     assert not list(out.rglob("error.json")) and leftovers(out) == []
+
+
+@pytest.mark.slow
+def test_two_ctrl_c_in_a_row_still_end_with_130(six_runs: Path, tmp_path: Path) -> None:
+    """The second arrives once the first has stopped the sweep, as it exits: the exit code stays 130."""
+    process, _ = start_sweep(six_runs, tmp_path / "out")
+    os.killpg(process.pid, signal.SIGINT)
+    time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
 
 
 @pytest.mark.slow

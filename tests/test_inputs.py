@@ -17,7 +17,12 @@ from biped_sim import config_from_dict, simulate
 from biped_sim.cli import app
 from biped_sim.config import Config, is_number_annotation
 from biped_sim.errors import ConfigError
+from biped_sim.integrate import blowup
+from biped_sim.integrate.driver import stop_reason
+from biped_sim.integrate.recorder import RUNNING, make_recorder
+from biped_sim.multibody.dispatch import make_workspace
 from biped_sim.simulate import prepare_model
+from biped_sim.walkers import build_model
 
 from .conftest import DEFAULT_CONFIG
 
@@ -125,15 +130,39 @@ def test_non_finite_study_options_are_one_line_exit_2(args: list[str], message: 
     ("overrides", "reason"),
     [
         (["integrator.method=euler", "integrator.dt=1e-3", "contact.stiffness=1e12"], "energy residual"),
-        (["integrator.method=rk4", "integrator.dt=3e-3"], "within one sample interval"),
+        (["integrator.method=euler", "contact.stiffness=1e12"], "energy residual"),  # blows up between 1 kHz samples
+        (["integrator.method=rk4", "integrator.dt=3e-3"], "between two checks"),
     ],
 )
-def test_a_blown_up_integration_is_diverged_not_fell(overrides: list[str], reason: str) -> None:
-    result = simulate(config_from_dict({}, [*overrides, "simulation.t_end=0.3"]))
-    assert result.status == "diverged"
-    assert reason in result.summary["status_reason"]
-    assert 0.0 < result.summary["stop_time"] < 0.3
-    json.dumps(result.summary, allow_nan=False)  # valid JSON: null, never NaN
+def test_a_blown_up_integration_is_diverged_whatever_the_sample_rate(overrides: list[str], reason: str) -> None:
+    """The checks see the loop's steps, not the samples: the same status, reason and time at 1 kHz and 100 kHz."""
+    summaries = [
+        simulate(config_from_dict({}, [*overrides, "simulation.t_end=0.3", f"output.sample_rate={rate}"])).summary
+        for rate in (1000, 100_000)
+    ]
+    for summary in summaries:
+        assert summary["status"] == "diverged" and reason in summary["status_reason"], summary["status_reason"]
+        assert 0.0 < summary["stop_time"] < 0.3
+        json.dumps(summary, allow_nan=False)  # valid JSON: null, never NaN
+    assert [(s["status_reason"], s["stop_time"]) for s in summaries] == [(summaries[0]["status_reason"],
+                                                                       summaries[0]["stop_time"])] * 2  # fmt: skip
+
+
+def test_a_check_stops_a_state_whose_energy_came_from_nowhere() -> None:
+    """What the loops (and the stiff driver, from Python) call at their checks: 2 m g l of work from nowhere."""
+    model = build_model(config_from_dict({}))
+    rec = make_recorder(len(model.y0), len(model.modes0), 2, 2, 0)
+    blowup.start_checks(rec, model.system, model.y0, model.modes0)
+    scales = blowup.Scales(model.total_mass * 9.81 * model.leg_length, model.leg_length)
+    work = make_workspace(model.system)
+    blowup.check(0.5, model.y0, model.system, model.modes0, work, rec.state, scales, False)
+    assert rec.state[0].status == RUNNING and rec.state[0].check_residual == 0.0  # the start balances exactly
+    y = model.y0.copy()
+    y[-1] += 2.0 * scales.energy
+    blowup.check(0.5, y, model.system, model.modes0, work, rec.state, scales, False)
+    assert rec.state[0].status == RUNNING  # not due: the next check is 1 ms after the last
+    blowup.check(0.5 + blowup.CHECK_INTERVAL, y, model.system, model.modes0, work, rec.state, scales, False)
+    assert stop_reason(rec.state[0]) == "energy residual 2 m g l: the integration blew up"
 
 
 def test_fixed_step_runs_that_walk_are_not_called_diverged() -> None:
@@ -142,10 +171,41 @@ def test_fixed_step_runs_that_walk_are_not_called_diverged() -> None:
     assert result.summary["n_steps"] >= 2
 
 
-def test_a_physical_fall_stays_fell() -> None:
+def test_a_physical_fall_stays_fell_and_says_which_limit_it_passed() -> None:
     result = simulate(config_from_dict({}, ["ground.slope=0.2", "simulation.t_end=2"]))
-    assert result.status == "fell" and result.summary["status_reason"] is None
+    assert result.status == "fell" and "simulation.fall_hip_height" in result.summary["status_reason"]
     assert result.summary["energy_residual_max_relative"] < 1e-6
+
+
+@pytest.mark.parametrize("dynamics", ["compliant", "rigid"])
+@pytest.mark.parametrize(
+    ("overrides", "reason"),
+    [
+        (["simulation.fall_leg_angle=0.3"], "a leg past simulation.fall_leg_angle"),
+        (["simulation.initial.stance_rate=0.5", "formulation.kind=minimal"], "hip"),
+    ],
+)
+def test_a_fall_names_its_criterion_in_compliant_and_rigid_runs(
+    dynamics: str, overrides: list[str], reason: str
+) -> None:
+    if dynamics == "rigid":
+        overrides = [o for o in overrides if not o.startswith("formulation")]
+        reason = "a leg past" if reason == "hip" else reason  # the rigid compass topples over its leg first
+    summary = simulate(config_from_dict({}, [*overrides, "simulation.t_end=3", f"dynamics={dynamics}"])).summary
+    assert summary["status"] == "fell" and reason in summary["status_reason"], summary["status_reason"]
+
+
+@pytest.mark.parametrize(
+    ("overrides", "reason"),
+    [  # the wheel balanced on its spoke (hip over the foot) stays there; a riser in the swing foot's way
+        (["walker.kind=rimless_wheel", "ground.slope=0.01", "simulation.initial.stance_angle=0.01",
+          "simulation.initial.stance_rate=0"], "no heel strike within 20 sqrt(l / g)"),
+        (["ground.profile={kind: steps, steps: [{at: 0.2, height: 0.05}]}"], "the swing foot met the ground profile"),
+    ],
+)  # fmt: skip
+def test_a_rigid_stall_or_trip_is_a_fall_that_says_so(overrides: list[str], reason: str) -> None:
+    summary = simulate(config_from_dict({}, ["dynamics=rigid", "simulation.t_end=20", *overrides])).summary
+    assert summary["status"] == "fell" and reason in summary["status_reason"], summary["status_reason"]
 
 
 def test_a_rigid_run_past_its_wall_time_budget_ends_with_status_timeout() -> None:

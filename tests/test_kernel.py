@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import importlib
+import inspect
 import pkgutil
+from typing import NamedTuple
 
+import numba
 import numpy as np
 import pytest
 from numba import njit
@@ -13,7 +16,7 @@ from numba.core.registry import CPUDispatcher
 
 import biped_sim
 from biped_sim.integrate.explicit import advance
-from biped_sim.kernel import PYTHON_ENTRY_SUFFIX, Kernel, kernel
+from biped_sim.kernel import PYTHON_ENTRY_SUFFIX, Kernel, kernel, missing_numba_internals, overload_by_type
 
 
 @kernel
@@ -27,6 +30,54 @@ def _weighted_sum(values: np.ndarray, weight: float) -> float:
 @njit(cache=True)
 def _calls_the_kernel(values: np.ndarray) -> float:
     return _weighted_sum(values, 2.0)
+
+
+def test_the_numba_internals_the_kernels_rely_on_are_there() -> None:
+    missing = missing_numba_internals()
+    assert missing == [], (
+        f"numba {numba.__version__} (llvmlite {numba.llvmlite.__version__}) lacks what biped_sim.kernel relies on: "
+        f"{'; '.join(missing)}. Adapt biped_sim/kernel.py, or install the numba pinned in pyproject.toml."
+    )
+
+
+class _Flat(NamedTuple):
+    height: float
+
+
+class _Tilted(NamedTuple):
+    height: float
+    slope: float
+
+
+@kernel
+def _flat_level(ground: _Flat, x: float) -> float:
+    return ground.height
+
+
+@kernel
+def _tilted_level(ground: _Tilted, x: float) -> float:
+    return ground.height + ground.slope * x
+
+
+def _level(ground: tuple, x: float) -> float:
+    return {_Flat: _flat_level, _Tilted: _tilted_level}[type(ground)](ground, x)
+
+
+_level.__signature__ = inspect.Signature(  # type: ignore[attr-defined]  # the parameters, as the registries give them
+    [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD) for name in ("ground", "x")]
+)
+overload_by_type(_level, "ground", {_Flat: _flat_level, _Tilted: _tilted_level}.get, inline=True)
+
+
+@njit
+def _levels(flat: _Flat, tilted: _Tilted) -> tuple[float, float]:
+    return _level(flat, 2.0), _level(tilted, 2.0)
+
+
+def test_a_call_is_resolved_by_its_argument_type_at_compile_time() -> None:
+    """numba picks the kernel from the NamedTuple class of one argument (biped_sim.kernel.overload_by_type)."""
+    assert _levels(_Flat(1.0), _Tilted(1.0, 0.5)) == (1.0, 2.0)
+    assert _level(_Tilted(1.0, 0.5), 2.0) == 2.0  # from Python: looked up by type
 
 
 def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> None:
@@ -67,3 +118,8 @@ def test_every_cached_engine_function_is_a_kernel_or_inlined() -> None:
             if value.targetoptions.get("inline", "never") != "always":
                 plain.append(f"{info.name}.{name}")
     assert plain == []
+
+
+def test_a_missing_internal_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delattr(numba.core.config, "DISABLE_JIT")
+    assert missing_numba_internals() == ["numba.core.config.DISABLE_JIT"]

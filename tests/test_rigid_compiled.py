@@ -19,9 +19,8 @@ from .conftest import CONFIGS
 
 AGREEMENT = 1e-10
 
-# (config, overrides, a post-impact start near its gait). The compass's leg-COM and foot offsets enter the
-# compiled model through ChainBody.offset and CompassChain.foot_offset: add cases with offsets here once the
-# Python reference model has them.
+# (config, overrides, a post-impact start near its gait); the compass's leg-COM and foot offsets enter the
+# compiled model through ChainBody.offset and CompassChain.foot_offset
 CASES = {
     "simplest": (CONFIGS / "simplest_walker.yaml", [], [0.2, -0.2, -0.2, -0.2 * math.cos(0.4)]),
     "compass": (CONFIGS / "compass_goswami.yaml", ["dynamics=rigid"], [0.2, -0.2, -1.0, -0.4]),

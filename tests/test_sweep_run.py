@@ -190,7 +190,7 @@ def test_dask_local_cluster_gives_the_same_results_as_local_processes(tiny_sweep
         (["sweep", "missing.yaml"], "missing.yaml: no such sweep file"),
         (["sweep", "ok.yaml", "--jobs", "0"], "--jobs: must be at least 1"),
         (["sweep", "ok.yaml", "--executor", "mpi"], "--executor: unknown executor 'mpi'"),
-        (["sweep", "ok.yaml", "--scheduler", "tcp://localhost:1"], "--scheduler: only used with --executor dask"),
+        (["sweep", "ok.yaml", "--scheduler", "tcp://localhost:1"], "--scheduler: only used with the dask executor"),
         (["sweep", "ok.yaml", "--set", "ground.slope=0.01"], "--set: ground.slope is a sweep axis"),
         (["sweep", "ok.yaml", "--set", "walker.hip_mass=-1"], "walker.hip_mass"),
         (["sweep", "bad.yaml"], "run 2 (slope=0.9): ground.slope"),

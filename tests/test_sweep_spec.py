@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.sweep import check_buildable, load_sweep
 from biped_sim.sweep.spec import RangeSpec, short_keys
 
@@ -156,7 +156,7 @@ def test_unbuildable_run_is_caught_before_the_sweep_starts(tmp_path: Path) -> No
 
 
 def test_command_line_override_of_a_swept_key_is_refused(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match=r"--set: ground\.slope is a sweep axis"):
+    with pytest.raises(ArgumentError, match=r"^overrides: ground\.slope is a sweep axis"):
         load_sweep(write_sweep(tmp_path, "grid:\n  ground.slope: [0.01]\n"), ["ground.slope=0.02"])
 
 

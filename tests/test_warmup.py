@@ -9,12 +9,14 @@ import sys
 import pytest
 from numba import njit
 
+from biped_sim import load_config, simulate
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.multibody.dispatch import FORMULATIONS
 from biped_sim.simulate import RunResult, warmup
+from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
-from .conftest import child_env, invoke
+from .conftest import CONFIGS, child_env, invoke
 
 # modules whose compiled code a planar run with an explicit method must neither compile nor load
 OTHER_GROUPS = (
@@ -64,22 +66,39 @@ def test_recording_compilations_lists_what_numba_compiles() -> None:
     assert again == []
 
 
-def test_warmup_command_warms_the_default_walker(short_run: RunResult, monkeypatch: pytest.MonkeyPatch) -> None:
-    """With the default walker's code compiled already (the shared short run), the warm-up compiles nothing."""
+def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles_nothing(
+    short_run: RunResult, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile loads its code."""
     monkeypatch.setattr(warmup, "_WARMED", set())
     result = invoke("warmup")
     assert result.exit_code == 0, result.output
-    assert result.output.startswith("planar explicit (dopri5): loaded from the cache in ")
-    assert len(result.output.strip().splitlines()) == 1
+    lines = result.output.strip().splitlines()
+    assert [line.split(":")[0] for line in lines] == [
+        "planar explicit (dopri5)", "planar explicit (dopri5, on a profile)", "spatial explicit (dopri5)"
+    ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
+    with recording_compilations() as compiled:
+        simulate(default_walker("ground.profile={kind: random, seed: 3, roughness: 0.002}", t_end=0.05))
+    assert compiled == []
 
 
-def test_warm_up_all_covers_every_formulation_and_integrator_family() -> None:
-    """Every registered formulation (the engine's registry, not the schema the configs come from) x both families."""
-    groups = {(c.formulation.kind, warmup.integrator_family(c.integrator.method)) for c in warmup.warm_up_configs(True)}
+def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
+    """Every compliant run of configs/ and configs/sweeps/ is in a group ``biped-sim warmup`` warms."""
+    configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
+    configs += [run.config for path in sorted((CONFIGS / "sweeps").glob("*.yaml")) for run in load_sweep(path).runs]
+    groups = {warmup.group_of(config) for config in configs if config.dynamics == "compliant"}
+    assert groups <= set(warmup.BUNDLED_GROUPS)
+    assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat")} <= groups
+
+
+def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
+    """Every registered formulation (the engine's registry, not the schema) x both families x the grounds it has."""
+    groups = {warmup.group_of(config) for config in warmup.warm_up_configs(True)}
     kinds = {formulation.name for formulation in FORMULATIONS.values()}
-    assert {"planar", "spatial"} <= kinds
-    assert groups == {(kind, family) for kind in kinds for family in ("explicit", "stiff")}
+    assert {"planar", "spatial", "minimal"} <= kinds
+    assert {(kind, family, "flat") for kind in kinds for family in ("explicit", "stiff")} <= groups
+    assert ("planar", "explicit", "profile") in groups and ("spatial", "explicit", "profile") not in groups
 
 
 @pytest.mark.parametrize(
@@ -92,7 +111,7 @@ def test_a_worker_warms_up_on_any_valid_run(overrides: list[str], monkeypatch: p
     monkeypatch.setattr(warmup, "_WARMED", set())
     family = "stiff" if "radau" in overrides[0] else "explicit"
     done = warmup.warm_up(default_walker(*overrides))
-    assert done is not None and (done.formulation, done.family) == ("planar", family)
+    assert done is not None and (done.formulation, done.family, done.ground) == ("planar", family, "flat")
     assert warmup.warm_up(default_walker(*overrides)) is None
 
 

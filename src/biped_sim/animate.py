@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 
 from biped_sim.config import InitialState
 from biped_sim.contact.profile import profile_arrays, profile_outline
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError
 from biped_sim.io.output import check_writable_dir
 from biped_sim.io.trajectory import RunData
 from biped_sim.plots import figure_style
@@ -38,19 +38,30 @@ FORMATS = (".gif", ".mp4")
 def check_output(out: Path) -> None:
     """Reject an unsupported file type (or .mp4 without ffmpeg) or an unusable location before any work is done."""
     if out.is_dir():
-        raise ConfigError("--out", f"{out} is a directory; give a file name ending in .gif or .mp4")
+        raise ArgumentError("out", f"{out} is a directory; give a file name ending in .gif or .mp4")
     if out.suffix.lower() not in FORMATS:
-        raise ConfigError("--out", f"unsupported animation type {out.suffix or '(none)'!r}; use .gif or .mp4")
+        raise ArgumentError("out", f"unsupported animation type {out.suffix or '(none)'!r}; use .gif or .mp4")
     if out.suffix.lower() == ".mp4" and not animation.writers.is_available("ffmpeg"):
-        raise ConfigError("--out", ".mp4 needs ffmpeg on the PATH; install it or write a .gif")
+        raise ArgumentError("out", ".mp4 needs ffmpeg on the PATH; install it or write a .gif")
     check_writable_dir(out.parent)
+
+
+def check_playback(fps: float, speed: float, t_start: float, t_end: float | None) -> None:
+    """ArgumentError naming the first of ``fps``, ``speed``, ``t_start``, ``t_end`` that cannot be played back."""
+    for name, value in (("fps", fps), ("speed", speed)):
+        if not (math.isfinite(value) and value > 0):
+            raise ArgumentError(name, f"must be a finite number > 0, got {value}")
+    if not (math.isfinite(t_start) and t_start >= 0):
+        raise ArgumentError("t_start", f"must be a finite time >= 0, got {t_start}")
+    if t_end is not None and not (math.isfinite(t_end) and t_end > t_start):
+        raise ArgumentError("t_end", f"must be a finite time after the start ({t_start}), got {t_end}")
 
 
 def frame_indices(time: np.ndarray, fps: float, speed: float, t_start: float, t_end: float | None) -> np.ndarray:
     """Sample indices of the frames: one frame every ``speed / fps`` simulated seconds."""
     stop = time[-1] if t_end is None else min(t_end, time[-1])
     if stop < t_start:
-        raise ConfigError("--start", f"after the end of the run ({time[-1]:.3f} s)")
+        raise ArgumentError("t_start", f"after the end of the run ({time[-1]:.3f} s)")
     frame_times = np.arange(t_start, stop + 1e-12, speed / fps)
     return np.unique(np.clip(np.searchsorted(time, frame_times), 0, len(time) - 1))
 
@@ -177,10 +188,7 @@ def animate_run(
 ) -> int:
     """Write the animation of ``run`` to ``out`` (.gif or .mp4); returns the number of frames."""
     check_output(out)
-    if fps <= 0:
-        raise ConfigError("--fps", "must be > 0")
-    if speed <= 0:
-        raise ConfigError("--speed", "must be > 0")
+    check_playback(fps, speed, t_start, t_end)
     frames = frame_indices(run.time, fps, speed, t_start, t_end)
     with figure_style():
         fig = Figure(figsize=(4.0, 3.2))

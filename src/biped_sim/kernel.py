@@ -17,17 +17,37 @@ arrays without numba's memory-info pointer, and so do the kernels it calls: thei
 (an atomic operation per array argument, at entry and exit) become a test of a null pointer, which
 makes the integration loop much faster (``make bench``). The caller keeps the arrays alive.
 Such a kernel must not return an array.
+
+Everything the project takes from numba beyond its documented API lives here, so that a numba release
+that changes it breaks one module (:func:`missing_numba_internals` names what is gone; ``pyproject.toml``
+bounds numba and llvmlite by the versions the tests ran on): the dispatcher subclass and the ``_nrt``
+option above; :func:`overload_by_type`, the compile-time dispatch on a NamedTuple argument's class,
+which hands numba a kernel's own code as an overload implementation; :func:`inlined`, a kernel's copy
+inlined into its callers' IR; and the silenced first-class-function warning of the law registries.
 """
 
 from __future__ import annotations
 
+import inspect
+import warnings
 from collections.abc import Callable
 from types import FunctionType
 from typing import Any
 
-from numba import njit
+import numba
+from numba import njit, types
 from numba.core import config
+from numba.core.dispatcher import Dispatcher
+from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.core.registry import CPUDispatcher
+from numba.extending import overload
+
+# The law registries are tuples of kernels that numba reaches through its first-class-function machinery
+# (``literal_unroll``, resolved statically to one direct call per law): its "experimental" warning at compile
+# time says nothing about them.
+warnings.filterwarnings(
+    "ignore", message="First-class function type feature is experimental", category=NumbaExperimentalFeatureWarning
+)
 
 PYTHON_ENTRY_SUFFIX = "_python_entry"  # the twin's qualified name, hence its own cache file
 
@@ -85,3 +105,76 @@ def kernel(function: Callable[..., Any] | None = None, *, reference_counts: bool
         return dispatcher
 
     return compile_kernel(function) if function is not None else compile_kernel
+
+
+def implementation_of(kernel: Any) -> FunctionType:
+    """The compiled ``kernel``'s Python function, without its annotations, as an overload implementation.
+
+    numba compiles the function an ``@overload`` returns as the implementation of the call, after
+    checking that its parameters equal the typing function's, annotations included
+    (``numba.core.typing.templates._validate_sigs``). Handing it the kernel's own code (not a
+    forwarding wrapper) makes a generic call exactly a call of the kernel: no extra function layer,
+    whose arguments would each cost a reference count at every right-hand-side evaluation.
+    """
+    code = kernel.py_func
+    return FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
+
+
+def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable[[type], Any], inline: bool) -> None:
+    """Compile calls of the Python function ``generic`` as calls of ``kernel_for(class of argument key)``.
+
+    ``generic`` carries the parameters in its ``__signature__``; ``kernel_for`` maps a NamedTuple class to a
+    kernel with those parameters (or None: not this overload's). numba resolves the call at compile time from
+    the argument's type (an ``@overload`` whose implementation is the kernel's own code,
+    :func:`implementation_of`), so a specialisation holds only that kernel; with ``inline`` the overload is
+    inlined into the caller's IR (no call layer, no reference counts for it).
+    """
+    signature = inspect.signature(generic)
+    at = list(signature.parameters).index(key)
+
+    def typer(*args):  # type: ignore[no-untyped-def]  # typed by __signature__: numba compares it with the kernel's
+        value = args[at]
+        if isinstance(value, types.BaseNamedTuple):
+            found = kernel_for(value.instance_class)
+            if found is not None:
+                return implementation_of(found)
+        return None
+
+    typer.__signature__ = signature  # type: ignore[attr-defined]
+    overload(generic, jit_options=kernel_options(), **({"inline": "always"} if inline else {}))(typer)
+
+
+def inlined(kernel: Dispatcher) -> Dispatcher:
+    """The compiled ``kernel`` (same source) made to be inlined where it is called, with its compiled callees.
+
+    A call of an ordinary kernel passes every array as seven machine words, and numba adds reference counts
+    around it; a copy inlined (numba's ``inline="always"``) has neither. The copy runs the kernel's own code
+    object, so each equation keeps one source.
+    """
+    function = kernel.py_func
+    names = dict(function.__globals__)
+    for name in function.__code__.co_names:
+        if isinstance(names.get(name), Dispatcher):
+            names[name] = inlined(names[name])
+    code = FunctionType(function.__code__, names, function.__name__, function.__defaults__, function.__closure__)
+    return njit(inline="always")(code)
+
+
+def missing_numba_internals() -> list[str]:
+    """What this module relies on in numba that the installed numba lacks (empty: everything is there)."""
+    from numba.core import event
+    from numba.core.typing import templates
+
+    options = CPUDispatcher.targetdescr.options
+    needs = {
+        "CPUDispatcher.enable_caching (Kernel subclasses the dispatcher)": hasattr(CPUDispatcher, "enable_caching"),
+        **{f"the {name} target option": hasattr(options, name) for name in kernel_options()},
+        "numba.core.config.DISABLE_JIT": hasattr(config, "DISABLE_JIT"),
+        "types.BaseNamedTuple (overload_by_type)": hasattr(types, "BaseNamedTuple"),
+        "an overload's signature check (templates._OverloadFunctionTemplate._validate_sigs)": hasattr(
+            getattr(templates, "_OverloadFunctionTemplate", None), "_validate_sigs"
+        ),
+        "numba.core.event.install_listener (compile events)": hasattr(event, "install_listener"),
+        "numba.config.CACHE_DIR (the cache keyed by source hash)": hasattr(numba.config, "CACHE_DIR"),
+    }
+    return [what for what, present in needs.items() if not present]

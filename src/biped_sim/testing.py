@@ -5,7 +5,7 @@ a sweep's table, a report's figures) show in the first few steps. These builders
 inputs that still show them, so that the fast test tier stays fast and examples stay short:
 
 - :func:`default_walker`: the default walker of ``configs/round_foot_walker.yaml`` (the schema
-  defaults) for :data:`SHORT_T_END` seconds, four heel strikes, about 0.2 s of wall time;
+  defaults) for :data:`SHORT_T_END` seconds, four heel strikes;
 - :func:`pendulum`: a hinged rod without contact, a smooth problem for integrator orders;
 - :func:`write_config`, :func:`write_sweep` and :func:`write_tiny_sweep`: config and sweep files for the
   command line, the sweep runner and the report (:func:`write_tiny_sweep` varies every axis the
@@ -115,7 +115,7 @@ def write_tiny_sweep(directory: Path, name: str = "tiny", base: Path | None = No
     """A sweep that varies every axis the report compares, in :data:`TINY_SWEEP_RUNS` runs of 1.3 s.
 
     Slopes and integrators form the grid; contact law, friction law and Baumgarte gains move
-    together (zip). Every run walks three steps; the eight take about 1.5 s on one core.
+    together (zip). Every run walks three steps.
     """
     return write_sweep(
         directory,

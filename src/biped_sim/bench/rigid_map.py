@@ -72,7 +72,7 @@ def basin_time(name: str) -> dict[str, Any]:
     """Wall time of one of :data:`BASINS` on a fresh pool of :data:`BASIN_WORKERS` (files in a temporary directory),
     after an untimed pass of one step per cell (as the other rows, it times running, not compiling)."""
     config_file, x, y, steps, target = BASINS[name]
-    spec = BasinSpec(load_config(CONFIGS / config_file), parse_axis("--x", x), parse_axis("--y", y), steps)
+    spec = BasinSpec(load_config(CONFIGS / config_file), parse_axis("x", x), parse_axis("y", y), steps)
     with tempfile.TemporaryDirectory(prefix="biped-sim-bench-basin-") as tmp:
         with local_executor(BASIN_WORKERS) as pool:  # untimed: one step per cell compiles what the cells run
             map_basin(replace(spec, steps=1), Path(tmp) / "warm-up", pool)

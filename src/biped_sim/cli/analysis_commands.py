@@ -13,30 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, fail, load, user_errors
-from biped_sim.config import config_from_dict, parse_yaml
-from biped_sim.errors import ConfigError
 from biped_sim.io.output import check_writable_dir
-
-GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
-
-
-def _parse_guess(text: str | None) -> dict[str, float] | None:
-    """--guess: a YAML/JSON mapping of the four README keys, or four numbers in that order."""
-    if text is None:
-        return None
-    value = parse_yaml(text, source="--guess")
-    if isinstance(value, list) and len(value) == 4:
-        value = dict(zip(GUESS_KEYS, value, strict=True))
-    if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
-        raise ConfigError("--guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
-    try:
-        guess = {k: float(value[k]) for k in GUESS_KEYS}
-    except (TypeError, ValueError):
-        raise ConfigError("--guess", "values must be numbers") from None
-    bad = [k for k, v in guess.items() if not math.isfinite(v) or isinstance(value[k], bool)]
-    if bad:
-        raise ConfigError("--guess", f"{bad[0]} must be a finite number")
-    return guess
 
 
 @app.command("limit-cycle")
@@ -60,10 +37,10 @@ def limit_cycle_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
-    from biped_sim.studies.limit_cycle import limit_cycle
+    from biped_sim.studies.limit_cycle import limit_cycle, parse_guess
 
     config = load(config_path, set_)
-    cycle = limit_cycle(config, _parse_guess(guess), settle_steps)
+    cycle = limit_cycle(config, parse_guess(guess), settle_steps)
     doc = cycle.to_json()
     if as_json:
         typer.echo(json.dumps(doc, indent=2))
@@ -91,26 +68,19 @@ def limit_cycle_command(
 def converge_command(
     config_path: ConfigArgument,
     set_: SetOption = None,
-    levels: Annotated[int, typer.Option("--levels", min=2, max=7, help="Contact settings (stiffness x10 each).")] = 5,
-    mu_kinetic: Annotated[float | None, typer.Option("--mu-kinetic", min=0.0, help="LuGre mu_k [default 1.0].")] = None,
-    mu_static: Annotated[float | None, typer.Option("--mu-static", min=0.0, help="LuGre mu_s [default 1.2].")] = None,
+    levels: Annotated[int, typer.Option("--levels", help="Contact settings, 2 to 7 (stiffness x10 each).")] = 5,
+    mu_kinetic: Annotated[float | None, typer.Option("--mu-kinetic", help="LuGre mu_k [default 1.0].")] = None,
+    mu_static: Annotated[float | None, typer.Option("--mu-static", help="LuGre mu_s [default 1.2].")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """The compliant gait against the rigid gait of the same walker as the contact stiffens."""
     from dataclasses import asdict
 
-    from biped_sim.studies.convergence import MU_KINETIC, MU_STATIC, converge, rigid_strike_check
+    from biped_sim.studies.convergence import converge, strike_violations
 
     config = load(config_path, set_)
-    if config.walker.kind != "compass":
-        raise ConfigError("walker.kind", "converge compares the compliant and rigid compass walker")
-    mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
-    mu_static = MU_STATIC if mu_static is None else mu_static
-    if mu_static < mu_kinetic:
-        raise ConfigError("--mu-static", f"must be >= the kinetic coefficient ({mu_kinetic})")
     rigid, rows = converge(config, levels, mu_kinetic=mu_kinetic, mu_static=mu_static)
-    check = rigid_strike_check(config, rigid, mu_kinetic)
-    violations = check.violations(mu_static)
+    check, violations = strike_violations(config, rigid, mu_kinetic, mu_static)
     if as_json:
         doc = {
             "rigid": rigid.to_json(),
@@ -158,28 +128,18 @@ def bifurcation_command(
     param: Annotated[str, typer.Option("--param", help="Parameter to vary (ground.slope).")] = "ground.slope",
     start: Annotated[float, typer.Option("--from", help="First slope [rad].")] = 0.005,
     stop: Annotated[float, typer.Option("--to", help="Last slope [rad].")] = 0.019,
-    n: Annotated[int, typer.Option("--n", min=2, help="Number of slopes.")] = 57,
+    n: Annotated[int, typer.Option("--n", help="Number of slopes (at least 2).")] = 57,
     out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/bifurcation"),
 ) -> None:
     """Continuation of the rigid period-1 gait and brute-force steady states against the slope (CSV, PNG, SVG)."""
     from biped_sim.plots import bifurcation_figure, save_figure
-    from biped_sim.studies.bifurcation import bifurcation_diagram, write_bifurcation
+    from biped_sim.studies.bifurcation import bifurcation_diagram, check_bifurcation, write_bifurcation
 
-    if param != "ground.slope":
-        raise ConfigError("--param", "only ground.slope is supported")
-    check_writable_dir(out)
     config = load(config_path, set_)
-    if config.dynamics != "rigid":
-        raise ConfigError("dynamics", "bifurcation runs the rigid model: use --set dynamics=rigid")
-    for option, value in (("--from", start), ("--to", stop)):
-        data = config.model_dump(mode="json")
-        data["ground"]["slope"] = value
-        try:
-            config_from_dict(data)
-        except ConfigError as exc:
-            raise ConfigError(option, f"slope {value}: {exc.reason}") from None
+    check_bifurcation(config, start, stop, n, param)
+    check_writable_dir(out)
     t0 = time.perf_counter()
-    diagram = bifurcation_diagram(config, start, stop, n)
+    diagram = bifurcation_diagram(config, start, stop, n, param)
     write_bifurcation(diagram, out)
     save_figure(bifurcation_figure(diagram), out, "bifurcation")
     flip = diagram.period_doubling_slope

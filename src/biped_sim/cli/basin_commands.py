@@ -10,7 +10,6 @@ import typer
 from rich.console import Console
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
-from biped_sim.errors import ConfigError
 from biped_sim.io.output import check_writable_dir
 
 AxisOption = "KEY=LO:HI:N, KEY a simulation.initial key (e.g. stance_angle=0:0.4:41)."
@@ -39,25 +38,16 @@ def basin_command(
     """
     from biped_sim.plots import save_figure
     from biped_sim.report.basin import basin_figure
-    from biped_sim.studies.basin import CONVERGED_TOLERANCE, BasinSpec, map_basin, parse_axis, write_basin
-    from biped_sim.sweep import default_jobs, make_executor
+    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis, write_basin
+    from biped_sim.sweep import study_executor, workers_for
 
-    if executor not in ("local", "dask"):
-        raise ConfigError("--executor", f"unknown executor {executor!r}; expected local or dask")
-    if jobs is not None and jobs < 1:
-        raise ConfigError("--jobs", "must be at least 1")
-    spec = BasinSpec(
-        load(config_path, set_), parse_axis("--x", x), parse_axis("--y", y), steps, tolerance or CONVERGED_TOLERANCE
-    )
+    spec = BasinSpec(load(config_path, set_), parse_axis("x", x), parse_axis("y", y), steps, tolerance)
     check_writable_dir(out)
     console = Console(stderr=True)
-    workers = max(1, min(jobs or default_jobs(), spec.y.n))
+    workers = workers_for(spec.y.n, jobs)
     progress = None if as_json else lambda done, total: console.print(f"rows {done}/{total}", end="\r")
-    if executor == "local" and workers == 1:  # no worker process to start
-        basin = map_basin(spec, out, None, progress)
-    else:
-        with make_executor(executor, workers) as pool:
-            basin = map_basin(spec, out, pool, progress)
+    with study_executor(executor, workers) as pool:
+        basin = map_basin(spec, out, pool, progress)
     files = write_basin(basin, out) + save_figure(basin_figure(basin), out, "basin")
     doc = basin.to_json()
     if as_json:

@@ -7,7 +7,6 @@ exit codes).
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -23,7 +22,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from biped_sim.cli.common import SetOption, app, load, user_errors
+from biped_sim.cli.common import SetOption, app, end_interrupted, fail, user_errors
 from biped_sim.errors import ConfigError
 from biped_sim.io.output import OutputKind, check_output_dir, check_writable_dir, staged_directory
 
@@ -115,25 +114,28 @@ def sweep_command(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress output.")] = False,
 ) -> None:
     """Run every combination of a sweep file in parallel; write run directories and sweep.csv."""
-    from biped_sim.sweep import check_buildable, default_jobs, load_sweep, make_executor, pending_runs, run_sweep
+    from biped_sim.sweep import (
+        check_buildable,
+        check_executor,
+        load_sweep,
+        make_executor,
+        pending_runs,
+        run_sweep,
+        workers_for,
+    )
 
-    if executor not in ("local", "dask"):
-        raise ConfigError("--executor", f"unknown executor {executor!r}; expected local or dask")
-    if jobs is not None and jobs < 1:
-        raise ConfigError("--jobs", "must be at least 1")
+    check_executor(executor, scheduler)
     sweep = load_sweep(sweep_file, set_ or [])
     sweep_dir = out or sweep.default_output_dir()
     check_writable_dir(sweep_dir)
     check_buildable(sweep)
-    pending = pending_runs(sweep, sweep_dir, resume)
-    workers = max(1, min(jobs or default_jobs(), len(pending)))
+    workers = workers_for(len(pending_runs(sweep, sweep_dir, resume)), jobs)
     console = Console()
     try:
         with make_executor(executor, workers, scheduler) as pool, SweepReporter(console, quiet) as reporter:
             outcome = run_sweep(sweep, sweep_dir, pool, resume=resume, on_progress=reporter)
-    except KeyboardInterrupt:
-        typer.echo(f"interrupted: finished runs are kept in {sweep_dir}/; the same command runs the rest", err=True)
-        raise typer.Exit(130) from None
+    except KeyboardInterrupt as exc:
+        end_interrupted(exc, f"finished runs are kept in {sweep_dir}/; the same command runs the rest")
     counts = ", ".join(f"{n} {status}" for status, n in sorted(outcome.progress.statuses.items()))
     console.print(
         f"sweep {sweep.spec.name}: {len(sweep.runs)} runs, {outcome.progress.skipped} already finished"
@@ -142,9 +144,9 @@ def sweep_command(
         soft_wrap=True,
     )
     console.print(f"files: {sweep_dir}/ (sweep.csv, sweep.json, runs/)", highlight=False, soft_wrap=True)
-    if outcome.errors:
-        typer.echo(f"error: {outcome.errors} run(s) raised; see the error column of {sweep_dir}/sweep.csv", err=True)
-        raise typer.Exit(1)
+    if outcome.failed:
+        counts = ", ".join(f"{n} {status}" for status, n in sorted(outcome.failed.items()))
+        fail(f"{sum(outcome.failed.values())} failed run(s) ({counts}); see {sweep_dir}/sweep.csv", code=1)
 
 
 @app.command("report")
@@ -192,59 +194,18 @@ def animate_command(
     out: Annotated[Path, typer.Option("--out", help="Output file: .gif, or .mp4 when ffmpeg is present.")],
     fps: Annotated[float, typer.Option("--fps", help="Frames per second of playback.")] = 25.0,
     speed: Annotated[float, typer.Option("--speed", help="Playback speed (1 = real time).")] = 1.0,
-    start: Annotated[float, typer.Option("--start", help="First simulated time shown [s].")] = 0.0,
-    end: Annotated[float | None, typer.Option("--end", help="Last simulated time shown [s].")] = None,
+    t_start: Annotated[float, typer.Option("--start", help="First simulated time shown [s].")] = 0.0,
+    t_end: Annotated[float | None, typer.Option("--end", help="Last simulated time shown [s].")] = None,
 ) -> None:
     """Draw the walker walking, with contact force arrows and a time stamp."""
-    from biped_sim.animate import animate_run, check_output
+    from biped_sim.animate import animate_run, check_output, check_playback
     from biped_sim.io.trajectory import load_run
 
-    for option, value in (("--fps", fps), ("--speed", speed)):
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(option, f"must be a finite number > 0, got {value}")
-    if not (math.isfinite(start) and start >= 0):
-        raise ConfigError("--start", f"must be a finite time >= 0, got {start}")
-    if end is not None and not (math.isfinite(end) and end > start):
-        raise ConfigError("--end", f"must be a finite time after --start, got {end}")
+    check_playback(fps, speed, t_start, t_end)
     check_output(out)
     run = load_run(run_dir)
-    frames = animate_run(run, out, fps=fps, speed=speed, t_start=start, t_end=end)
+    frames = animate_run(run, out, fps=fps, speed=speed, t_start=t_start, t_end=t_end)
     typer.echo(f"animation: {out} ({frames} frames at {fps:g} fps)")
-
-
-def _compare_targets(
-    target: Path, set_: list[str] | None, skip: int
-) -> tuple[list[tuple[str, list[float]]], str | None]:
-    """(label, model step periods) of each target run, and a line on the sweep's runs without results (or None).
-
-    A config file is simulated (nothing else is written); a run directory or a sweep directory
-    is read from disk.
-    """
-    from biped_sim.io.trajectory import load_summary
-    from biped_sim.studies.compare import model_step_periods
-
-    if target.is_dir():
-        if set_:
-            raise ConfigError("--set", "only applies when comparing a config file, not a run or sweep directory")
-        if (target / "sweep.json").is_file():
-            from biped_sim.report import SweepView
-
-            view = SweepView.load(target)
-            series = [
-                (view.label(row), model_step_periods(load_summary(target / "runs" / row["run"])["step_times"], skip))
-                for row in view.finished
-            ]
-            if not series:
-                raise ConfigError(str(target), "no finished run in this sweep")
-            return series, view.missing_note("compared")
-        summary = load_summary(target)
-        return [(target.name, model_step_periods(summary["step_times"], skip))], None
-    from biped_sim.simulate import simulate
-
-    config = load(target, set_)
-    result = simulate(config)
-    label = target.stem + (f" ({', '.join(set_)})" if set_ else "")
-    return [(label, model_step_periods(result.summary["step_times"], skip))], None
 
 
 @app.command("compare")
@@ -263,12 +224,11 @@ def compare_command(
     """Per-step error table (Markdown, CSV, LaTeX) and figure of model step periods against a reference."""
     from biped_sim.io.references import load_reference
     from biped_sim.plots import comparisons_figure, save_figure
+    from biped_sim.report.targets import compare_targets
     from biped_sim.studies.compare import compare_periods, stats_table, step_table
 
     if reference is None:
         raise ConfigError("--reference", NO_REFERENCE)
-    if skip < 0:
-        raise ConfigError("--skip-steps", "must be >= 0")
     ref = load_reference(reference)
     if not ref.is_periods:
         raise ConfigError(
@@ -276,11 +236,9 @@ def compare_command(
             f"{reference} holds published relative errors, not measured step periods; "
             "compare needs a step_period reference (see docs/experiments.md)",
         )
-    if not target.exists():
-        raise ConfigError(str(target), "no such config file, run directory or sweep directory")
     out_dir = out or (target / "compare" if target.is_dir() else Path("results") / "compare" / target.stem)
     check_output_dir(out_dir, COMPARE_OUTPUT)
-    series, missing = _compare_targets(target, set_, skip)
+    series, missing = compare_targets(target, set_ or [], skip)
     comparisons = [compare_periods(ref, periods, label) for label, periods in series]
     tables = [step_table(comparisons), stats_table(comparisons)]
     figure = comparisons_figure(comparisons)

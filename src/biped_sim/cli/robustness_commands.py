@@ -10,26 +10,6 @@ from rich.console import Console
 from rich.table import Table
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
-from biped_sim.config import Config
-from biped_sim.errors import ConfigError
-
-DYNAMICS = ("rigid", "compliant")
-
-
-def _dynamics(config: Config, which: str) -> list[Config]:
-    """The config under each dynamics asked for ('both': those the walker has; ConfigError for an unknown one)."""
-    if which not in (*DYNAMICS, "both"):
-        raise ConfigError("--dynamics", f"unknown dynamics {which!r}; expected rigid, compliant or both")
-    configs = []
-    for dynamics in DYNAMICS if which == "both" else (which,):
-        data = config.model_dump(mode="json")
-        data["dynamics"] = dynamics
-        try:
-            configs.append(type(config).model_validate(data))
-        except ValueError:
-            if which != "both":
-                raise ConfigError("--dynamics", f"the {config.walker.kind} walker has no {dynamics} model") from None
-    return configs
 
 
 @app.command("robustness")
@@ -46,15 +26,12 @@ def robustness_command(
 ) -> None:
     """Started on its gait: the largest step down and up, forward and backward push it survives, its survival on
     random ground, and its gait sensitivity norm, for rigid and compliant dynamics."""
-    from biped_sim.studies.robustness import robustness, robustness_table
-    from biped_sim.sweep.runner import make_executor
+    from biped_sim.studies.robustness import robustness, robustness_configs, robustness_table
+    from biped_sim.sweep import study_executor
 
-    configs = _dynamics(load(config_path, set_), dynamics)
-    if jobs == 1:
-        results = [robustness(config, seeds=seeds) for config in configs]
-    else:
-        with make_executor("local", jobs) as executor:
-            results = [robustness(config, executor, seeds=seeds) for config in configs]
+    configs = robustness_configs(load(config_path, set_), dynamics)
+    with study_executor("local", jobs) as executor:
+        results = [robustness(config, executor, seeds=seeds) for config in configs]
     if as_json:
         typer.echo(json.dumps([r.to_json() for r in results], indent=2))
         return

@@ -13,7 +13,7 @@ import yaml
 from pydantic import ValidationError
 
 from biped_sim.config.schema import Config
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, ConfigError, quote
 
 
 class _Loader(yaml.SafeLoader):
@@ -50,14 +50,21 @@ def parse_yaml(text: str, source: str = "<string>") -> Any:
 
 
 def apply_override(data: dict[str, Any], assignment: str) -> None:
-    """Apply one ``dotted.key=value`` override (value parsed as YAML) to a raw config dict in place."""
+    """Apply one ``dotted.key=value`` override (value parsed as YAML) to a raw config dict in place.
+
+    A malformed one is an :class:`~biped_sim.errors.ArgumentError` of ``overrides`` (the CLI's ``--set``).
+    """
     if "=" not in assignment:
-        raise ConfigError("--set", f"expected KEY=VALUE, got {assignment!r}")
+        raise ArgumentError("overrides", f"expected KEY=VALUE, got {quote(assignment)}")
     key, _, raw_value = assignment.partition("=")
     key = key.strip()
     if not key or any(not part for part in key.split(".")):
-        raise ConfigError("--set", f"invalid key {key!r}")
-    set_dotted(data, key, parse_yaml(raw_value, source=f"--set {key}"))
+        raise ArgumentError("overrides", f"invalid key {quote(key)}")
+    try:
+        value = parse_yaml(raw_value, source=key)
+    except ConfigError as exc:
+        raise ArgumentError("overrides", str(exc)) from None
+    set_dotted(data, key, value)
 
 
 def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
@@ -93,7 +100,7 @@ def _format_validation_error(exc: ValidationError) -> ConfigError:
     if err["type"] == "extra_forbidden":
         message = "unknown key (not in the schema)"
     elif err["type"] == "literal_error":
-        message = f"unknown name {err.get('input')!r}; {message[0].lower()}{message[1:]}"
+        message = f"unknown name {quote(err.get('input'))}; {message[0].lower()}{message[1:]}"
     return ConfigError(loc or "config", message)
 
 

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from biped_sim.contact.friction import FRICTION_LAWS
 from biped_sim.contact.normal import NORMAL_LAWS
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
+from biped_sim.errors import quote
 
 
 def is_number_annotation(annotation: Any) -> bool:
@@ -46,7 +47,7 @@ class _Strict(BaseModel):
                     and is_number_annotation(field.annotation)
                     and any(isinstance(v, bool) for v in numbers)
                 ):
-                    raise ValueError(f"{name}: expected a number, got {str(value).lower()}")
+                    raise ValueError(f"{name}: expected a number, got {quote(value).lower()}")
         return data
 
 
@@ -251,11 +252,16 @@ class Push(_Strict):
     impulse: tuple[float, float] = Field(..., description="[px, py] [N s]; slope frame: x downhill, y its normal.")
 
 
+MAX_STEPS = 1_000_000_000  # heel strikes: more than any run within the integration budget can take
+
+
 class SimulationConfig(_Strict):
     """What to simulate and when to stop."""
 
     t_end: float = Field(15.0, gt=0, description="Simulated time [s].")
-    max_steps: int | None = Field(None, gt=0, description="Stop after this many heel strikes (none = run to t_end).")
+    max_steps: int | None = Field(
+        None, gt=0, le=MAX_STEPS, description="Stop after this many heel strikes (none = run to t_end; at most 1e9)."
+    )
     initial: InitialState | Literal["rigid_limit_cycle"] = Field(
         default_factory=InitialState,
         description="Initial leg angles and rates, or 'rigid_limit_cycle' to start on the rigid model's fixed point.",
@@ -314,11 +320,11 @@ class Config(_Strict):
             raise ValueError(f"ground.profile: {reason}")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:
             raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
-        if self.friction.model != "none" and math.tan(abs(self.ground.slope)) >= max(
+        if self.friction.model != "none" and math.tan(abs(self.ground.slope)) > max(
             self.friction.mu_static, self.friction.mu_kinetic
         ):
             raise ValueError(
-                "ground.slope: steeper than the friction cone (tan(slope) >= friction coefficient), "
+                "ground.slope: steeper than the friction cone (tan(slope) > friction coefficient), "
                 "the stance foot cannot hold"
             )
         return self
@@ -327,8 +333,6 @@ class Config(_Strict):
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""
         data = self.model_dump(mode="json")
         data["output"].pop("dir", None)
-        if data["ground"]["profile"] == {"kind": "flat"}:  # the configs of before profiles keep their hash
-            del data["ground"]["profile"]
         text = json.dumps(data, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 

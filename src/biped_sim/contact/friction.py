@@ -6,8 +6,8 @@ parameter vector of :func:`friction_parameters`, and the returned force (along t
 opposes the slip. LuGre carries a bristle deflection ``z`` per contact in the ODE state and has
 its own pair of functions.
 
-To add a law: one ``@kernel`` function, one line in ``FRICTION_LAWS``, one branch in
-:func:`friction_force`.
+To add a law: one ``@kernel`` function and one line in ``FRICTION_LAWS`` (a law with state goes last):
+:func:`friction_force` dispatches over the registry (:mod:`~biped_sim.contact.registry`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from biped_sim.contact.registry import registered_functions
 from biped_sim.kernel import kernel
 
 MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2 = range(10)
-N_FRICTION_PARAMS = 10
 
 
 @kernel

@@ -7,8 +7,8 @@ by :func:`normal_parameters`: ``p[K, N, CHI, D]`` = stiffness, exponent, hystere
 linear damping. Laws return the unclipped force; :func:`normal_force` clips it at zero (no
 "sticky" pull) so that clipping is applied once, for every law.
 
-To add a law: write one ``@kernel`` function below and add one line to ``NORMAL_LAWS`` and one
-branch to :func:`normal_force` (numba needs a static dispatch).
+To add a law: write one ``@kernel`` function below and add one line to ``NORMAL_LAWS``:
+:func:`normal_force` dispatches over the registry (:mod:`~biped_sim.contact.registry`).
 """
 
 from __future__ import annotations

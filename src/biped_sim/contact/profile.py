@@ -15,9 +15,8 @@ at declared step edges, where a step is a vertical riser at x = at. Kinds:
 
 A config with a profile, from Python (what a robustness study does), validated with every cross-check::
 
-    data = config.model_dump(mode="json")
-    data["ground"]["profile"] = StepsProfile(steps=[Step(at=0.6, height=-0.01)]).model_dump()
-    config_from_dict(data)  # or config_from_dict(data, ["ground.profile={kind: random, seed: 3}"])
+    derive(config, {"ground.profile": StepsProfile(steps=[Step(at=0.6, height=-0.01)]).model_dump()})
+    derive(config, {"ground.profile": {"kind": "random", "seed": 3}})
 
 The compiled side (:mod:`.ground`) reads :func:`profile_arrays` (a system holds :func:`profile_ground`);
 ``ground_height(x, vertices, ends)`` there

@@ -39,6 +39,8 @@ N_MODE_COLUMNS = 3
 NORMAL_MODEL, FRICTION_MODEL, SCUFFING_GUARD = 0, 1, 2
 # entries of the kernels' limits vector: impact velocity floor [m/s], fall hip height [m], fall leg angle [rad]
 IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE = 0, 1, 2
+# what a formulation's fall kernel returns: standing, or which fall limit the state passed
+STANDING, HIP_TOO_LOW, LEG_TOO_FAR = 0, 1, 2
 # onset marks written by update_contact_modes
 TOUCHDOWN = 1  # the foot touched down and no other foot of its body was or did: one heel strike per body
 _WAS_TOUCHING = 2  # transient, inside one update

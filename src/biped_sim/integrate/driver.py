@@ -21,11 +21,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from biped_sim.config import IntegratorConfig
+from biped_sim.integrate.blowup import NO_CHECKS, Scales, start_checks
 from biped_sim.integrate.explicit import Settings, advance
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
     DIVERGENCE_REASONS,
+    FALL_REASONS,
     FELL,
     RUNNING,
     TIMEOUT,
@@ -42,6 +44,7 @@ FIXED_STEP_METHODS = ("euler", "rk2", "rk4")
 STIFF_METHODS = ("radau", "bdf")  # scipy's implicit methods over the compiled right-hand side
 TIMEOUT_REASON = "simulation.max_wall_time reached"
 STATUS_NAMES = {COMPLETED: "walking", FELL: "fell", DIVERGED: "diverged", TIMEOUT: "timeout"}
+STRIKES_PER_SECOND = 50  # the strike buffers' first size per simulated second (they grow; a walker takes ~2)
 STEP_BUDGET = 20_000  # steps per compiled call between progress updates (does not change results)
 PUSH_COLUMNS = ("time", "first_sample", "work")  # a push record: when, the first sample after it, its work [J]
 
@@ -66,7 +69,7 @@ class Integration:
     rejected_steps: int
     events: int
     sample_dt: float
-    stop_reason: str | None = None  # why it diverged or timed out
+    stop_reason: str | None = None  # why it fell, diverged or timed out
     pushes: np.ndarray = field(default_factory=lambda: np.zeros((0, len(PUSH_COLUMNS))))  # applied, PUSH_COLUMNS
 
 
@@ -95,7 +98,7 @@ def recorder_for(
     """(recorder, sample interval) for an integration to ``t_end`` (samples sized for it; strikes and log grow)."""
     interval = sample_interval(integrator, sample_rate)
     n_samples = math.floor(t_end / interval + 1e-9) + 2
-    n_strikes = (max_strikes if max_strikes else int(t_end * 50) + 16) + nf  # has_room holds until max_strikes
+    n_strikes = min(max_strikes or math.inf, int(t_end * STRIKES_PER_SECOND) + 16) + nf  # grown when needed
     return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval
 
 
@@ -111,17 +114,22 @@ def integrate_model(
     progress: Callable[[float], None] | None = None,
     deadline: float = math.inf,
     pushes: Sequence[tuple[float, np.ndarray]] = (),
+    checks: Scales = NO_CHECKS,
 ) -> Integration:
     """Integrate ``system`` from (y0, modes0) at t = 0 to ``t_end`` or a stop condition.
 
     ``deadline``: the ``time.monotonic()`` past which the run stops with status 'timeout'. ``pushes``:
     (time, impulse [px, py]) in time order, each before ``t_end``; the integration stops at each time and
     resumes after :func:`apply_push` (a run that ended earlier, by a fall or max_strikes, skips the rest).
+    ``checks``: the walker's units for the blow-up checks (:mod:`~biped_sim.integrate.blowup`; the default
+    checks nothing).
     """
     y = np.array(y0, dtype=np.float64)
     modes = np.array(modes0, dtype=np.float64)
     ny, nf = y.shape[0], modes.shape[0]
     rec, interval = recorder_for(ny, nf, integrator, t_end, sample_rate, max_strikes, initial_stance_foot)
+    if checks.energy > 0.0:
+        start_checks(rec, system, y, modes)
     stiff = integrator.method in STIFF_METHODS
     if not stiff:
         tab = tableau(integrator.method)
@@ -133,12 +141,12 @@ def integrate_model(
             from biped_sim.integrate.stiff import integrate_stiff  # here: scipy.integrate adds 0.3 s to start-up
 
             rec = integrate_stiff(
-                system, rec, y, modes, integrator, segment_end, interval, max_strikes or 0, progress, deadline
+                system, rec, y, modes, integrator, segment_end, interval, max_strikes or 0, progress, deadline, checks
             )  # fmt: skip
         else:
             cfg = Settings(
                 segment_end, integrator.dt, integrator.adaptive and tab.kind != FIXED, integrator.rtol,
-                integrator.atol, integrator.max_step, interval, max_strikes or 0,
+                integrator.atol, integrator.max_step, interval, max_strikes or 0, checks,
             )  # fmt: skip
             loop = loop._replace(rec=rec)
             while loop.rec.state[0].status == RUNNING:
@@ -170,7 +178,8 @@ def apply_push(system: tuple, y: np.ndarray, modes: np.ndarray, rec: Recorder, i
     The formulation's ``hip_impulse`` makes the jump; the contact modes (armed, touching, the remembered
     impact speed) are kept: a push is not a contact event. Returns the push record (PUSH_COLUMNS): its time,
     the index of the first sample after it (a sample at the push time holds the state before it) and its
-    work, the kinetic energy jump (positions do not move, so no other energy changes).
+    work, the kinetic energy jump (positions do not move, so no other energy changes), which the blow-up
+    checks' energy reference takes in.
     """
     formulation = formulation_of(system)
     if formulation.hip_impulse is None:
@@ -178,10 +187,12 @@ def apply_push(system: tuple, y: np.ndarray, modes: np.ndarray, rec: Recorder, i
     energy = measures(system).mechanical_energy
     before = energy(y, system, modes)[0]
     y[:] = formulation.hip_impulse(y, system, np.asarray(impulse, dtype=np.float64))
+    work = energy(y, system, modes)[0] - before
     st = rec.state[0]
     st.status = RUNNING
     st.fsal_valid = 0  # the stored first stage f(t, y) is the state's before the jump
-    return float(st.time), float(st.n_samples), energy(y, system, modes)[0] - before
+    st.energy_reference += work
+    return float(st.time), float(st.n_samples), work
 
 
 def finish_integration(rec: Recorder, interval: float, max_strikes: int | None = None) -> Integration:
@@ -223,9 +234,11 @@ def stop_for_time(rec: Recorder) -> None:
 
 
 def stop_reason(st: np.record) -> str | None:
-    """Why the integration recorded in ``st`` diverged or timed out (None when it did neither)."""
+    """Why the integration recorded in ``st`` fell, diverged or timed out (None when it did none of these)."""
     if st.status == TIMEOUT:
         return TIMEOUT_REASON
     if st.status == DIVERGED:
-        return DIVERGENCE_REASONS.get(int(st.reason), "the integration failed")
+        return DIVERGENCE_REASONS.get(int(st.reason), "the integration failed").format(float(st.excess))
+    if st.status == FELL:
+        return FALL_REASONS.get(int(st.reason))
     return None

@@ -26,11 +26,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from biped_sim.integrate import blowup
 from biped_sim.integrate.dense import dense_coefficients, dense_eval, dop853_extra_stage_input, locate_event
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
-    FELL,
     MIN_STEP_REACHED,
     NONFINITE,
     RUNNING,
@@ -44,7 +44,7 @@ from biped_sim.integrate.recorder import (
 from biped_sim.integrate.stepper import Loop, error_norm, initial_step, propagate, stage_input
 from biped_sim.integrate.tableaus import DOPRI5, FIXED
 from biped_sim.kernel import kernel
-from biped_sim.multibody.dispatch import system_has_fallen, system_rhs
+from biped_sim.multibody.dispatch import system_fall, system_rhs
 from biped_sim.multibody.events import system_event_functions
 
 MIN_STEP = 1e-13  # [s] a smaller step means the solution diverged
@@ -65,11 +65,12 @@ class Settings(NamedTuple):
     max_step: float  # [s]
     sample_dt: float  # [s]
     max_strikes: int  # heel strikes that complete the run (0: no limit)
+    checks: blowup.Scales  # the blow-up checks' units (energy 0: none)
 
 
 @njit(cache=True, inline="always")  # inlined: a compiled function would be compiled once per literal status
 def _stop(st: np.record, status: int, t: float, reason: int = 0) -> None:
-    """End the integration with ``status`` (FELL or DIVERGED, and why) at time t (``st``: the loop-state record)."""
+    """End the integration with ``status`` (DIVERGED, and why) at time t (``st``: the loop-state record)."""
     st.status = status
     st.stop_time = t
     st.reason = reason
@@ -184,8 +185,9 @@ def _update_at_event(loop: Loop, t: float, max_strikes: int) -> bool:
 def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
     """Integrate from the recorder's time to t_end, a stop, ``step_budget`` steps or a full buffer (in place).
 
-    Stops set the status: COMPLETED (t_end or max_strikes heel strikes), FELL, DIVERGED (non-finite
-    state or step, step below MIN_STEP, too many forced steps, steps collapsed: the record's ``reason``).
+    Stops set the status: COMPLETED (t_end or max_strikes heel strikes), FELL (the record's ``reason``: the
+    fall kernel's criterion), DIVERGED (non-finite state or step, step below MIN_STEP, too many forced steps,
+    steps collapsed, or the blow-up checks of :mod:`~biped_sim.integrate.blowup`: the record's ``reason``).
     It returns RUNNING after ``step_budget`` steps or when one more event might not fit in the recorder
     (:func:`~biped_sim.integrate.recorder.has_room`).
     """
@@ -246,7 +248,12 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
         if tab.kind != FIXED and st.fsal_valid == 1:
             copy_vector(sc.k[0], sc.k[tab.stages])
         h = h_next
-        if system_has_fallen(y, system):
-            _stop(st, FELL, t)
+        criterion = system_fall(y, system)
+        if criterion:
+            blowup.fall(t, y, system, modes, work, rec.state, cfg.checks, criterion)
+        else:
+            blowup.check(t, y, system, modes, work, rec.state, cfg.checks, False)
+    if st.status == COMPLETED:  # the state the run ends on
+        blowup.check(t, y, system, modes, work, rec.state, cfg.checks, True)
     st.time = t
     st.step = h

@@ -22,14 +22,16 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.response import TOUCHDOWN, TOUCHING, ContactBuffers
+from biped_sim.contact.response import HIP_TOO_LOW, LEG_TOO_FAR, TOUCHDOWN, TOUCHING, ContactBuffers
 from biped_sim.kernel import kernel
 from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
 
 # status codes
 RUNNING, COMPLETED, FELL, DIVERGED, TIMEOUT = 0, 1, 2, 3, 4
-# why a run diverged (LOOP_STATE.reason)
+# why a run diverged (LOOP_STATE.reason; the blow-up checks' value is LOOP_STATE.excess)
 NONFINITE, MIN_STEP_REACHED, TOO_MANY_FORCED, STEPS_COLLAPSED, EVALUATION_BUDGET, SOLVER_FAILED = 1, 2, 3, 4, 5, 6
+ENERGY_RESIDUAL, ENERGY_JUMP, JOINT_DRIFT = 7, 8, 9  # integrate.blowup's checks
+BLEW_UP = ": the integration blew up"
 DIVERGENCE_REASONS = {
     NONFINITE: "non-finite state",
     MIN_STEP_REACHED: "step size below 1e-13 s",
@@ -37,6 +39,14 @@ DIVERGENCE_REASONS = {
     STEPS_COLLAPSED: "steps averaging below 1e-8 s over 200000 steps: the step-size control is stuck",
     EVALUATION_BUDGET: "right-hand-side evaluation budget exhausted",
     SOLVER_FAILED: "the stiff solver failed (its step size fell below round-off)",
+    ENERGY_RESIDUAL: "energy residual {:.2g} m g l" + BLEW_UP,
+    ENERGY_JUMP: "energy error of {:.2g} m g l between two checks (1 ms or one step apart), then a fall" + BLEW_UP,
+    JOINT_DRIFT: "joint drift {:.2g} leg lengths" + BLEW_UP,
+}
+# why a run fell (LOOP_STATE.reason): the codes of the formulations' fall kernels (contact.response)
+FALL_REASONS = {
+    HIP_TOO_LOW: "the hip below simulation.fall_hip_height leg lengths above the ground",
+    LEG_TOO_FAR: "a leg past simulation.fall_leg_angle from the slope normal",
 }
 LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)
 LOG_COLUMNS = 4  # time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
@@ -46,7 +56,7 @@ LOOP_STATE = np.dtype(
         ("step", np.float64),  # [s] next step size of an adaptive method (0: not chosen yet)
         ("stop_time", np.float64),  # [s] time of the fall or divergence
         ("status", np.int64),  # RUNNING, COMPLETED, FELL, DIVERGED or TIMEOUT
-        ("reason", np.int64),  # why it diverged (DIVERGENCE_REASONS), 0 otherwise
+        ("reason", np.int64),  # why it diverged (DIVERGENCE_REASONS) or fell (FALL_REASONS), 0 otherwise
         ("n_samples", np.int64),  # samples recorded
         ("n_strikes", np.int64),  # heel strikes recorded
         ("n_log", np.int64),  # contact-log rows recorded
@@ -57,6 +67,13 @@ LOOP_STATE = np.dtype(
         ("n_events", np.int64),  # event updates that changed a contact mode
         ("last_strike_foot", np.int64),  # foot of the last heel strike (bounces of it are not strikes)
         ("fsal_valid", np.int64),  # 1 when the stored first stage f(t, y) is current (explicit loop)
+        # the blow-up checks (integrate.blowup)
+        ("energy_reference", np.float64),  # [J] E(0) + W(0) + the pushes' work so far: residual = E + W - this
+        ("check_time", np.float64),  # [s] the first accepted step from here on is checked
+        ("check_residual", np.float64),  # [m g l] the energy residual at the last check
+        ("jump_time", np.float64),  # [s] the first check that saw a jump of the residual (-1: none)
+        ("jump_size", np.float64),  # [m g l] that jump
+        ("excess", np.float64),  # the value that failed a check (m g l or leg lengths)
     ]
 )
 
@@ -80,6 +97,7 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
     state = np.zeros(1, dtype=LOOP_STATE).view(np.recarray)
     state[0].status = RUNNING
     state[0].last_strike_foot = initial_stance_foot
+    state[0].jump_time = -1.0
     return Recorder(
         state=state,
         sample_t=np.zeros(n_samples),
@@ -127,7 +145,7 @@ def copy_vector(dst: np.ndarray, src: np.ndarray) -> None:
     """dst[:] = src for 1-D arrays, element by element.
 
     Written out because numba compiles a slice assignment with a shape check whose error message
-    (string formatting of the shapes) costs about 2 s of compilation on a cold cache.
+    (string formatting of the shapes) is a large part of a cold compilation.
     """
     for i in range(src.shape[0]):
         dst[i] = src[i]

@@ -15,12 +15,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from biped_sim.config import IntegratorConfig
 from biped_sim.contact.response import ContactBuffers
+from biped_sim.integrate import blowup
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
@@ -36,7 +38,7 @@ from biped_sim.integrate.recorder import (
     with_room,
 )
 from biped_sim.kernel import kernel
-from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system_has_fallen, system_rhs
+from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system_fall, system_rhs
 from biped_sim.multibody.events import event_count, system_event_functions
 
 EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
@@ -80,11 +82,12 @@ def integrate_stiff(
     max_strikes: int,
     progress: Callable[[float], None] | None,
     deadline: float = math.inf,
+    checks: blowup.Scales = blowup.NO_CHECKS,
 ) -> Recorder:
     """Integrate with scipy's Radau or BDF, restarting at every contact event; returns the (enlarged) recorder.
 
     The run stops as 'timeout' past ``deadline`` (``time.monotonic()``) and as diverged after
-    ``MAX_STIFF_EVALS`` right-hand sides.
+    ``MAX_STIFF_EVALS`` right-hand sides or when the blow-up checks (``checks``) fail.
     """
     ny = y.shape[0]
     work = make_workspace(system)
@@ -110,7 +113,7 @@ def integrate_stiff(
     method = "Radau" if integrator.method == "radau" else "BDF"
     rec = integrate_scipy(
         system, rec, y, modes, contact_buffers(system), method, integrator.rtol, integrator.atol, integrator.max_step,
-        t_end, interval, max_strikes, progress, fun, jac=jac,
+        t_end, interval, max_strikes, progress, fun, jac=jac, checks=checks, work=work,
     )  # fmt: skip
     rec.state[0].rhs_evals += counts["jac"] * (ny + 1)
     return rec
@@ -135,6 +138,8 @@ def integrate_scipy(
     jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
     event_values: Callable[[np.ndarray, tuple, np.ndarray], None] = system_event_functions,
     apply_events: Callable[..., bool] = apply_events,
+    checks: blowup.Scales = blowup.NO_CHECKS,
+    work: tuple | None = None,
 ) -> Recorder:
     """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events; returns the recorder.
 
@@ -145,6 +150,8 @@ def integrate_scipy(
     The returned recorder is ``rec`` or, when its contact log or strike buffers had to grow, its
     enlarged copy; its rhs_evals adds solve_ivp's count of ``fun`` calls. The integration starts where the
     recorder stands (t = 0 for a new one, which records the first sample), so a driver may resume it.
+    With ``checks`` (and the right-hand side's ``work``), the blow-up checks run at solve_ivp's accepted
+    steps, as in the compiled loop.
     """
     nf = modes.shape[0]
     touching_before = np.zeros(nf)
@@ -188,24 +195,66 @@ def integrate_scipy(
         hit_event = sol.status == 1
         if hit_event:
             t_stop = min(t_stop + EVENT_NUDGE, t_end)
-        while st.n_samples < rec.sample_t.shape[0] and st.n_samples * interval <= t_stop:
-            ts = st.n_samples * interval
-            if ts > t:
-                record_sample(rec, ts, sol.sol(ts), modes)
-            else:
-                record_sample(rec, ts, y, modes)
-        y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1]
+        blown = _check_steps(sol, system, modes, work, rec, checks)  # the accepted step where a check failed
+        if blown is not None:
+            t_stop, hit_event = float(sol.t[blown]), False
+        _record_samples(rec, sol, t, t_stop, y, modes, interval)
+        y[:] = sol.sol(t_stop) if hit_event else sol.y[:, -1 if blown is None else blown]
         t = t_stop
+        if blown is not None:
+            break
         rec = with_room(rec, nf)
         if hit_event and apply_events(t, y, system, modes, contact, rec, touching_before, max_strikes):
             st.n_events += 1
-        if system_has_fallen(y, system):
-            st.status = FELL
-            st.stop_time = t
+        _stop_if_fallen(t, y, system, modes, work, rec, checks)
         if progress is not None:
             progress(t)
         if not math.isfinite(t):
             st.status, st.reason = DIVERGED, NONFINITE
+    if st.status == COMPLETED and work is not None:  # the state the run ends on
+        blowup.check(t, y, system, modes, work, rec.state, checks, True)
     st.rhs_evals += nfev
     st.time = t
     return rec
+
+
+def _stop_if_fallen(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple | None, rec: Recorder, checks: blowup.Scales
+) -> None:
+    """End the run at a fall (FELL and its criterion; the blow-up checks' verdict when they run)."""
+    criterion = system_fall(y, system)
+    if criterion and work is not None:
+        blowup.fall(t, y, system, modes, work, rec.state, checks, criterion)
+    elif criterion:
+        st = rec.state[0]
+        st.status, st.stop_time, st.reason = FELL, t, criterion
+
+
+def _record_samples(
+    rec: Recorder, sol: Any, t: float, t_stop: float, y: np.ndarray, modes: np.ndarray, interval: float
+) -> None:
+    """The samples of a solve_ivp segment from t (state ``y``) to ``t_stop``, from its dense output."""
+    st = rec.state[0]
+    while st.n_samples < rec.sample_t.shape[0] and st.n_samples * interval <= t_stop:
+        ts = st.n_samples * interval
+        if ts > t:
+            record_sample(rec, ts, sol.sol(ts), modes)
+        else:
+            record_sample(rec, ts, y, modes)
+
+
+def _check_steps(
+    sol: Any, system: tuple, modes: np.ndarray, work: tuple | None, rec: Recorder, checks: blowup.Scales
+) -> int | None:
+    """Run the blow-up checks due at the accepted steps of a solve_ivp segment; the step where one failed, or None."""
+    st = rec.state[0]
+    if checks.energy <= 0.0 or work is None:
+        return None
+    for k in range(1, len(sol.t)):
+        if sol.t[k] >= st.check_time:
+            blowup.check(
+                float(sol.t[k]), np.ascontiguousarray(sol.y[:, k]), system, modes, work, rec.state, checks, True
+            )
+            if st.status != RUNNING:
+                return k
+    return None

@@ -2,7 +2,7 @@
 
 Every formulation is one :class:`~biped_sim.multibody.formulation.Formulation` record, registered
 below with one line. Compiled code calls the generic ``system_*`` kernels (one per entry of
-``KERNEL_SIGNATURES``: ``system_rhs``, ``system_foot_contact``, ``system_has_fallen``);
+``KERNEL_SIGNATURES``: ``system_rhs``, ``system_foot_contact``, ``system_fall``, ``system_audit``);
 :func:`_generic_kernel` makes each of them and registers a numba ``@overload`` that resolves the call
 at compile time from the type of ``system`` (the formulation's NamedTuple class), so one loop source
 serves every formulation and each specialisation is cached on disk. Called from Python, the same
@@ -16,12 +16,8 @@ import inspect
 from collections.abc import Callable
 from typing import Any
 
-from numba import types
-from numba.extending import overload
-
-from biped_sim.contact.registry import implementation_of
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
-from biped_sim.kernel import kernel_options
+from biped_sim.kernel import overload_by_type
 from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
 
@@ -52,9 +48,9 @@ def formulation_of(system: tuple) -> Formulation:
 def _generic_kernel(kernel: str) -> Callable[..., Any]:
     """``system_<kernel>``: calls ``kernel`` of the formulation of its ``system`` argument.
 
-    Compiled, numba resolves the call at compile time from the type of ``system`` (the typing
-    function below) and compiles the formulation's kernel in its place; in Python it looks the
-    kernel up in the registry. Both functions show the parameters of ``KERNEL_SIGNATURES``.
+    Compiled, numba resolves the call at compile time from the type of ``system``
+    (:func:`~biped_sim.kernel.overload_by_type`) and compiles the formulation's kernel in its place; in
+    Python it looks the kernel up in the registry. Both functions show the parameters of ``KERNEL_SIGNATURES``.
     """
     parameters = KERNEL_SIGNATURES[kernel]
     at = parameters.index("system")
@@ -65,23 +61,21 @@ def _generic_kernel(kernel: str) -> Callable[..., Any]:
     def generic(*args: Any) -> Any:
         return getattr(formulation_of(args[at]), kernel)(*args)
 
-    def typer(*args):  # type: ignore[no-untyped-def]  # typed by __signature__: numba compares it with the kernel's
-        system = args[at]
-        if isinstance(system, types.BaseNamedTuple) and system.instance_class in FORMULATIONS:
-            return implementation_of(getattr(FORMULATIONS[system.instance_class], kernel))
-        return None
+    def kernel_of(system_type: type) -> Any:
+        formulation = FORMULATIONS.get(system_type)
+        return None if formulation is None else getattr(formulation, kernel)
 
-    typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, jit_options=kernel_options())(typer)
     generic.__name__ = generic.__qualname__ = f"system_{kernel}"
     generic.__doc__ = f"``{kernel}`` of the formulation of ``system`` (compiled: resolved by type)."
     generic.__signature__ = signature  # type: ignore[attr-defined]
+    overload_by_type(generic, "system", kernel_of, inline=False)
     return generic
 
 
 system_rhs = _generic_kernel("rhs")
 system_foot_contact = _generic_kernel("foot_contact")
-system_has_fallen = _generic_kernel("has_fallen")
+system_fall = _generic_kernel("fall")
+system_audit = _generic_kernel("audit")
 
 
 def measures(system: tuple) -> Measures:

@@ -27,8 +27,10 @@ KERNEL_SIGNATURES: dict[str, tuple[str, ...]] = {
     "rhs": ("t", "y", "system", "modes", "work", "ydot"),
     # (penetration delta [m], approach velocity deltadot [m/s], contact point along the slope [m]) of a foot
     "foot_contact": ("y", "system", "foot"),
-    # whether the walker fell (stops the integration)
-    "has_fallen": ("y", "system"),
+    # whether the walker fell (stops the integration): STANDING (0), or which limit it passed (contact.response codes)
+    "fall": ("y", "system"),
+    # (mechanical energy E = kinetic + potential + elastic [J], joint drift ||Phi|| [m]): the loops' blow-up checks
+    "audit": ("y", "system", "modes", "work"),
 }
 
 
@@ -158,7 +160,8 @@ class Formulation:
     system_type: type
     rhs: Callable[..., None]
     foot_contact: Callable[..., tuple[float, float, float]]
-    has_fallen: Callable[..., bool]
+    fall: Callable[..., int]
+    audit: Callable[..., tuple[float, float]]
     make_workspace: Callable[[Any], tuple]  # (system) -> the right-hand side's buffers (a NamedTuple of arrays)
     measures: Measures
     coordinates: tuple[str, ...]  # see StateLayout

@@ -22,26 +22,26 @@ builders' output) into this formulation, so both describe the same walker by con
 from __future__ import annotations
 
 import math
-from types import FunctionType
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
-from numba.core.dispatcher import Dispatcher
 
 from biped_sim.contact.ground import FLAT_GROUND, FlatGround, Ground, ProfileGround, ground_clearance
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
+    HIP_TOO_LOW,
     IMPACT_FLOOR,
+    LEG_TOO_FAR,
+    STANDING,
     arc_contact,
     arc_energy,
     arc_forces,
     ground_forces,
     is_loaded,
 )
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 
@@ -86,28 +86,11 @@ def make_workspace(system: MinimalSystem) -> Workspace:
     return Workspace(np.zeros((system.body_mass.shape[0] + system.foot_body.shape[0], N_COLUMNS)))
 
 
-def _inlined(kernel: Dispatcher) -> Dispatcher:
-    """The compiled ``kernel`` (same source) made to be inlined where it is called, with its compiled callees.
-
-    The contact response is written once for every formulation (:mod:`biped_sim.contact.response`) as
-    ordinary compiled functions. Called from this right-hand side, a call passes every array as seven
-    machine words, and the call and the reference counts numba adds around it cost about 0.05 us per
-    loaded foot (measured: 0.41 against 0.36 us per evaluation of the default walker, bench method).
-    Inlined (numba's ``inline="always"``), that cost goes. The copy runs the kernel's own code object,
-    so each equation keeps one source; the laws reached through the registry tuples (``literal_unroll``)
-    are direct calls that LLVM inlines already.
-    """
-    function = kernel.py_func
-    names = dict(function.__globals__)
-    for name in function.__code__.co_names:
-        if isinstance(names.get(name), Dispatcher):
-            names[name] = _inlined(names[name])
-    code = FunctionType(function.__code__, names, function.__name__, function.__defaults__, function.__closure__)
-    return njit(inline="always")(code)
-
-
-_ground_forces = _inlined(ground_forces)
-_is_loaded = _inlined(is_loaded)
+# the contact response is written once for every formulation as ordinary kernels; inlined here, the call and the
+# reference counts around it go (make bench shows the cost per evaluation); the laws reached through the registry
+# tuples are direct calls that LLVM inlines already
+_ground_forces = inlined(ground_forces)
+_is_loaded = inlined(is_loaded)
 
 
 @kernel
@@ -302,14 +285,22 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
 
 
 @kernel
-def has_fallen(y: np.ndarray, system: MinimalSystem) -> bool:
-    """Fall: hip below the height limit over the ground under it, or any body rotated past the leg-angle limit."""
+def fall(y: np.ndarray, system: MinimalSystem) -> int:
+    """HIP_TOO_LOW: hip below the height limit over the ground under it; LEG_TOO_FAR: a body rotated past the
+    leg-angle limit; else STANDING."""
     if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:
-        return True
+        return HIP_TOO_LOW
     for b in range(system.body_mass.shape[0]):
         if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
-            return True
-    return False
+            return LEG_TOO_FAR
+    return STANDING
+
+
+@kernel
+def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
+    """(mechanical energy [J], 0): the coordinates hold the hip joints exactly, so there is no drift."""
+    kinetic, potential, elastic = mechanical_energy(y, system, modes)
+    return kinetic + potential + elastic, 0.0
 
 
 # ---------------------------------------------------------------- conversion and post-processing (Python side)
@@ -419,7 +410,8 @@ FORMULATION = Formulation(
     system_type=MinimalSystem,
     rhs=rhs,
     foot_contact=foot_contact,
-    has_fallen=has_fallen,
+    fall=fall,
+    audit=audit,
     make_workspace=make_workspace,
     measures=Measures(
         pitch=pitch,

@@ -32,7 +32,10 @@ from biped_sim.contact.ground import FLAT_GROUND, Ground, ground_clearance
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
+    HIP_TOO_LOW,
     IMPACT_FLOOR,
+    LEG_TOO_FAR,
+    STANDING,
     arc_contact,
     arc_energy,
     arc_forces,
@@ -274,17 +277,25 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
 
 
 @kernel
-def has_fallen(y: np.ndarray, system: PlanarSystem) -> bool:
-    """Fall: hip (joint 0) below the height limit over the ground under it, or a body past the leg-angle limit."""
+def fall(y: np.ndarray, system: PlanarSystem) -> int:
+    """HIP_TOO_LOW: hip (joint 0) below the height limit over the ground under it; LEG_TOO_FAR: a body past the
+    leg-angle limit; else STANDING."""
     if system.joint_bodies.shape[0] > 0:
         jp = system.joint_points[0]
         _, _, hip_x, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
         if ground_clearance(hip_x, hip_y, system.ground) < system.limits[FALL_HIP_HEIGHT]:
-            return True
+            return HIP_TOO_LOW
     for b in range(system.body_mass.shape[0]):
         if abs(y[3 * b + 2]) > system.limits[FALL_LEG_ANGLE]:
-            return True
-    return False
+            return LEG_TOO_FAR
+    return STANDING
+
+
+@kernel
+def audit(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
+    """(mechanical energy [J], ||Phi|| [m]) of a state, for the loops' blow-up checks."""
+    kinetic, potential, elastic = mechanical_energy(y, system, modes)
+    return kinetic + potential + elastic, constraint_violation(y, system)[0]
 
 
 # ---------------------------------------------------------------- post-processing (Python side)
@@ -339,7 +350,8 @@ FORMULATION = Formulation(
     system_type=PlanarSystem,
     rhs=rhs,
     foot_contact=foot_contact,
-    has_fallen=has_fallen,
+    fall=fall,
+    audit=audit,
     make_workspace=make_workspace,
     measures=Measures(
         pitch=pitch,

@@ -28,8 +28,11 @@ from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
     FRICTION_MODEL,
+    HIP_TOO_LOW,
     IMPACT_FLOOR,
+    LEG_TOO_FAR,
     NORMAL_MODEL,
+    STANDING,
     is_loaded,
     normal_response,
     stored_energy,
@@ -206,20 +209,28 @@ def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -
 
 
 @kernel
-def has_fallen(y: np.ndarray, system: SpatialSystem) -> bool:
-    """Fall: the hip (point s_a of primitive 0) below the height limit, or a body's legs tilted past the limit angle."""
+def fall(y: np.ndarray, system: SpatialSystem) -> int:
+    """HIP_TOO_LOW: the hip (point s_a of primitive 0) below the height limit; LEG_TOO_FAR: a body's legs tilted
+    past the limit angle; else STANDING."""
     nb = system.body_mass.shape[0]
     if system.con_type.shape[0] > 0:
         hip = point_state(y, nb, system.con_bodies[0, 0], vec3(system.con_vecs, 0, 0))[0]
         if hip[1] < system.limits[FALL_HIP_HEIGHT]:
-            return True
+            return HIP_TOO_LOW
     for b in range(nb):
         p = parameters(y, b)
         pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]
         cos_tilt = rotate(p, (0.0, 1.0, 0.0))[1] / pp
         if math.acos(min(1.0, max(-1.0, cos_tilt))) > system.limits[FALL_LEG_ANGLE]:
-            return True
-    return False
+            return LEG_TOO_FAR
+    return STANDING
+
+
+@kernel
+def audit(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
+    """(mechanical energy [J], ||Phi|| [m]) of a state, for the loops' blow-up checks (the Jacobian is not filled)."""
+    kinetic, potential, elastic = mechanical_energy(y, system, modes)
+    return kinetic + potential + elastic, constraint_violation(y, system, work.phi_q)[0]
 
 
 # ---------------------------------------------------------------- post-processing (Python side)
@@ -278,7 +289,8 @@ FORMULATION = Formulation(
     system_type=SpatialSystem,
     rhs=rhs,
     foot_contact=foot_contact,
-    has_fallen=has_fallen,
+    fall=fall,
+    audit=audit,
     make_workspace=make_workspace,
     measures=Measures(
         pitch=pitch,

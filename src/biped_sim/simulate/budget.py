@@ -1,4 +1,5 @@
-"""Runs that could never end or never fit are refused before they start, naming the field to change.
+"""Runs that could never end or never fit, and sweeps or studies of too many runs, are refused before they start,
+naming the field to change.
 
 A run samples its state every ``1 / output.sample_rate`` seconds up to ``simulation.t_end``; the samples
 and the channels measured from them live in memory until the run is written. A fixed-step method takes
@@ -11,12 +12,19 @@ from __future__ import annotations
 import math
 
 from biped_sim.config import Config
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import takes_fixed_steps
 
+MAX_RUNS = 1_000_000  # runs of a sweep, cells of a basin, samples of a study: more is refused before it starts
 MEMORY_BUDGET_BYTES = 4 * 2**30  # samples x channels x 8 bytes, with the copies measuring makes
 MAX_INTEGRATION_STEPS = 1e9  # about 20 minutes of the fastest compiled loop
 MEASURE_COPIES = 3  # the recorder, its trimmed copy and the measured channels
+
+
+def check_run_count(count: float, field: str, what: str = "runs") -> None:
+    """ArgumentError naming ``field`` when a sweep or study would make more than ``MAX_RUNS`` runs."""
+    if not count <= MAX_RUNS:
+        raise ArgumentError(field, f"{count:,.0f} {what}, more than the limit of {MAX_RUNS:,}")
 
 
 def check_run_size(config: Config, values_per_sample: int) -> None:

@@ -45,12 +45,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.contact.response import LEG_TOO_FAR
 from biped_sim.integrate.driver import TIMEOUT_REASON
+from biped_sim.integrate.recorder import FALL_REASONS
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
@@ -59,10 +61,11 @@ from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
-from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.stepping import MAX_STEP_TIME, RigidStep, rigid_step
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
+HIP_ON_GROUND = 0.05  # [leg lengths] the rigid step's fall event on the hip (rigid.stepping)
 
 
 @dataclass
@@ -72,6 +75,7 @@ class RigidRunResult(RunResult):
     config: Config
     walker: RigidWalker
     status: str  # 'walking', 'fell' (a stall counts as a fall) or 'timeout' (simulation.max_wall_time)
+    status_reason: str | None  # why it fell (the criterion) or timed out
     stop_time: float | None  # end of the step that fell or stalled
     t_final: float  # last simulated time: t_end, the last strike (max_steps), or the fall
     time: np.ndarray  # (ns,)
@@ -129,11 +133,34 @@ class RigidRunResult(RunResult):
         return [self.walker.legs_state(x) for x in self.strike_post]
 
 
-def _walk(
-    config: Config, start: RigidStart, progress: Callable[[float], None] | None
-) -> tuple[RigidTrace, str, float | None, float, int, int]:
-    """Step from the start until t_end, max_steps, a fall or the wall-time budget;
-    (trace, status, stop_time, t_final, evals, steps)."""
+class WalkEnd(NamedTuple):
+    """How a rigid walk ended."""
+
+    status: str  # 'walking', 'fell' or 'timeout'
+    reason: str | None  # why it fell or timed out
+    stop_time: float | None
+    t_final: float
+    rhs_evals: int
+    accepted_steps: int
+
+
+def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
+    """Which criterion ended a step that did not strike: the stall, the trip, or the fall limit its end state is
+    nearest to (the fall events stop the flow on one of them)."""
+    if step.status == "stalled":
+        return f"no heel strike within {MAX_STEP_TIME:g} sqrt(l / g): the walker rocked back or stopped"
+    if step.status == "tripped":
+        return "the swing foot met the ground profile short of a heel strike (a riser, or below it)"
+    x = step.x_minus
+    leg_margin = walker.fall_leg_angle - float(np.max(np.abs(x[: walker.n_q])))
+    hip_margin = walker.hip_height(x) / walker.leg_length - HIP_ON_GROUND
+    if leg_margin <= hip_margin:
+        return FALL_REASONS[LEG_TOO_FAR]
+    return f"the hip within {HIP_ON_GROUND:g} leg lengths of the ground"
+
+
+def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:
+    """Step from the start until t_end, max_steps, a fall or the wall-time budget."""
     walker = start.walker
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
     deadline = wall_deadline(config)
@@ -148,7 +175,9 @@ def _walk(
         finished = t0 >= t_end or (max_steps is not None and step_index >= max_steps)
         if finished or time.monotonic() > deadline:
             trace.add_samples(np.array([t0]), x, step_index)  # the state the run ends on, just after a strike
-            return trace, "walking" if finished else "timeout", None if finished else t0, t0, evals, accepted
+            if finished:
+                return trace, WalkEnd("walking", None, None, t0, evals, accepted)
+            return trace, WalkEnd("timeout", TIMEOUT_REASON, t0, t0, evals, accepted)
         pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
         step = rigid_step(walker, x, rate, pending, profile)
         trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
@@ -160,10 +189,10 @@ def _walk(
         trace.add_samples(t_samples[kept], step.samples_x[local][kept], step_index)
         t_step_end = t0 + step.period
         if t_step_end > t_end:
-            return trace, "walking", None, t_end, evals, accepted
+            return trace, WalkEnd("walking", None, None, t_end, evals, accepted)
         if step.status != "strike" or step.x_plus is None:
             trace.add_samples(np.array([t_step_end]), step.x_minus, step_index)
-            return trace, "fell", t_step_end, t_step_end, evals, accepted
+            return trace, WalkEnd("fell", fall_reason(walker, step), t_step_end, t_step_end, evals, accepted)
         trace.strike_time.append(t_step_end)
         trace.strike_pre.append(step.x_minus)
         trace.strike_post.append(step.x_plus)
@@ -189,7 +218,7 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
-        "status_reason": TIMEOUT_REASON if result.status == "timeout" else None,
+        "status_reason": result.status_reason,
         "stop_time": result.stop_time,
         "t_end": result.t_final,
         **result.step_summary(),
@@ -222,7 +251,7 @@ def simulate_rigid(
     start = start or rigid_start(config)
     walker = start.walker
     clock = time.perf_counter()
-    trace, status, stop_time, t_final, evals, accepted = _walk(config, start, progress)
+    trace, end = _walk(config, start, progress)
     wall = time.perf_counter() - clock
     ny = len(start.state)
     times = np.concatenate(trace.times)
@@ -231,9 +260,10 @@ def simulate_rigid(
     result = RigidRunResult(
         config=config,
         walker=walker,
-        status=status,
-        stop_time=stop_time,
-        t_final=t_final,
+        status=end.status,
+        status_reason=end.reason,
+        stop_time=end.stop_time,
+        t_final=end.t_final,
         time=times,
         state=states,
         energy=energy,
@@ -243,8 +273,8 @@ def simulate_rigid(
         strike_post=np.array(trace.strike_post).reshape(-1, ny),
         pushes=trace.pushes,
         steps=rigid_step_table(walker, trace),
-        rhs_evals=evals,
-        accepted_steps=accepted,
+        rhs_evals=end.rhs_evals,
+        accepted_steps=end.accepted_steps,
         wall_time_s=wall,
     )
     result.summary = json_safe(summarize_rigid(result))

@@ -2,11 +2,13 @@
 
 A compliant run needs the compiled code of its group only: its formulation's kernels and its
 integrator family's loop (every explicit method shares one compiled loop, Radau and BDF share the
-scipy driver's compiled right-hand side). Every contact law is part of each group's kernels (the laws
-are dispatched at run time). :func:`warm_up` runs a config for a millisecond once per process and
-group; ``biped-sim warmup`` (and ``make setup``) warms the default walker's group, ``--all`` every
-formulation and integrator family of the package; a sweep's workers warm each group before its
-first timed run, and a Dask worker can warm itself at start (:mod:`biped_sim.sweep.preload`).
+scipy driver's compiled right-hand side), specialised for its ground (the flat ground, or a profile).
+Every contact law is part of each group's kernels (the laws are dispatched at run time).
+:func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
+``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
+ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
+the package has; a sweep's workers warm each group before its first timed run, and a Dask worker can
+warm itself at start (:mod:`biped_sim.sweep.preload`).
 """
 
 from __future__ import annotations
@@ -16,12 +18,18 @@ from dataclasses import dataclass
 from typing import get_args
 
 from biped_sim._compiled_cache import recording_compilations
-from biped_sim.config import Config, FormulationConfig, config_from_dict
+from biped_sim.config import Config, FormulationConfig, config_from_dict, derive
+from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.simulate import simulate
 
 WARM_UP_TIME = 0.001  # [s] simulated by a warm-up run
-_WARMED: set[tuple[str, str]] = set()
+# a profile the warm-up's millisecond never reaches (its code is compiled all the same)
+WARM_UP_PROFILE = {"kind": "steps", "steps": [{"at": 100.0, "height": -0.01}]}
+GROUNDS = ("flat", "profile")
+# (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
+BUNDLED_GROUPS = (("planar", "explicit", "flat"), ("planar", "explicit", "profile"), ("spatial", "explicit", "flat"))
+_WARMED: set[tuple[str, str, str]] = set()
 
 
 @dataclass(frozen=True)
@@ -30,6 +38,7 @@ class WarmUp:
 
     formulation: str
     family: str  # 'explicit' or 'stiff'
+    ground: str  # 'flat' or 'profile'
     method: str  # the integrator the group was warmed with
     compiled: tuple[str, ...]
     seconds: float
@@ -37,12 +46,23 @@ class WarmUp:
     def line(self) -> str:
         """One line for the terminal."""
         how = f"compiled {len(self.compiled)} functions" if self.compiled else "loaded from the cache"
-        return f"{self.formulation} {self.family} ({self.method}): {how} in {self.seconds:.1f} s"
+        ground = "" if self.ground == "flat" else f", on a {self.ground}"
+        return f"{self.formulation} {self.family} ({self.method}{ground}): {how} in {self.seconds:.1f} s"
 
 
 def integrator_family(method: str) -> str:
     """'stiff' (scipy's Radau/BDF over the compiled right-hand side) or 'explicit' (the compiled loop)."""
     return "stiff" if method in STIFF_METHODS else "explicit"
+
+
+def ground_of(config: Config) -> str:
+    """'flat' or 'profile': which specialisation of the kernels a run compiles."""
+    return "flat" if config.ground.profile.kind == "flat" else "profile"
+
+
+def group_of(config: Config) -> tuple[str, str, str]:
+    """A compliant run's group: (formulation, integrator family, ground)."""
+    return config.formulation.kind, integrator_family(config.integrator.method), ground_of(config)
 
 
 def warm_up(config: Config) -> WarmUp | None:
@@ -53,14 +73,12 @@ def warm_up(config: Config) -> WarmUp | None:
     """
     if config.dynamics == "rigid":
         return None
-    group = (config.formulation.kind, integrator_family(config.integrator.method))
+    group = group_of(config)
     if group in _WARMED:
         return None
     # at least one step and one sample after the start, so that the short run passes the run's own checks
     t_end = max(WARM_UP_TIME, config.integrator.dt)
-    short = config_from_dict(
-        config.model_dump(mode="json"), [f"simulation.t_end={t_end!r}", f"output.sample_rate={1 / t_end!r}"]
-    )
+    short = derive(config, {"simulation.t_end": t_end, "output.sample_rate": 1 / t_end})
     start = time.perf_counter()
     with recording_compilations() as compiled:
         simulate(short)
@@ -68,15 +86,27 @@ def warm_up(config: Config) -> WarmUp | None:
     return WarmUp(*group, config.integrator.method, tuple(compiled), time.perf_counter() - start)
 
 
+def group_config(formulation: str, family: str, ground: str) -> Config:
+    """The default walker (the schema's defaults) in a group: ConfigError if the group does not exist (a profile
+    under a formulation that does not model it)."""
+    method = config_from_dict({}).integrator.method if family == "explicit" else STIFF_METHODS[0]
+    values: dict[str, object] = {"formulation.kind": formulation, "integrator.method": method}
+    if ground == "profile":
+        values["ground.profile"] = WARM_UP_PROFILE
+    return derive(config_from_dict({}), values)
+
+
 def warm_up_configs(every_group: bool = False) -> list[Config]:
-    """The default walker (the schema's defaults); with ``every_group``, it in every formulation x integrator family."""
-    default = config_from_dict({})
+    """The default walker in each of ``BUNDLED_GROUPS``; with ``every_group``, in every formulation x integrator
+    family x ground there is."""
     if not every_group:
-        return [default]
-    formulations = get_args(FormulationConfig.model_fields["kind"].annotation)
-    methods = (default.integrator.method, STIFF_METHODS[0])
-    return [
-        config_from_dict({}, [f"formulation.kind={kind}", f"integrator.method={method}"])
-        for kind in formulations
-        for method in methods
-    ]
+        return [group_config(*group) for group in BUNDLED_GROUPS]
+    configs = []
+    for kind in get_args(FormulationConfig.model_fields["kind"].annotation):
+        for family in ("explicit", "stiff"):
+            for ground in GROUNDS:
+                try:
+                    configs.append(group_config(kind, family, ground))
+                except ConfigError:  # e.g. the spatial formulation on a profile: not modelled, nothing to compile
+                    continue
+    return configs

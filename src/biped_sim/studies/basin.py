@@ -36,13 +36,15 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState, config_from_dict
-from biped_sim.errors import ConfigError
+from biped_sim.config import Config, InitialState, derive
+from biped_sim.config.schema import MAX_STEPS
+from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
 from biped_sim.rigid.compiled import STRIKE, walk_starts
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
 from biped_sim.rigid.models import rigid_walker
+from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
 
 LEG_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
@@ -69,19 +71,20 @@ class GridAxis:
         return np.linspace(self.lo, self.hi, self.n)
 
 
-def parse_axis(option: str, text: str) -> GridAxis:
-    """``KEY=LO:HI:N`` (KEY a simulation.initial key, with or without the prefix); ConfigError naming the option."""
+def parse_axis(name: str, text: str) -> GridAxis:
+    """``KEY=LO:HI:N`` (KEY a simulation.initial key, with or without the prefix); ArgumentError naming ``name``
+    (the axis: ``x`` or ``y``)."""
     key, sep, rest = text.partition("=")
     key = key.strip().removeprefix(KEY_PREFIX)
     if not sep or key not in LEG_KEYS:
-        raise ConfigError(option, f"expected KEY=LO:HI:N with KEY one of {KEY_PREFIX}{{{', '.join(LEG_KEYS)}}}")
+        raise ArgumentError(name, f"expected KEY=LO:HI:N with KEY one of {KEY_PREFIX}{{{', '.join(LEG_KEYS)}}}")
     parts = rest.split(":")
     try:
         lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
     except (IndexError, ValueError):
-        raise ConfigError(option, f"{rest!r}: expected LO:HI:N (two numbers and a count)") from None
+        raise ArgumentError(name, f"{quote(rest)}: expected LO:HI:N (two numbers and a count)") from None
     if len(parts) != 3 or not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo or n < 2:
-        raise ConfigError(option, f"{rest!r}: need finite LO < HI and N >= 2")
+        raise ArgumentError(name, f"{quote(rest)}: need finite LO < HI and N >= 2")
     return GridAxis(key, lo, hi, n)
 
 
@@ -97,13 +100,14 @@ class BasinSpec:
 
     def __post_init__(self) -> None:
         if self.x.key == self.y.key:
-            raise ConfigError("--y", f"the same key as --x ({self.x.key})")
+            raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
         if not isinstance(self.config.simulation.initial, InitialState):
             raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its four keys")
-        if self.steps < 1:
-            raise ConfigError("--steps", "must be at least 1")
+        check_run_count(self.x.n * self.y.n, "y", "cells (x times y values)")
+        if not 1 <= self.steps <= MAX_STEPS:
+            raise ArgumentError("steps", f"must be from 1 to {MAX_STEPS:.0e}")
         if not (math.isfinite(self.tolerance) and self.tolerance > 0):
-            raise ConfigError("--tolerance", "must be a positive number")
+            raise ArgumentError("tolerance", "must be a positive number")
 
     @property
     def garcia_section(self) -> bool:
@@ -160,10 +164,9 @@ def _compliant_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[i
     t_end = STEP_TIME_ALLOWANCE * steps * math.sqrt(config.walker.leg_length / config.gravity)
     outcome, taken = [], []
     for legs in cells:
-        data = config.model_dump(mode="json")
-        data["simulation"].update(initial=legs, max_steps=steps, t_end=t_end)
         try:
-            result = simulate(config_from_dict(data))
+            result = simulate(derive(config, {"simulation.initial": legs, "simulation.max_steps": steps,
+                                              "simulation.t_end": t_end}))  # fmt: skip
         except ConfigError:  # the walker cannot start there (e.g. a foot below the ground): it falls at once
             outcome.append(FELL)
             taken.append(0)

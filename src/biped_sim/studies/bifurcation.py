@@ -16,13 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict
+from biped_sim.config import Config, derive
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.io.atomic import write_text_atomic
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
+from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.continuation import bisect_flip, continue_cycle, flip_margin
 
+PARAMETER = "ground.slope"  # the one parameter the diagram varies
 BRUTE_STEPS = 150
 RECORDED = 16
 PERTURBATION = 1e-4
@@ -39,9 +42,7 @@ class BifurcationDiagram:
 
 
 def _brute_force(config: Config, slope: float, start: np.ndarray) -> list[float]:
-    data = config.model_dump(mode="json")
-    data["ground"]["slope"] = slope
-    walker = rigid_walker(config_from_dict(data))
+    walker = rigid_walker(derive(config, {"ground.slope": slope}))
     x = walker.from_section(start + PERTURBATION)
     periods = []
     for _ in range(BRUTE_STEPS):
@@ -53,12 +54,30 @@ def _brute_force(config: Config, slope: float, start: np.ndarray) -> list[float]
     return periods[-RECORDED:]
 
 
-def bifurcation_diagram(config: Config, start: float, stop: float, n: int) -> BifurcationDiagram:
-    """Continuation and brute force over ``n`` slopes from ``start`` to ``stop``."""
+def check_bifurcation(config: Config, start: float, stop: float, n: int, param: str = PARAMETER) -> None:
+    """What :func:`bifurcation_diagram` refuses: another ``param`` than the slope, a compliant config, a slope
+    ``start`` or ``stop`` the config cannot take, fewer than 2 or more than ``MAX_RUNS`` slopes ``n``."""
+    if param != PARAMETER:
+        raise ArgumentError("param", f"only {PARAMETER} is supported")
+    if config.dynamics != "rigid":
+        raise ConfigError("dynamics", "bifurcation runs the rigid model: set dynamics to rigid")
+    for name, value in (("start", start), ("stop", stop)):
+        try:
+            derive(config, {PARAMETER: value})
+        except ConfigError as exc:
+            raise ArgumentError(name, f"slope {value}: {exc.reason}") from None
+    if n < 2:
+        raise ArgumentError("n", "at least 2 slopes")
+    check_run_count(n, "n", "slopes")
+
+
+def bifurcation_diagram(
+    config: Config, start: float, stop: float, n: int, param: str = PARAMETER
+) -> BifurcationDiagram:
+    """Continuation and brute force over ``n`` slopes from ``start`` to ``stop`` (:func:`check_bifurcation`)."""
+    check_bifurcation(config, start, stop, n, param)
     slopes = np.linspace(start, stop, n)
-    first = config.model_dump(mode="json")
-    first["ground"]["slope"] = float(start)
-    cycle: LimitCycle | None = rigid_limit_cycle(config_from_dict(first))
+    cycle: LimitCycle | None = rigid_limit_cycle(derive(config, {"ground.slope": float(start)}))
     cycles: list[LimitCycle | None] = []
     brute = []
     flip_bracket: tuple[LimitCycle, LimitCycle] | None = None

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict
+from biped_sim.config import Config, derive
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError, rigid_limit_cycle
 from biped_sim.rigid.models import SimplestWalker
 from biped_sim.rigid.stepping import rigid_step
@@ -47,9 +47,7 @@ def simplest_variational_jacobian(walker: SimplestWalker, z: np.ndarray) -> np.n
 
 def continue_cycle(config: Config, slope: float, guess: dict[str, float]) -> LimitCycle:
     """The rigid period-1 cycle at another slope, Newton started from ``guess`` (no settling)."""
-    data = config.model_dump(mode="json")
-    data["ground"]["slope"] = slope
-    return rigid_limit_cycle(config_from_dict(data), guess, settle_steps=0)
+    return rigid_limit_cycle(derive(config, {"ground.slope": slope}), guess, settle_steps=0)
 
 
 def flip_margin(cycle: LimitCycle) -> float:

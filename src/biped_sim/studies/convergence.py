@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict
+from biped_sim.config import Config, derive
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import CompassChain, rigid_walker
 from biped_sim.rigid.strike_check import StrikeCheck, strike_check
@@ -20,6 +21,7 @@ from biped_sim.studies.limit_cycle import TOUCHDOWN_KEYS
 from biped_sim.walkers.model import contact_stiffness
 
 CONVERGE_LEVELS = 5
+LEVELS = range(2, 8)  # contact settings a study may take: the stiffest (x10^6) is near the limit of dop853 steps
 CONVERGE_STEPS = 20
 MU_KINETIC, MU_STATIC = 1.0, 1.2  # the study's LuGre friction coefficients
 BRISTLE_DAMPING = 20.0  # LuGre sigma1 [s/m per N of normal load], the same at every level (see converge)
@@ -39,12 +41,14 @@ class ConvergenceRow:
     slip: float  # stance-foot slip over the last step [m]
 
 
-def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float = MU_KINETIC) -> StrikeCheck:
-    """The rigid gait's strike against the conditions under which a stiff compliant strike tends to it.
+def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float | None = None) -> StrikeCheck:
+    """The rigid gait's strike against the conditions under which a stiff compliant strike tends to it
+    (``mu_kinetic`` None: the study's ``MU_KINETIC``).
 
     ``StrikeCheck.violations(mu_static)`` lists why the compliant gait of :func:`converge` with that friction
-    cannot converge to the rigid one (empty: it can).
+    cannot converge to the rigid one (empty: it can); :func:`strike_violations` both at once.
     """
+    mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
     walker = rigid_walker(config)
     if not isinstance(walker, CompassChain):
         raise ValueError("rigid_strike_check: the compass walker only")
@@ -53,12 +57,34 @@ def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float = MU
     return strike_check(walker, x_minus, mu_kinetic)
 
 
+def strike_violations(
+    config: Config, rigid: LimitCycle, mu_kinetic: float | None = None, mu_static: float | None = None
+) -> tuple[StrikeCheck, list[str]]:
+    """:func:`rigid_strike_check` and its violations at the study's friction (None: ``MU_KINETIC``, ``MU_STATIC``)."""
+    check = rigid_strike_check(config, rigid, mu_kinetic)
+    return check, check.violations(MU_STATIC if mu_static is None else mu_static)
+
+
+def check_converge(config: Config, levels: int, mu_kinetic: float, mu_static: float) -> None:
+    """What :func:`converge` refuses: a walker other than the compass (ConfigError), ``levels`` outside
+    ``LEVELS``, negative friction coefficients or ``mu_static`` below ``mu_kinetic`` (ArgumentError)."""
+    if config.walker.kind != "compass":
+        raise ConfigError("walker.kind", "converge compares the compliant and rigid compass walker")
+    if levels not in LEVELS:
+        raise ArgumentError("levels", f"must be from {LEVELS.start} to {LEVELS.stop - 1} (stiffness x10 each)")
+    for name, value in (("mu_kinetic", mu_kinetic), ("mu_static", mu_static)):
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ArgumentError(name, f"must be a finite number >= 0, got {value}")
+    if mu_static < mu_kinetic:
+        raise ArgumentError("mu_static", f"must be >= the kinetic coefficient ({mu_kinetic})")
+
+
 def converge(
     config: Config,
     levels: int = CONVERGE_LEVELS,
     steps: int = CONVERGE_STEPS,
-    mu_kinetic: float = MU_KINETIC,
-    mu_static: float = MU_STATIC,
+    mu_kinetic: float | None = None,
+    mu_static: float | None = None,
 ) -> tuple[LimitCycle, list[ConvergenceRow]]:
     """The compliant gait approaching the rigid one as the contact stiffens, dissipates and stops slipping.
 
@@ -74,22 +100,27 @@ def converge(
     tau: it vanishes for a fixed sigma1, not for sigma1 ~ sqrt(sigma0) (the bristles' critical damping). The
     limit is the rigid strike only where :func:`rigid_strike_check` finds no violation (a leading foot that
     lands slipping backwards pushes the trailing one into the ground through friction when mu_k is large).
+    ``mu_kinetic``, ``mu_static`` None: ``MU_KINETIC``, ``MU_STATIC``. Bad arguments are refused first
+    (:func:`check_converge`).
     """
+    mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
+    mu_static = MU_STATIC if mu_static is None else mu_static
+    check_converge(config, levels, mu_kinetic, mu_static)
     rigid = rigid_limit_cycle(config)
     rigid_touchdown = np.array([rigid.touchdown[k] for k in TOUCHDOWN_KEYS])
     base_stiffness = contact_stiffness(config)
     rows = []
     for k in range(levels):
-        data = config.model_dump(mode="json")
         stiffness = base_stiffness * 10.0**k
         restitution = 0.3 / math.sqrt(10.0) ** k
         sigma0 = 1e4 * 10.0**k
-        data["contact"].update(stiffness=stiffness, materials=None, restitution=restitution)
-        data["friction"].update(
-            model="lugre", mu_kinetic=mu_kinetic, mu_static=mu_static, sigma0=sigma0, sigma1=BRISTLE_DAMPING
-        )
-        data["simulation"].update(initial=rigid.fixed_point, max_steps=steps, t_end=max(200.0, config.simulation.t_end))
-        result = simulate(config_from_dict(data))
+        level = {
+            "contact.stiffness": stiffness, "contact.materials": None, "contact.restitution": restitution,
+            "friction.model": "lugre", "friction.mu_kinetic": mu_kinetic, "friction.mu_static": mu_static,
+            "friction.sigma0": sigma0, "friction.sigma1": BRISTLE_DAMPING, "simulation.initial": rigid.fixed_point,
+            "simulation.max_steps": steps, "simulation.t_end": max(200.0, config.simulation.t_end),
+        }  # fmt: skip
+        result = simulate(derive(config, level))
         states = result.heel_strike_states
         if result.status != "walking" or len(states) < 3:
             rows.append(

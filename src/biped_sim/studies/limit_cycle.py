@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict
+from biped_sim.config import Config, derive, parse_yaml
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE
@@ -50,6 +50,7 @@ MAP_HORIZON = 10.0  # [sqrt(l / g)] a step not ended by then has stalled (period
 NOISE_PROBES = 4  # map evaluations that measure the noise floor at the fixed point
 NOISE_PROBE_STEP = 1e-8  # their relative offset: the map is linear there to 1e-16
 TOUCHDOWN_KEYS = ("stance_angle", "swing_angle", "stance_rate", "swing_rate")
+GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")  # the README's initial-state order
 
 
 def _rotate(angle: float, v: np.ndarray) -> np.ndarray:
@@ -198,12 +199,10 @@ def touchdown_guesses(
     integrator settings. Returns its last touchdown (near the stable gait when there is one) and, when
     ``settle`` > 0 and the run got further than that, its first touchdown (nearest the guess).
     """
-    data = config.model_dump(mode="json")
-    data["simulation"]["max_steps"] = settle + 1
-    data["simulation"]["t_end"] = (settle + 2) * section.horizon
+    walk = {"simulation.max_steps": settle + 1, "simulation.t_end": (settle + 2) * section.horizon}
     if guess is not None:
-        data["simulation"]["initial"] = dict(guess)
-    run = simulate(config_from_dict(data)).run
+        walk["simulation.initial"] = dict(guess)
+    run = simulate(derive(config, walk)).run
     if len(run.strike_t) == 0:
         raise ConfigError("simulation.initial", f"the compliant walker {run.status} before its first heel strike")
     touchdowns = [
@@ -298,6 +297,27 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
         f"the hip velocity, the trailing leg's angle (its foot's sinkage) and its impact-speed memory); {zero} are "
         f"below {CONTACT_MULTIPLIER_FLOOR:g}, i.e. zero: contact perturbations forgotten within the step"
     )
+
+
+def parse_guess(text: str | None) -> dict[str, float] | None:
+    """A guess of the gait from text: a YAML/JSON mapping of the four README keys, or four numbers in
+    ``GUESS_KEYS`` order (None for None); ArgumentError naming ``guess`` otherwise."""
+    if text is None:
+        return None
+    try:
+        value = parse_yaml(text, source="guess")
+    except ConfigError as exc:
+        raise ArgumentError("guess", exc.reason) from None
+    if isinstance(value, list) and len(value) == len(GUESS_KEYS):
+        value = dict(zip(GUESS_KEYS, value, strict=True))
+    if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
+        raise ArgumentError("guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
+    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in GUESS_KEYS):
+        raise ArgumentError("guess", "values must be numbers")
+    bad = [k for k in GUESS_KEYS if not math.isfinite(value[k])]
+    if bad:
+        raise ArgumentError("guess", f"{bad[0]} must be a finite number")
+    return {k: float(value[k]) for k in GUESS_KEYS}
 
 
 def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_steps: int | None = None) -> LimitCycle:

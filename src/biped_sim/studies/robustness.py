@@ -37,11 +37,12 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, config_from_dict
-from biped_sim.errors import ConfigError
+from biped_sim.config import Config, derive
+from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.tables import Column, Table
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.simulate import RunResult, simulate
+from biped_sim.simulate.budget import check_run_count
 from biped_sim.simulate.rigid import RigidRunResult
 
 SURVIVAL_STEPS = 10
@@ -58,6 +59,7 @@ RANDOM_SPACING = 0.1  # [leg lengths]
 GSN_STEP = {"rigid": 1e-6, "compliant": 1e-4}  # [leg lengths] small enough for a linear response
 GSN_STEPS = 30
 SAMPLE_RATE = 50.0  # samples per sqrt(l / g) (the runs' steps are read, and the hip at one time)
+DYNAMICS = ("rigid", "compliant")
 
 
 @dataclass(frozen=True)
@@ -89,13 +91,27 @@ def _with(
     config: Config, *, steps: int, ground: dict[str, Any] | None = None, push: float | None = None, t: float = 0.0
 ) -> Config:
     """The config of a run of ``steps`` heel strikes, with a ground profile and a push along the slope at t."""
-    data = config.model_dump(mode="json")
-    data["simulation"]["max_steps"] = steps
+    values: dict[str, Any] = {"simulation.max_steps": steps}
     if ground is not None:
-        data["ground"]["profile"] = ground
+        values["ground.profile"] = ground
     if push is not None:
-        data["simulation"]["pushes"] = [{"time": t, "impulse": [push, 0.0]}]
-    return config_from_dict(data)
+        values["simulation.pushes"] = [{"time": t, "impulse": [push, 0.0]}]
+    return derive(config, values)
+
+
+def robustness_configs(config: Config, dynamics: str = "both") -> list[Config]:
+    """``config`` under each dynamics asked for: 'rigid', 'compliant', or 'both' (those the walker has);
+    ArgumentError naming ``dynamics`` for another name, or a single dynamics the walker has no model for."""
+    if dynamics not in (*DYNAMICS, "both"):
+        raise ArgumentError("dynamics", f"unknown dynamics {quote(dynamics)}; expected rigid, compliant or both")
+    configs = []
+    for kind in DYNAMICS if dynamics == "both" else (dynamics,):
+        try:
+            configs.append(derive(config, {"dynamics": kind}))
+        except ConfigError:
+            if dynamics != "both":
+                raise ArgumentError("dynamics", f"the {config.walker.kind} walker has no {kind} model") from None
+    return configs
 
 
 def _strike_times(result: RunResult) -> np.ndarray:
@@ -122,14 +138,15 @@ def gait_start(config: Config) -> Gait:
     simplest = config.walker.kind == "simplest"
     leg, gravity = (1.0, 1.0) if simplest else (config.walker.leg_length, config.gravity)
     time_scale = math.sqrt(leg / gravity)
-    data = config.model_dump(mode="json")
-    data["ground"].pop("profile", None)
-    data["simulation"].update(pushes=[], max_steps=None, t_end=20.0 * (SETTLE_STEPS + GSN_STEPS) * time_scale)
-    data["output"]["sample_rate"] = SAMPLE_RATE / time_scale
+    undisturbed: dict[str, Any] = {
+        "ground.profile": {"kind": "flat"}, "simulation.pushes": [], "simulation.max_steps": None,
+        "simulation.t_end": 20.0 * (SETTLE_STEPS + GSN_STEPS) * time_scale,
+        "output.sample_rate": SAMPLE_RATE / time_scale,
+    }  # fmt: skip
     d = 1 if config.dynamics == "rigid" else SETTLE_STEPS
     if config.dynamics == "rigid" or config.simulation.initial == "rigid_limit_cycle":  # resolved once for all runs
-        data["simulation"]["initial"] = rigid_limit_cycle(config).fixed_point
-    base = config_from_dict(data)
+        undisturbed["simulation.initial"] = rigid_limit_cycle(config).fixed_point
+    base = derive(config, undisturbed)
     reference = simulate(_with(base, steps=d + GSN_STEPS + 2))
     strikes = _strike_times(reference)
     if reference.status != "walking" or len(strikes) < d + GSN_STEPS + 3:
@@ -263,6 +280,9 @@ def robustness(
 ) -> Robustness:
     """The robustness of the walker of ``config`` with its own dynamics (module docstring); ``executor`` runs
     the searches, the rough-ground runs and the GSN in parallel (else one after the other)."""
+    if seeds < 1:
+        raise ArgumentError("seeds", "must be at least 1")
+    check_run_count(len(roughness) * seeds, "seeds", "rough-ground runs (roughness levels times seeds)")
     gait = gait_start(config)
     tasks = [
         ("step", -1.0, 0),

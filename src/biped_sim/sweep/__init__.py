@@ -12,6 +12,7 @@ from biped_sim.sweep.rows import read_sweep
 from biped_sim.sweep.runner import (
     SweepOutcome,
     SweepProgress,
+    check_executor,
     dask_executor,
     default_jobs,
     execute_run,
@@ -20,6 +21,7 @@ from biped_sim.sweep.runner import (
     pending_runs,
     run_sweep,
     study_executor,
+    workers_for,
 )
 from biped_sim.sweep.spec import RangeSpec, RunSpec, Sweep, SweepSpec, check_buildable, expand, load_sweep
 
@@ -31,6 +33,7 @@ __all__ = [
     "SweepProgress",
     "SweepSpec",
     "check_buildable",
+    "check_executor",
     "dask_executor",
     "default_jobs",
     "execute_run",
@@ -42,4 +45,5 @@ __all__ = [
     "read_sweep",
     "run_sweep",
     "study_executor",
+    "workers_for",
 ]

@@ -29,7 +29,7 @@ def sweep_lock(sweep_dir: Path) -> Iterator[None]:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 256, 0).decode(errors="replace").strip() or "holder unknown"
-            reason = f"another sweep is writing this directory ({holder}); wait for it or choose another --out"
+            reason = f"another sweep is writing this directory ({holder}); wait for it or write elsewhere"
             raise ConfigError(str(sweep_dir), reason) from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"pid {os.getpid()} on host {socket.gethostname()}\n".encode(), 0)

@@ -25,6 +25,7 @@ matches the run directories: finished runs as finished, the others pending.
 from __future__ import annotations
 
 import contextlib
+import errno
 import inspect
 import json
 import os
@@ -36,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from biped_sim.config import Config
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, quote
 from biped_sim.io.atomic import write_json_atomic
 from biped_sim.io.run_files import start_run_directory
 from biped_sim.io.trajectory import trajectory_problem
@@ -49,7 +50,8 @@ from biped_sim.sweep.spec import RunSpec, Sweep
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
-FAILED_STATUSES = ("error", "diverged")
+FAILED_STATUSES = ("error", "diverged")  # a sweep holding such a run exits with 1
+EXECUTORS = ("local", "dask")
 
 
 def init_worker() -> None:
@@ -64,6 +66,13 @@ def default_jobs() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         return os.cpu_count() or 1
+
+
+def workers_for(tasks: int, jobs: int | None = None) -> int:
+    """How many workers ``tasks`` tasks get: ``jobs`` (default: every core), no more than the tasks, at least one."""
+    if jobs is not None and jobs < 1:
+        raise ArgumentError("jobs", "must be at least 1")
+    return max(1, min(jobs or default_jobs(), tasks))
 
 
 @contextlib.contextmanager
@@ -86,14 +95,14 @@ def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
     try:
         from distributed import Client, LocalCluster  # optional extra (biped-sim[dask])
     except ImportError:
-        raise ConfigError("--executor", "dask needs the optional extra: pip install 'biped-sim[dask]'") from None
+        raise ArgumentError("executor", "dask needs the optional extra: pip install 'biped-sim[dask]'") from None
     with contextlib.ExitStack() as stack:
         if scheduler:
             try:
                 client = stack.enter_context(Client(scheduler, timeout="10s"))
             except (OSError, TimeoutError, ValueError, TypeError) as exc:  # unreachable, or not an address at all
                 reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                raise ConfigError("--scheduler", f"cannot connect to {scheduler!r}: {reason}") from None
+                raise ArgumentError("scheduler", f"cannot connect to {scheduler!r}: {reason}") from None
         else:
             cluster = stack.enter_context(
                 LocalCluster(
@@ -113,19 +122,24 @@ def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
             executor.shutdown(wait=False)
 
 
+def check_executor(kind: str, scheduler: str | None = None) -> None:
+    """ArgumentError unless ``kind`` is 'local' or 'dask' (and a ``scheduler`` comes with 'dask' only)."""
+    if kind not in EXECUTORS:
+        raise ArgumentError("executor", f"unknown executor {quote(kind)}; expected local or dask")
+    if kind == "local" and scheduler:
+        raise ArgumentError("scheduler", "only used with the dask executor")
+
+
 @contextlib.contextmanager
 def make_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterator[Executor]:
-    """The executor named on the command line: 'local' (processes) or 'dask'."""
+    """The executor ``kind``: 'local' (processes) or 'dask' (:func:`check_executor`)."""
+    check_executor(kind, scheduler)
     if kind == "local":
-        if scheduler:
-            raise ConfigError("--scheduler", "only used with --executor dask")
         with local_executor(jobs) as executor:
             yield executor
-    elif kind == "dask":
+    else:
         with dask_executor(jobs, scheduler) as executor:
             yield executor
-    else:
-        raise ConfigError("--executor", f"unknown executor {kind!r}; expected local or dask")
 
 
 @contextlib.contextmanager
@@ -135,7 +149,8 @@ def study_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterat
     Studies take ``executor: Executor | None`` and run serially on None: one job gains nothing from a
     pool and would pay its start-up and each worker's compilation.
     """
-    if kind == "local" and jobs == 1 and scheduler is None:
+    check_executor(kind, scheduler)
+    if kind == "local" and jobs == 1:
         yield None
         return
     with make_executor(kind, jobs, scheduler) as executor:
@@ -162,11 +177,16 @@ def _clear_unfinished(run_dir: Path) -> None:
     (run_dir / "error.json").unlink(missing_ok=True)
 
 
+def disk_full(exc: BaseException) -> bool:
+    """Whether ``exc`` says the disk (or the user's quota) is full: every later run would fail the same way."""
+    return isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT)
+
+
 def execute_run(task: RunTask) -> dict[str, Any]:
     """Worker: simulate one run, write its directory, return its metric columns.
 
     Any exception is recorded (error.json and the returned row) rather than raised, so one bad
-    run never stops a sweep.
+    run never stops a sweep; but a full disk is raised (:func:`disk_full`): it stops the sweep.
     """
     run_dir = Path(task.run_dir)
     _clear_unfinished(run_dir)
@@ -177,6 +197,8 @@ def execute_run(task: RunTask) -> dict[str, Any]:
         result.write(run_dir)
         return metrics_from_summary(result.summary)
     except Exception as exc:
+        if disk_full(exc):
+            raise
         message = error_message(exc)
         record_error(run_dir, task.name, message, traceback.format_exc())
         return unfinished_metrics("error", message)
@@ -229,6 +251,15 @@ class SweepOutcome:
     @property
     def errors(self) -> int:
         return self.progress.statuses.get("error", 0)
+
+    @property
+    def failed(self) -> dict[str, int]:
+        """The sweep's failed runs by status (``FAILED_STATUSES``), finished before this resume or now."""
+        counts: dict[str, int] = {}
+        for row in self.rows:
+            if row["status"] in FAILED_STATUSES:
+                counts[row["status"]] = counts.get(row["status"], 0) + 1
+        return counts
 
 
 def manifest(sweep: Sweep) -> dict[str, Any]:
@@ -304,6 +335,8 @@ def _metrics(future: Future[dict[str, Any]], run: RunSpec, run_dir: Path) -> dic
     try:
         return future.result()
     except Exception as exc:
+        if disk_full(exc):
+            raise
         message = error_message(exc)
         record_error(run_dir, run.name, message, "".join(traceback.format_exception(exc)))
         return unfinished_metrics("error", message)
@@ -377,7 +410,8 @@ def run_sweep(
     after each run. With ``resume``, runs finished intact are not run again; damaged ones are (and are
     listed in ``progress.damaged``). The sweep directory is locked for the duration (ConfigError naming
     the holder if another sweep writes it). Interrupted (KeyboardInterrupt), the queue is cancelled, the
-    executor stopped and the table of what finished written before the interrupt propagates.
+    executor stopped and the table of what finished written before the interrupt propagates; so does a full
+    disk's OSError (no space left: the sweep stops at the first run that meets it).
     """
     sweep_dir.mkdir(parents=True, exist_ok=True)
     with sweep_lock(sweep_dir):

@@ -33,13 +33,13 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from biped_sim.config import Config, apply_override, config_from_dict, parse_yaml, set_dotted
-from biped_sim.errors import ConfigError
+from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.simulate import prepare_model
+from biped_sim.simulate.budget import MAX_RUNS
 
 _DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 _NAME_SAFE = re.compile(r"[A-Za-z0-9.+-]+")
 STEM_MAX_LENGTH = 96
-MAX_RUNS = 1_000_000  # a sweep file that expands to more runs is refused before anything is expanded
 
 
 class RangeSpec(BaseModel):
@@ -94,7 +94,7 @@ class SweepSpec(BaseModel):
     def _keys_are_dotted(cls, value: dict[str, Any]) -> dict[str, Any]:
         for key in value:
             if not _DOTTED_KEY.match(key):
-                raise ValueError(f"{key!r} is not a dotted config key such as ground.slope")
+                raise ValueError(f"{quote(key)} is not a dotted config key such as ground.slope")
         return value
 
     @field_validator("grid", "zipped", mode="before")
@@ -166,6 +166,8 @@ def _format_value(value: Any) -> str:
         text = "true" if value else "false"
     elif isinstance(value, float):
         text = f"{value:g}" if math.isfinite(value) else str(value)
+    elif isinstance(value, list | dict):
+        text = quote(value)  # short: a YAML alias bomb would not fit in memory as text
     else:
         text = str(value)
     # runs of other characters become one '-'; a value's own sign stays (slope -0.3 is 'slope=-0.3')
@@ -279,7 +281,7 @@ def expand(spec: SweepSpec, source: Path, overrides: list[str] | tuple[str, ...]
     for assignment in overrides:
         key = assignment.partition("=")[0].strip()
         if key in spec.axes:
-            raise ConfigError("--set", f"{key} is a sweep axis of {source}; change the sweep file instead")
+            raise ArgumentError("overrides", f"{key} is a sweep axis of {source}; change the sweep file instead")
         apply_override(base, assignment)
     names = short_keys(spec.axes)
     runs: list[RunSpec] = []
