@@ -21,7 +21,9 @@ from biped_sim import load_config, simulate
 
 from .conftest import ROOT
 
-GOLDEN = json.loads((Path(__file__).parent / "data" / "golden_summaries.json").read_text())["cases"]
+_FILE = json.loads((Path(__file__).parent / "data" / "golden_summaries.json").read_text())
+GOLDEN = _FILE["cases"]
+TOUCHDOWN_MEMORY = _FILE["touchdown_memory"]["cases"]  # as recorded before contact.impact_memory: impact
 FULL_LENGTH = {"round_foot_walker", "four_legged_walker"}  # 2-4 s of wall time each
 MISSING = object()
 
@@ -34,11 +36,23 @@ def test_golden_file_has_the_bundled_configs_and_their_short_variants() -> None:
     assert set(GOLDEN) >= FULL_LENGTH
 
 
-@pytest.mark.parametrize(
-    "name", [pytest.param(name, marks=pytest.mark.slow) if name in FULL_LENGTH else name for name in GOLDEN]
-)
+def _tiered(cases: dict[str, Any]) -> list[Any]:
+    return [pytest.param(name, marks=pytest.mark.slow) if name in FULL_LENGTH else name for name in cases]
+
+
+@pytest.mark.parametrize("name", _tiered(GOLDEN))
 def test_bundled_config_reproduces_its_golden_summary_exactly(name: str) -> None:
-    case = GOLDEN[name]
+    _assert_reproduces(GOLDEN[name])
+
+
+@pytest.mark.parametrize("name", _tiered(TOUCHDOWN_MEMORY))
+def test_touchdown_impact_memory_reproduces_the_summaries_recorded_before_the_option(name: str) -> None:
+    """contact.impact_memory=touchdown is the earlier behaviour, bit for bit, where the new default moved numbers."""
+    assert TOUCHDOWN_MEMORY[name]["overrides"][-1] == "contact.impact_memory=touchdown"
+    _assert_reproduces(TOUCHDOWN_MEMORY[name])
+
+
+def _assert_reproduces(case: dict[str, Any]) -> None:
     result = simulate(load_config(ROOT / case["config"], case["overrides"]))
     summary: dict[str, Any] = json.loads(json.dumps(result.summary))  # as summary.json holds it
     differences = {
