@@ -1,0 +1,115 @@
+"""Is the optimum a smooth minimum? A small profile scan per parameter, and the fit's honest verdict.
+
+For each parameter, ``PROFILE_POINTS`` on each side of the optimum (the others held), spaced by
+``PROFILE_WIDTH_SE`` standard errors (in normalised units, clipped to ``PROFILE_SPACING``); all
+``2 p PROFILE_POINTS`` runs are one batch. Along each scan every residual component should be smooth: a
+jump (a rebound, a slip or a fall that appears) shows as a second difference as large as the first
+differences. The fit is called ``converged`` only when the optimizer met a tolerance, no parameter is on
+a bound, the fitted walker reaches every target, the scans find nothing lower and see no jump; otherwise
+the verdict lists why not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2 as chi2_distribution
+
+from biped_sim.studies.fit.evaluate import Evaluator
+from biped_sim.studies.fit.optimize import FitRun
+
+PROFILE_POINTS = 3
+PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in standard errors
+PROFILE_SPACING = (1e-3, 0.03)  # ... clipped to this, in normalised units
+JUMP_RATIO = 0.5  # a second difference above this fraction of the largest first difference is a jump
+NOISE_FLOOR = 1e-3  # residuals (in standard errors) that move less than this are not judged
+AT_BOUND = 1e-6  # normalised distance from a bound that counts as on it
+MISFIT_P_VALUE = 1e-3  # chi2 above its 99.9th percentile: the data are not matched
+
+
+@dataclass
+class Profile:
+    """One parameter's scan: values, costs, and whether (and where) the residuals jump."""
+
+    key: str
+    values: list[float]
+    costs: list[float]
+    smooth: bool
+    jump: str | None  # "step 4 step_period between 0.31 and 0.312", or None
+    lower: bool  # a point of the scan is lower than the optimum
+
+
+def _jump(residuals: np.ndarray, values: np.ndarray, labels: list[str]) -> str | None:
+    """Where a residual component jumps along a scan (rows: scan points), or None."""
+    d1 = np.diff(residuals, axis=0)
+    d2 = np.diff(residuals, n=2, axis=0)
+    for i, label in enumerate(labels):
+        first = np.max(np.abs(d1[:, i]))
+        if first < NOISE_FLOOR:
+            continue
+        k = int(np.argmax(np.abs(d2[:, i])))
+        if abs(d2[k, i]) > JUMP_RATIO * first:
+            return f"{label} between {values[k]:.6g} and {values[k + 2]:.6g}"
+    return None
+
+
+def profile_scans(evaluator: Evaluator, run: FitRun, standard_errors_u: np.ndarray) -> list[Profile]:
+    """The scans around ``run``'s optimum, with spacings from the standard errors of the normalised variables."""
+    problem, u0 = run.problem, run.u
+    offsets = np.arange(-PROFILE_POINTS, PROFILE_POINTS + 1)
+    plans = []
+    for j, se in enumerate(standard_errors_u):
+        spacing = PROFILE_WIDTH_SE * se if np.isfinite(se) and se > 0 else PROFILE_SPACING[1]
+        spacing = float(np.clip(spacing, *PROFILE_SPACING))
+        points = np.repeat(u0[None, :], len(offsets), axis=0)
+        points[:, j] = np.clip(u0[j] + spacing * offsets, 0.0, 1.0)
+        plans.append(np.unique(points, axis=0) if len(np.unique(points[:, j])) < len(offsets) else points)
+    evaluator.stage = "profile scans"
+    outcomes = evaluator.outcomes([point for plan in plans for point in plan])
+    labels = [f"step {t.step} {t.quantity}" for t in problem.targets]
+    profiles, start = [], 0
+    for j, plan in enumerate(plans):
+        chunk = outcomes[start : start + len(plan)]
+        start += len(plan)
+        residuals = np.array([problem.residuals(o) for o in chunk])
+        costs = [0.5 * float(r @ r) for r in residuals]
+        values = np.array([problem.parameters[j].from_unit(u) for u in plan[:, j]])
+        jump = _jump(residuals, values, labels) if len(plan) >= 3 else None
+        lower = min(costs) < run.cost * (1 - 1e-9) - 1e-15
+        profiles.append(Profile(problem.parameters[j].key, values.tolist(), costs, jump is None, jump, lower))
+    return profiles
+
+
+def misfit(run: FitRun) -> str | None:
+    """Whether the residuals are far larger than the reference's std at the optimum (weighted fits only)."""
+    problem = run.problem
+    n, p = len(run.residuals), len(problem.parameters)
+    chi2 = float(run.residuals @ run.residuals)
+    if not problem.weighted or n <= p:
+        return None
+    p_value = float(chi2_distribution.sf(chi2, n - p))
+    if p_value >= MISFIT_P_VALUE:
+        return None
+    return (
+        f"the fitted model misses the data: chi2 {chi2:.4g} for {n - p} degrees of freedom (p = {p_value:.1e}); "
+        "another minimum, a model error or an underestimated std"
+    )
+
+
+def verdict(run: FitRun, profiles: list[Profile], reached: bool) -> list[str]:
+    """Why the fit is not converged (empty: it is)."""
+    reasons = []
+    if not run.polish.success:
+        reasons.append(f"the polish met no tolerance ({run.polish.message})")
+    for parameter, u in zip(run.problem.parameters, run.u, strict=True):
+        if u <= AT_BOUND or u >= 1 - AT_BOUND:
+            reasons.append(f"{parameter.key} is on a bound")
+    if not reached:
+        reasons.append("the fitted walker does not reach every reference step")
+    for profile in profiles:
+        if profile.jump is not None:
+            reasons.append(f"the objective jumps along {profile.key} ({profile.jump})")
+        if profile.lower:
+            reasons.append(f"the profile of {profile.key} finds a lower cost than the optimum")
+    return reasons
