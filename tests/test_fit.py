@@ -240,3 +240,14 @@ def test_the_parallel_fit_is_the_serial_fit(reference: Reference) -> None:
     with local_executor(2) as pool:
         parallel = calibrate(problem, pool).result
     assert serial.parameters == parallel.parameters and serial.run.evaluations == parallel.run.evaluations
+
+
+def test_a_reference_one_step_off_is_flagged(tmp_path: Path) -> None:
+    """Periods from a run's steps.csv (first heel strike on) read as release-numbered: the fit says so."""
+    truth = _config(f"walker.leg_inertia={TRUE_INERTIA}")
+    data = yaml.safe_load(synthetic_reference(truth, 4, 1e-5, 5, origin="heel_strike"))
+    del data["step_origin"]  # the user forgot to say so
+    path = tmp_path / "off_by_one.yaml"
+    path.write_text(yaml.safe_dump(data))
+    result = calibrate(_problem(load_reference(path))).result
+    assert any("steps +1 off better" in w for w in result.identifiability.warnings)

@@ -18,6 +18,7 @@ from scipy.stats import chi2 as chi2_distribution
 
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import FitRun
+from biped_sim.studies.fit.problem import FitProblem, simulate_outcome
 
 PROFILE_POINTS = 3
 PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in standard errors
@@ -25,6 +26,7 @@ PROFILE_SPACING = (1e-3, 0.03)  # ... clipped to this, in normalised units
 JUMP_RATIO = 0.5  # a second difference above this fraction of the largest first difference is a jump
 NOISE_FLOOR = 1e-3  # residuals (in standard errors) that move less than this are not judged
 AT_BOUND = 1e-6  # normalised distance from a bound that counts as on it
+NUMBERING_RATIO = 0.25  # a shifted numbering this much better is flagged
 MISFIT_P_VALUE = 1e-3  # chi2 above its 99.9th percentile: the data are not matched
 
 
@@ -94,6 +96,39 @@ def misfit(run: FitRun) -> str | None:
     return (
         f"the fitted model misses the data: chi2 {chi2:.4g} for {n - p} degrees of freedom (p = {p_value:.1e}); "
         "another minimum, a model error or an underestimated std"
+    )
+
+
+def numbering_check(problem: FitProblem, start: np.ndarray) -> str | None:
+    """Whether the reference's periods meet the start's model periods clearly better one step earlier or later
+    (a reference built from a run's steps.csv but read as release-numbered is one step off): one simulation
+    of the start, one strike further than the fit's."""
+    data = problem.evaluation_data(start)
+    data["simulation"]["max_steps"] += 1
+    outcome = simulate_outcome(data)
+    periods = [t for t in problem.targets if t.quantity == "step_period"]
+    if len(periods) < 3:
+        return None
+
+    shifts = (-1, 0, 1)
+    model = np.array([[outcome.value("step_period", t.model_step + s) for t in periods] for s in shifts])
+    common = np.all(np.isfinite(model), axis=0)  # the steps every alignment has
+    if common.sum() < 3:
+        return None
+    means = np.array([t.mean for t in periods])[common]
+    errors = {s: float(np.sqrt(np.mean((model[i, common] - means) ** 2))) for i, s in enumerate(shifts)}
+
+    def rms(shift: int) -> float:
+        return errors[shift]
+
+    declared = rms(0)
+    better = [s for s in (-1, 1) if rms(s) < NUMBERING_RATIO * declared]
+    if not better:
+        return None
+    origin = problem.reference.spec.step_origin
+    return (
+        f"the reference's periods meet the start's model steps {better[0]:+d} off better (RMS {rms(better[0]):.3g} s "
+        f"against {declared:.3g} s): is step_origin ({origin}) or skip right?"
     )
 
 

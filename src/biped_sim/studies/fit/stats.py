@@ -20,7 +20,7 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.io.references import Reference
 from biped_sim.studies.compare import Comparison, compare_periods
-from biped_sim.studies.fit.diagnose import AT_BOUND, Profile, misfit, profile_scans, verdict
+from biped_sim.studies.fit.diagnose import AT_BOUND, Profile, misfit, numbering_check, profile_scans, verdict
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import FitRun
 from biped_sim.studies.fit.problem import Outcome, simulate_outcome
@@ -161,6 +161,9 @@ def summarize(run: FitRun, evaluator: Evaluator) -> FitResult:
     cov, ident, unresolved = covariance(run.jacobian, s2 if math.isfinite(s2) else 1.0)
     estimates = _estimates(run, cov, unresolved)
     ident.warnings = identifiability_warnings(estimates, ident, unresolved)
+    shifted = numbering_check(problem, np.array([q.to_unit(q.start) for q in problem.parameters]))
+    if shifted is not None:
+        ident.warnings.append(shifted)
     if not math.isfinite(s2):
         ident.warnings.append(f"{n} reference values for {p} parameters: no residual variance, no standard errors")
         estimates = [Estimate(**{**vars(e), "standard_error": None}) for e in estimates]
