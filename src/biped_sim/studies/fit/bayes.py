@@ -29,7 +29,7 @@ from biped_sim.studies.fit.problem import FitProblem
 TAU_FACTOR = 50
 BALL_SD = 1e-3  # the walkers' initial spread around the optimum, in normalised units (at most)
 INTERVAL = (0.05, 0.5, 0.95)  # the 90 % credible interval and the median
-CORRELATION_FLAG = 0.95  # posterior correlations beyond this: the data cannot separate the two
+CORRELATION_FLAG = 0.99  # posterior correlations beyond this: the data hardly separate the two (as the fit's)
 PRIOR_DOMINATED = 0.5  # a 90 % interval wider than this fraction of the bound range: barely constrained
 PREDICTIVE_DRAWS = 200
 MIN_ACCEPTANCE = 0.15
@@ -155,7 +155,7 @@ def _diagnose(run: PosteriorRun, steps: int, parameters: tuple[FitParameter, ...
             for j in range(i + 1, p):
                 if abs(run.correlation[i, j]) > CORRELATION_FLAG:
                     c = run.correlation[i, j]
-                    run.warnings.append(f"{run.keys[i]} and {run.keys[j]} correlate at {c:+.3f}: not separable")
+                    run.warnings.append(f"{run.keys[i]} and {run.keys[j]} correlate at {c:+.3f}: hardly separable")
     for parameter in parameters:
         lo, _, hi = run.intervals[parameter.key]
         span = parameter.to_unit(hi) - parameter.to_unit(lo)
