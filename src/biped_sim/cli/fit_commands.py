@@ -72,7 +72,8 @@ def _print(label: str | None, doc: dict[str, Any]) -> None:
     rms = f"RMS error {doc['rms_error_s']:.4g} s, " if doc["rms_error_s"] is not None else ""
     typer.echo(
         (f"{label}: " if label else "") + f"{values}; {rms}RMS residual {doc['rms_weighted_residual']:.3g}, "
-        f"{doc['evaluations']} simulations in {doc['wall_time_s']:.1f} s; {doc['verdict']}"
+        f"{doc['evaluations']} evaluations ({doc['simulations']} simulated, {doc['evaluations_replayed']} from the "
+        f"checkpoint) in {doc['wall_time_s']:.1f} s; {doc['verdict']}"
     )
     for warning in doc["identifiability"]["warnings"] + ([doc["misfit"]] if doc["misfit"] else []):
         typer.echo(f"  warning: {warning}")

@@ -31,7 +31,7 @@ def profile_figure(result: FitResult) -> Figure:
         ax.axvline(estimate.value, color="C3", linewidth=0.8, label="optimum")
         ax.set_xlabel(profile.key)
         ax.set_ylabel("cost")
-        ax.set_title("smooth" if profile.smooth else f"jump: {profile.jump}")
+        ax.set_title("smooth" if profile.smooth else f"not smooth: {profile.jump}")
     axes[0].legend(frameon=False)
     return fig
 
@@ -89,6 +89,7 @@ def predictive_figure(calibration: Calibration) -> Figure:
         ax.set_ylabel(f"{quantity} [{MEASURED_UNITS[quantity]}]")
     axes[0].legend(frameon=False, fontsize=6)
     axes[-1].set_xlabel(f"step ({problem.reference.spec.step_origin} numbering)")
+    axes[-1].xaxis.get_major_locator().set_params(integer=True)
     return fig
 
 

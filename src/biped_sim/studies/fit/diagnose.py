@@ -1,10 +1,11 @@
 """Is the optimum a smooth minimum? A small profile scan per parameter, and the fit's honest verdict.
 
 For each parameter, ``PROFILE_POINTS`` on each side of the optimum (the others held), spaced by
-``PROFILE_WIDTH_SE`` standard errors (in normalised units, clipped to ``PROFILE_SPACING``); all
+``PROFILE_WIDTH_SE`` of its conditional standard error (the others held: ``s / sqrt((J^T J)_jj)``, the
+scale on which this scan's cost rises; in normalised units, clipped to ``PROFILE_SPACING``); all
 ``2 p PROFILE_POINTS`` runs are one batch. Along each scan every residual component should be smooth: a
-jump (a rebound, a slip or a fall that appears) shows as a second difference as large as the first
-differences. The fit is called ``converged`` only when the optimizer met a tolerance, no parameter is on
+jump (a rebound, a slip or a fall that appears) shows as one first difference off the line of its
+neighbours (:func:`_jump`). The fit is called ``converged`` only when the optimizer met a tolerance, no parameter is on
 a bound, the fitted walker reaches every target, the scans find nothing lower and see no jump; otherwise
 the verdict lists why not.
 """
@@ -21,9 +22,9 @@ from biped_sim.studies.fit.optimize import FitRun
 from biped_sim.studies.fit.problem import FitProblem, simulate_outcome
 
 PROFILE_POINTS = 3
-PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in standard errors
+PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in conditional standard errors
 PROFILE_SPACING = (1e-3, 0.03)  # ... clipped to this, in normalised units
-JUMP_RATIO = 0.5  # a second difference above this fraction of the largest first difference is a jump
+JUMP_RATIO = 0.5  # a first difference this far (relative) off its neighbours' line is a jump
 NOISE_FLOOR = 1e-3  # residuals (in standard errors) that move less than this are not judged
 AT_BOUND = 1e-6  # normalised distance from a bound that counts as on it
 NUMBERING_RATIO = 0.25  # a shifted numbering this much better is flagged
@@ -43,30 +44,44 @@ class Profile:
 
 
 def _jump(residuals: np.ndarray, values: np.ndarray, labels: list[str]) -> str | None:
-    """Where a residual component jumps along a scan (rows: scan points), or None."""
+    """Where a residual component jumps along a scan (rows: scan points), or None.
+
+    Along a smooth scan the first differences change slowly: each is close to the linear interpolation (or,
+    at the ends, extrapolation) of its neighbours, exactly so for a quadratic. A jump adds its size to one
+    first difference only; one that departs from its neighbours' line by more than ``JUMP_RATIO`` of their
+    size (and by more than ``NOISE_FLOOR``) is a jump.
+    """
     d1 = np.diff(residuals, axis=0)
-    d2 = np.diff(residuals, n=2, axis=0)
+    n = d1.shape[0]
+    if n < 3:
+        return None
     for i, label in enumerate(labels):
-        first = np.max(np.abs(d1[:, i]))
-        if first < NOISE_FLOOR:
-            continue
-        k = int(np.argmax(np.abs(d2[:, i])))
-        if abs(d2[k, i]) > JUMP_RATIO * first:
-            return f"{label} between {values[k]:.6g} and {values[k + 2]:.6g}"
+        for k in range(n):
+            if k == 0:
+                line, near = 2 * d1[1, i] - d1[2, i], (d1[1, i], d1[2, i])
+            elif k == n - 1:
+                line, near = 2 * d1[n - 2, i] - d1[n - 3, i], (d1[n - 2, i], d1[n - 3, i])
+            else:
+                line, near = 0.5 * (d1[k - 1, i] + d1[k + 1, i]), (d1[k - 1, i], d1[k + 1, i])
+            departure = abs(d1[k, i] - line)
+            if departure > NOISE_FLOOR and departure > JUMP_RATIO * max(abs(near[0]), abs(near[1])):
+                return f"{label} between {values[k]:.6g} and {values[k + 1]:.6g}"
     return None
 
 
 def profile_scans(evaluator: Evaluator, run: FitRun, standard_errors_u: np.ndarray) -> list[Profile]:
-    """The scans around ``run``'s optimum, with spacings from the standard errors of the normalised variables."""
+    """The scans around ``run``'s optimum, spaced by the conditional standard errors of the normalised variables."""
     problem, u0 = run.problem, run.u
     offsets = np.arange(-PROFILE_POINTS, PROFILE_POINTS + 1)
     plans = []
     for j, se in enumerate(standard_errors_u):
         spacing = PROFILE_WIDTH_SE * se if np.isfinite(se) and se > 0 else PROFILE_SPACING[1]
         spacing = float(np.clip(spacing, *PROFILE_SPACING))
-        points = np.repeat(u0[None, :], len(offsets), axis=0)
-        points[:, j] = np.clip(u0[j] + spacing * offsets, 0.0, 1.0)
-        plans.append(np.unique(points, axis=0) if len(np.unique(points[:, j])) < len(offsets) else points)
+        along = u0[j] + spacing * offsets
+        along = along[(along >= 0.0) & (along <= 1.0)]  # evenly spaced: a point beyond a bound is left out
+        points = np.repeat(u0[None, :], len(along), axis=0)
+        points[:, j] = along
+        plans.append(points)
     evaluator.stage = "profile scans"
     outcomes = evaluator.outcomes([point for plan in plans for point in plan])
     labels = [f"step {t.step} {t.quantity}" for t in problem.targets]
@@ -77,7 +92,7 @@ def profile_scans(evaluator: Evaluator, run: FitRun, standard_errors_u: np.ndarr
         residuals = np.array([problem.residuals(o) for o in chunk])
         costs = [0.5 * float(r @ r) for r in residuals]
         values = np.array([problem.parameters[j].from_unit(u) for u in plan[:, j]])
-        jump = _jump(residuals, values, labels) if len(plan) >= 3 else None
+        jump = _jump(residuals, values, labels)
         lower = min(costs) < run.cost * (1 - 1e-9) - 1e-15
         profiles.append(Profile(problem.parameters[j].key, values.tolist(), costs, jump is None, jump, lower))
     return profiles
@@ -144,7 +159,7 @@ def verdict(run: FitRun, profiles: list[Profile], reached: bool) -> list[str]:
         reasons.append("the fitted walker does not reach every reference step")
     for profile in profiles:
         if profile.jump is not None:
-            reasons.append(f"the objective jumps along {profile.key} ({profile.jump})")
+            reasons.append(f"the objective is not smooth along {profile.key} ({profile.jump})")
         if profile.lower:
             reasons.append(f"the profile of {profile.key} finds a lower cost than the optimum")
     return reasons

@@ -101,6 +101,8 @@ class FitResult:
     after_outcome: Outcome  # the fitted config run as given (its own formulation)
     fitted_config: Config
     misfit: str | None = None  # the data are not matched at the optimum (diagnose.misfit)
+    simulations: int = 0  # run by the fit, the scans included
+    replayed: int = 0  # read back from a checkpoint
 
     @property
     def converged(self) -> bool:
@@ -167,15 +169,19 @@ def summarize(run: FitRun, evaluator: Evaluator) -> FitResult:
     if not math.isfinite(s2):
         ident.warnings.append(f"{n} reference values for {p} parameters: no residual variance, no standard errors")
         estimates = [Estimate(**{**vars(e), "standard_error": None}) for e in estimates]
-    profiles = profile_scans(evaluator, run, np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+    curvature = np.diag(run.jacobian.T @ run.jacobian)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        conditional = np.sqrt((s2 if math.isfinite(s2) else 1.0) / curvature)
+    profiles = profile_scans(evaluator, run, conditional)
     fitted = problem.config_at({e.key: e.value for e in estimates})
     after_data = problem.evaluation_data(run.u)
     after_data["formulation"]["kind"] = problem.config.formulation.kind  # the fitted config as the user runs it
     after = simulate_outcome(after_data)
     reached = bool(np.all(np.isfinite(problem.model_values(after))))
     evaluator.save()
+    totals = {"simulations": evaluator.evaluations, "replayed": evaluator.replayed}
     return FitResult(
         run, estimates, ident, s2, source, profiles, verdict(run, profiles, reached),
         _periods(problem.reference, run.start_outcome, problem.skip, "start"),
-        _periods(problem.reference, after, problem.skip, "fitted"), after, fitted, misfit(run),
+        _periods(problem.reference, after, problem.skip, "fitted"), after, fitted, misfit(run), **totals,
     )  # fmt: skip
