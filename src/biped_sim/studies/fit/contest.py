@@ -86,8 +86,8 @@ def ranking_table(key: str, fits: list[tuple[str, FitResult]], name: str = "rank
             {
                 "rank": rank, "value": value, "parameters": text, "rms_abs": stats.rms_abs if stats else math.nan,
                 "max_abs": stats.max_abs if stats else math.nan, "k": ev.k, "chi_square": ev.chi_square,
-                "aicc": ev.aicc, "delta": ev.aicc - best, "bic": ev.bic, "evaluations": result.simulations + result.replayed,
-                "converged": "yes" if result.converged else "no",
+                "aicc": ev.aicc, "delta": ev.aicc - best, "bic": ev.bic,
+                "evaluations": result.simulations + result.replayed, "converged": "yes" if result.converged else "no",
             }
         )  # fmt: skip
     notes = [
