@@ -253,3 +253,26 @@ def test_a_reference_one_step_off_is_flagged(tmp_path: Path) -> None:
     path.write_text(yaml.safe_dump(data))
     result = calibrate(_problem(load_reference(path))).result
     assert any("steps +1 off better" in w for w in result.identifiability.warnings)
+
+
+@pytest.mark.slow  # two two-parameter fits: ~20 s on a quiet machine
+def test_a_fit_interrupted_midway_resumes_and_ends_where_an_uninterrupted_one_does(
+    reference: Reference, tmp_path: Path
+) -> None:
+    """Ctrl-C during the global stage (raised from the progress callback): the checkpoint on disk holds what was
+    done; the same call again replays it, simulates only the rest, and finds the uninterrupted fit's answer."""
+    problem = fit_problems(_config("walker.leg_inertia=0.0048"), reference, [BOUNDS, "walker.hip_mass=1.5:3"])[0][1]
+    checkpoint = tmp_path / "fit.checkpoint.json"
+
+    def interrupt(evaluator: object) -> None:
+        if getattr(evaluator, "evaluations", 0) >= 40:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        calibrate(problem, checkpoint=checkpoint, progress=interrupt)
+    done = len(json.loads(checkpoint.read_text())["evaluations"])
+    assert done >= 40
+    resumed = calibrate(problem, checkpoint=checkpoint).result
+    fresh = calibrate(problem).result
+    assert resumed.replayed == done and resumed.simulations == fresh.simulations - done
+    assert resumed.parameters == fresh.parameters
