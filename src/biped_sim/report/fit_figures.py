@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from biped_sim.io.references import MEASURED_UNITS
-from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, style_of, styled
+from biped_sim.plots import COLUMN_WIDTH_IN, PANEL_HEIGHT_IN, log_positive, log_scale, style_of, styled
 from biped_sim.studies.fit import Calibration, FitResult
 from biped_sim.studies.fit.bayes import PosteriorRun
 
@@ -105,10 +105,12 @@ def contest_errors_figure(fits: Sequence[tuple[str, FitResult]]) -> Figure:
             continue
         steps = np.asarray(after.steps, dtype=float)
         relative = np.asarray(after.relative_errors, dtype=float)
-        top.bar(steps - 0.4 + width * (i + 0.5), relative, width, label=label, color=style_of(i)["color"])
+        top.bar(steps - 0.4 + width * (i + 0.5), log_positive(relative), width, label=label, color=style_of(i)["color"])
         errors = np.asarray(after.errors, dtype=float)
         running = np.sqrt(np.cumsum(errors**2) / np.arange(1, len(errors) + 1))
-        bottom.plot(steps, 1e3 * running, marker="o", label=label, **style_of(i))
+        bottom.plot(steps, log_positive(1e3 * running), marker="o", label=label, **style_of(i))
+    top.set_yscale("log")  # laws that reach the data and laws that do not differ by orders of magnitude
+    log_scale(bottom)
     top.set_ylabel("|error| [%]")
     bottom.set_ylabel("RMS error, steps 1..k [ms]")
     bottom.set_xlabel("step number k")
