@@ -128,11 +128,14 @@ def test_compliant_newton_converges_on_the_default_walker_gait(
 ) -> None:
     cycle = default_compliant
     assert cycle.converged and cycle.residual <= 1e-10 and cycle.stable
-    assert cycle.step_period == pytest.approx(0.43508, abs=1e-5)
+    # 0.43508 s before contact.impact_memory: impact (the heel strike's rebounds now keep its impact velocity)
+    assert cycle.step_period == pytest.approx(0.43949, abs=1e-5)
     assert set(cycle.to_json()["fixed_point"]) == {"stance_angle", "swing_angle", "stance_rate", "swing_rate"}
     # the settling run of the default walker (34 steps at rtol 1e-8) ends on the same touchdown state
     settled = default_run.heel_strike_states[-1]
-    assert max(abs(settled[k] - cycle.fixed_point[k]) for k in settled) < 1e-6  # measured 1.3e-7
+    # within 2e-5 (measured 7e-6): the largest multiplier is 0.65 (0.57 under impact_memory touchdown, whose
+    # reset stance damping settled the gait faster: 1.3e-7 then), a complex pair, so the approach spirals
+    assert max(abs(settled[k] - cycle.fixed_point[k]) for k in settled) < 2e-5
     # the fast contact directions are forgotten within a step: 3 zero multipliers of 7
     assert np.sum(np.abs(cycle.multipliers) < 1e-6) == 3
 
