@@ -1,6 +1,6 @@
 """Golden summaries: the bundled configs, re-simulated, reproduce their recorded summary.json.
 
-tests/data/golden_summaries.json holds, for 14 cases (a bundled config and ``--set`` overrides), the summary
+tests/data/golden_summaries.json holds, for 21 cases (a bundled config and ``--set`` overrides), the summary
 of their run and what its arithmetic goes through (``arithmetic``), which says how it is compared (the file's
 ``classes``). A case whose numbers come from the project's compiled loops alone (``compiled``) must match bit
 for bit on any x86 CPU: a refactor that means to keep the numerics must keep every bit, and one that changes
@@ -11,7 +11,8 @@ constraint violations) must stay below ``noise_floor`` times the recorded value,
 ``counters`` (relative): a step accepted on one CPU may be rejected on another. Strings, statuses, step counts
 and feet are exact in every class. The short cases are in the fast tier, the full-length compliant runs in the
 slow tier. The same tier runs under ``make test-older-cpu`` (numpy's dispatch and OpenBLAS limited to an AVX2
-CPU), which is how these classes were checked.
+CPU), which is how these classes were checked. The ``*_touchdown_memory`` cases are the compliant ones with
+``contact.impact_memory=touchdown``: the behaviour before that option, pinned to the numbers recorded before it.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from .record_golden import GOLDEN_PATH, read_golden, record, simulated_summary
 GOLDEN = read_golden()
 CASES = GOLDEN["cases"]
 FULL_LENGTH = {"round_foot_walker", "four_legged_walker"}  # 2-4 s of wall time each
+TOUCHDOWN = "_touchdown_memory"  # suffix of the cases pinned to the behaviour before contact.impact_memory
 COUNTERS = ("rhs_evals", "accepted_steps", "rejected_steps", "events")
 NOISE_FLOOR = ("energy_residual_max", "energy_residual_max_relative", "constraint_violation_max")
 MISSING = object()
@@ -73,7 +75,12 @@ def differences(now: dict[str, Any], case: dict[str, Any]) -> dict[str, dict[str
 
 
 def test_golden_file_has_the_bundled_configs_their_short_variants_and_a_class_each() -> None:
-    assert len(CASES) == 14
+    assert len(CASES) == 21
+    touchdown = {name for name in CASES if name.endswith(TOUCHDOWN)}
+    assert {name.removesuffix(TOUCHDOWN) for name in touchdown} <= {  # the compiled cases the default moved
+        name for name, case in CASES.items() if case["arithmetic"] == "compiled" and name not in touchdown
+    }
+    assert all(CASES[name]["overrides"][-1] == "contact.impact_memory=touchdown" for name in touchdown)
     assert {Path(case["config"]).stem for case in CASES.values()} == {
         path.stem for path in (ROOT / "configs").glob("*.yaml")
     }
@@ -107,7 +114,8 @@ def test_re_recording_a_compiled_case_moves_nothing(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "name", [pytest.param(name, marks=pytest.mark.slow) if name in FULL_LENGTH else name for name in CASES]
+    "name",
+    [pytest.param(n, marks=pytest.mark.slow) if n.removesuffix(TOUCHDOWN) in FULL_LENGTH else n for n in CASES],
 )
 def test_bundled_config_reproduces_its_golden_summary(name: str) -> None:
     case = CASES[name]

@@ -59,7 +59,9 @@ def test_compliant_run_can_start_on_the_rigid_limit_cycle() -> None:
     result = simulate(config)
     rigid = rigid_limit_cycle(load_config(CONFIGS / "round_foot_walker.yaml", ["dynamics=rigid"]))
     assert result.status == "walking"
-    assert abs(result.step_periods[-1] - rigid.step_period) < 0.01 * rigid.step_period
+    # e = 0.3, not the plastic strike of the rigid model: the heel strike's rebounds (one impact, its impact
+    # velocity remembered through them: contact.impact_memory) lengthen the compliant step by about 1.5 %
+    assert abs(result.step_periods[-1] - rigid.step_period) < 0.02 * rigid.step_period
 
 
 def test_limit_cycle_cli_json_and_bad_guess() -> None:
@@ -112,8 +114,8 @@ def test_lift_is_exact_on_the_constraints_and_the_section_and_project_inverts_it
     assert np.max(np.abs(np.array(constraint_violation(y, section.system)))) < 1e-15
     delta, delta_dot = foot_kinematics(y, section.system, 0)[:2]
     assert abs(delta) < 1e-15
-    assert modes[0].tolist() == [1.0, 1.0, delta_dot]  # the striking foot as the touchdown event leaves it
-    assert foot_kinematics(y, section.system, 1)[0] > 0 and modes[1].tolist() == [1.0, 1.0, z[6]]
+    assert modes[0, :3].tolist() == [1.0, 1.0, delta_dot]  # the striking foot as the touchdown event leaves it
+    assert foot_kinematics(y, section.system, 1)[0] > 0 and modes[1, :3].tolist() == [1.0, 1.0, z[6]]
     assert np.max(np.abs(section.project(y, modes, 0) - z)) < 1e-15  # to round-off
     # the same state with the legs' bodies, feet, bristles and modes swapped, read with foot 1 striking
     swapped = np.concatenate([y[3:6], y[0:3], y[9:12], y[6:9], y[13:14], y[12:13], y[14:]])
@@ -126,11 +128,14 @@ def test_compliant_newton_converges_on_the_default_walker_gait(
 ) -> None:
     cycle = default_compliant
     assert cycle.converged and cycle.residual <= 1e-10 and cycle.stable
-    assert cycle.step_period == pytest.approx(0.43508, abs=1e-5)
+    # 0.43508 s before contact.impact_memory: impact (the heel strike's rebounds now keep its impact velocity)
+    assert cycle.step_period == pytest.approx(0.43949, abs=1e-5)
     assert set(cycle.to_json()["fixed_point"]) == {"stance_angle", "swing_angle", "stance_rate", "swing_rate"}
     # the settling run of the default walker (34 steps at rtol 1e-8) ends on the same touchdown state
     settled = default_run.heel_strike_states[-1]
-    assert max(abs(settled[k] - cycle.fixed_point[k]) for k in settled) < 1e-6  # measured 1.3e-7
+    # within 2e-5 (measured 7e-6): the largest multiplier is 0.65 (0.57 under impact_memory touchdown, whose
+    # reset stance damping settled the gait faster: 1.3e-7 then), a complex pair, so the approach spirals
+    assert max(abs(settled[k] - cycle.fixed_point[k]) for k in settled) < 2e-5
     # the fast contact directions are forgotten within a step: 3 zero multipliers of 7
     assert np.sum(np.abs(cycle.multipliers) < 1e-6) == 3
 

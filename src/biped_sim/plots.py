@@ -411,7 +411,7 @@ def comparisons_figure(comparisons: Sequence[Comparison]) -> Figure:
     return comparison_figure(
         reference.steps,
         reference.values,
-        reference.spec.std,
+        reference.std,
         reference.short_name,
         [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
         comparisons[0].published,

@@ -72,7 +72,7 @@ def pendulum(amplitude: float = 0.1, length: float = 1.0, mass: float = 1.0) -> 
         normal_params=np.zeros(4),
         friction_params=np.zeros(10),
         switches=np.zeros(3, dtype=np.int64),
-        limits=np.array([1e-3, -math.inf, math.inf]),
+        limits=np.array([1e-3, -math.inf, math.inf, 0.0]),
     )
     centre = 0.5 * length * np.array([math.sin(amplitude), -math.cos(amplitude)])
     y0 = np.array([*centre, amplitude, 0.0, 0.0, 0.0, 0.0, 0.0])

@@ -99,6 +99,11 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
                 basin["wall_s"] < basin["target_s"],
             )
         )
+    for name, label in (("global_fit", "global fit, 2 parameters, 7 periods"), ("posterior", "4,000-draw posterior")):
+        row = result.get("fit", {}).get(name)
+        if row:
+            ok = row["wall_s"] < row["target_s"]
+            out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
     mj = result.get("mujoco") or {}
     best = fastest_accurate_row(result)
     if mj.get("available") and best is not None:

@@ -31,6 +31,7 @@ import numpy as np
 import scipy
 
 from biped_sim.bench.baseline import integrate_baseline
+from biped_sim.bench.fit import fit_bench
 from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
 from biped_sim.config import Config, load_config
@@ -86,6 +87,7 @@ class BenchSettings:
     slow_repeats: int = 3  # rows whose first timed run takes over SLOW_RUN_S (the baseline, the smallest dt)
     sweep_runs: int = 32  # 0: no sweep throughput
     basins: bool = True  # the rigid map's basin wall times (minutes; bench.rigid_map)
+    fits: bool = True  # the global fit and the 4,000-draw posterior (about 10 minutes; bench.fit)
     compile_time: bool = True
     mujoco: bool = True
     quick: bool = False
@@ -100,6 +102,7 @@ class BenchSettings:
             slow_repeats=1,
             sweep_runs=0,
             basins=False,
+            fits=False,
             compile_time=False,
             mujoco=False,
             quick=True,
@@ -337,6 +340,9 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
         log(f"sweep: {json.dumps(result['sweep'])}")
     result["rigid_map"] = rigid_map_bench(settings.basins)
     log(f"rigid map: {json.dumps(result['rigid_map'])}")
+    if settings.fits:
+        result["fit"] = fit_bench()
+        log(f"fit: {json.dumps(result['fit'])}")
     if settings.mujoco:
         result["mujoco"] = mujoco_comparison(settings, base, reference, log)
     result["environment"] = environment()

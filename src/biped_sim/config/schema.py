@@ -158,6 +158,19 @@ class ContactConfig(_Strict):
         gt=0,
         description="Lower bound [m/s] on the remembered impact velocity (avoids division by ~0 on grazing contact).",
     )
+    impact_memory: Literal["impact", "touchdown"] = Field(
+        "impact",
+        description="What the remembered impact velocity belongs to (Hunt-Crossley-type laws): 'impact' keeps it "
+        "through a re-contact within recontact_time of the foot's lift-off (a rebound or micro-separation), taking "
+        "the larger of the two approach velocities; 'touchdown' makes every touchdown a new impact (the behaviour "
+        "before this option).",
+    )
+    recontact_time: float = Field(
+        0.1,
+        gt=0,
+        description="Longest flight [s] after which a touchdown still continues the same impact (impact_memory: "
+        "impact): longer than the rebounds of a heel strike, shorter than a swing.",
+    )
 
     @model_validator(mode="after")
     def _one_stiffness_source(self) -> ContactConfig:

@@ -3,8 +3,8 @@
 A formulation computes the geometry of its feet (penetration delta, approach velocity deltadot, slip,
 lead over the partner foot); what the ground does with it is written once, here:
 
-* the per-foot discrete mode table ``modes[i]`` = (ARMED, TOUCHING, IMPACT_SPEED) and the indices of
-  the kernels' ``switches`` and ``limits`` vectors;
+* the per-foot discrete mode table ``modes[i]`` = (ARMED, TOUCHING, IMPACT_SPEED, LIFTOFF_TIME) and the
+  indices of the kernels' ``switches`` and ``limits`` vectors;
 * :func:`arc_contact`, :func:`arc_forces`, :func:`arc_energy`: a foot arc against the ground (penetration,
   approach and slip velocities, contact point; the forces summed over the ground's contact features;
   their spring energy): the one place where the ground enters, resolved at compile time from the type
@@ -13,8 +13,9 @@ lead over the partner foot); what the ground does with it is written once, here:
 * :func:`normal_response`: the normal force of the selected law with the approach velocity
   remembered at touchdown (floored) and the power its damping dissipates;
 * :func:`update_contact_modes`: the scuffing guard's arming rule (:func:`guard_arms`), touchdown and
-  lift-off bookkeeping, and the touchdown marks that the integrator turns into heel strikes, with
-  its per-foot buffers :class:`ContactBuffers` (part of every formulation's workspace).
+  lift-off bookkeeping with the impact-velocity memory (:func:`remembered_impact_speed`), and the
+  touchdown marks that the integrator turns into heel strikes, with its per-foot buffers
+  :class:`ContactBuffers` (part of every formulation's workspace).
 
 Every function is compiled and allocation-free; ``system`` is any formulation's system NamedTuple
 (numba specialises on its type), read through the fields of :class:`ContactSystem`.
@@ -32,13 +33,15 @@ from biped_sim.contact.normal import elastic_energy, elastic_force, normal_force
 from biped_sim.contact.registry import by_type
 from biped_sim.kernel import kernel
 
-# columns of the per-foot discrete mode table
-ARMED, TOUCHING, IMPACT_SPEED = 0, 1, 2
-N_MODE_COLUMNS = 3
+# columns of the per-foot discrete mode table (LIFTOFF_TIME: when the foot last left the ground [s])
+ARMED, TOUCHING, IMPACT_SPEED, LIFTOFF_TIME = 0, 1, 2, 3
+N_MODE_COLUMNS = 4
 # entries of the kernels' switches vector (int64)
 NORMAL_MODEL, FRICTION_MODEL, SCUFFING_GUARD = 0, 1, 2
-# entries of the kernels' limits vector: impact velocity floor [m/s], fall hip height [m], fall leg angle [rad]
-IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE = 0, 1, 2
+# entries of the kernels' limits vector: impact velocity floor [m/s], fall hip height [m], fall leg angle [rad],
+# re-contact time [s] (0: every touchdown is a new impact; see remembered_impact_speed)
+IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE, RECONTACT_TIME = 0, 1, 2, 3
+N_LIMITS = 4
 # what a formulation's fall kernel returns: standing, or which fall limit the state passed
 STANDING, HIP_TOO_LOW, LEG_TOO_FAR = 0, 1, 2
 # onset marks written by update_contact_modes
@@ -53,7 +56,7 @@ class ContactSystem(Protocol):
     normal_params: np.ndarray
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: NORMAL_MODEL, FRICTION_MODEL, SCUFFING_GUARD
-    limits: np.ndarray  # (3,): IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE
+    limits: np.ndarray  # (4,): IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE, RECONTACT_TIME
 
 
 class ContactBuffers(NamedTuple):
@@ -291,12 +294,36 @@ def _claim_touchdown(foot_body: np.ndarray, onset: np.ndarray, i: int) -> None:
 
 
 @kernel
-def update_contact_modes(y: np.ndarray, system: ContactSystem, modes: np.ndarray, contact: ContactBuffers) -> bool:
-    """Apply the scuffing guard and contact onset/separation bookkeeping at an event (MODEL.md 3).
+def remembered_impact_speed(
+    remembered: float, liftoff_time: float, t: float, approach: float, recontact_time: float
+) -> float:
+    """The impact velocity deltadot^- a foot remembers after touching down at time ``t`` with ``approach``.
+
+    The Hunt-Crossley family (Hunt and Crossley 1975; Lankarani and Nikravesh 1990; Flores et al. 2011)
+    takes its hysteresis damping chi K delta^n deltadot / deltadot^- from the restitution e of one impact,
+    deltadot^- being the approach velocity at the start of that impact: a property of the impact, not of
+    each sign change of delta. A touchdown less than ``recontact_time`` after the same foot's lift-off
+    (a rebound of the impact or a micro-separation, far shorter than a swing) continues the impact: the
+    foot keeps the larger of the remembered and the new approach velocity (continuous as a rebound
+    appears with zero flight and zero approach velocity, and a harder re-impact counts with its own
+    speed). After a longer flight, or with ``recontact_time`` = 0 (``contact.impact_memory: touchdown``),
+    the touchdown is a new impact and remembers ``approach``.
+    """
+    if t - liftoff_time < recontact_time and remembered > approach:
+        return remembered
+    return approach
+
+
+@kernel
+def update_contact_modes(
+    t: float, y: np.ndarray, system: ContactSystem, modes: np.ndarray, contact: ContactBuffers
+) -> bool:
+    """Apply the scuffing guard and contact onset/separation bookkeeping at an event at time ``t`` (MODEL.md 3).
 
     Reads the feet's penetration, lead and approach velocity from ``contact.gates`` and
-    ``contact.approach``. A touchdown remembers the approach velocity deltadot^- (IMPACT_SPEED) and
-    relaxes the foot's LuGre bristles (sets its states ``contact.bristles[i]`` of y to 0).
+    ``contact.approach``. A touchdown remembers the approach velocity deltadot^- (IMPACT_SPEED, by
+    :func:`remembered_impact_speed`) and relaxes the foot's LuGre bristles (sets its states
+    ``contact.bristles[i]`` of y to 0); a lift-off records its time (LIFTOFF_TIME).
     ``contact.onset[i]`` = TOUCHDOWN marks a touchdown when no other foot of the same body was
     touching or touched down in this update (the feet of one leg land together and make one heel
     strike); 0 otherwise. Returns True when any mode changed (the right-hand side then changes too).
@@ -306,6 +333,7 @@ def update_contact_modes(y: np.ndarray, system: ContactSystem, modes: np.ndarray
     changed = False
     guard = system.switches[SCUFFING_GUARD] != 0
     lugre = system.switches[FRICTION_MODEL] == LUGRE
+    recontact = system.limits[RECONTACT_TIME]
     for i in range(nf):
         onset[i] = _WAS_TOUCHING if modes[i, TOUCHING] > 0.5 else 0
     for i in range(nf):
@@ -315,11 +343,15 @@ def update_contact_modes(y: np.ndarray, system: ContactSystem, modes: np.ndarray
         touching = new_armed and delta > 0.0
         was_touching = modes[i, TOUCHING] > 0.5
         if touching and not was_touching:
-            modes[i, IMPACT_SPEED] = contact.approach[i]
+            modes[i, IMPACT_SPEED] = remembered_impact_speed(
+                modes[i, IMPACT_SPEED], modes[i, LIFTOFF_TIME], t, contact.approach[i], recontact
+            )
             _claim_touchdown(system.foot_body, onset, i)
             if lugre:
                 for k in range(contact.bristles.shape[1]):
                     y[contact.bristles[i, k]] = 0.0
+        elif was_touching and not touching:
+            modes[i, LIFTOFF_TIME] = t
         if touching != was_touching or new_armed != armed:
             changed = True
         modes[i, ARMED] = 1.0 if new_armed else 0.0

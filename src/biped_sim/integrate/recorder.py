@@ -22,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.response import HIP_TOO_LOW, LEG_TOO_FAR, TOUCHDOWN, TOUCHING, ContactBuffers
+from biped_sim.contact.response import HIP_TOO_LOW, LEG_TOO_FAR, N_MODE_COLUMNS, TOUCHDOWN, TOUCHING, ContactBuffers
 from biped_sim.kernel import kernel
 from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
 
@@ -84,11 +84,11 @@ class Recorder(NamedTuple):
     state: np.ndarray  # (1,) LOOP_STATE record array: the loop's resumable state, state[0].time etc.
     sample_t: np.ndarray  # (ns,)
     sample_y: np.ndarray  # (ns, ny)
-    sample_modes: np.ndarray  # (ns, nf, 3)
+    sample_modes: np.ndarray  # (ns, nf, N_MODE_COLUMNS)
     strike_t: np.ndarray  # (nk,)
     strike_foot: np.ndarray  # (nk,) int64
     strike_y: np.ndarray  # (nk, ny)
-    strike_modes: np.ndarray  # (nk, nf, 3)
+    strike_modes: np.ndarray  # (nk, nf, N_MODE_COLUMNS)
     log: np.ndarray  # (nl, LOG_COLUMNS): time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
 
 
@@ -102,11 +102,11 @@ def make_recorder(ny: int, nf: int, n_samples: int, n_strikes: int, initial_stan
         state=state,
         sample_t=np.zeros(n_samples),
         sample_y=np.zeros((n_samples, ny)),
-        sample_modes=np.zeros((n_samples, nf, 3)),
+        sample_modes=np.zeros((n_samples, nf, N_MODE_COLUMNS)),
         strike_t=np.zeros(n_strikes),
         strike_foot=np.zeros(n_strikes, dtype=np.int64),
         strike_y=np.zeros((n_strikes, ny)),
-        strike_modes=np.zeros((n_strikes, nf, 3)),
+        strike_modes=np.zeros((n_strikes, nf, N_MODE_COLUMNS)),
         log=np.zeros((LOG_CAPACITY, LOG_COLUMNS)),
     )
 
@@ -209,7 +209,7 @@ def apply_events(
     nf = modes.shape[0]
     for i in range(nf):
         touching_before[i] = modes[i, TOUCHING]
-    if not system_update_modes(y, system, modes, contact):
+    if not system_update_modes(t, y, system, modes, contact):
         return False
     _log_contact_changes(t, y, system, modes, rec, touching_before)
     st = rec.state[0]

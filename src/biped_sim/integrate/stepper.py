@@ -63,7 +63,7 @@ class Loop(NamedTuple):
     work: tuple  # its right-hand side's workspace
     contact: ContactBuffers  # its contact-mode update's buffers
     y: np.ndarray  # (ny,) the state at the current time, updated in place
-    modes: np.ndarray  # (nf, 3) the contact modes, updated in place
+    modes: np.ndarray  # (nf, N_MODE_COLUMNS) the contact modes, updated in place
     sc: Scratch
     rec: Recorder
 

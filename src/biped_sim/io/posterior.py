@@ -6,7 +6,11 @@
   thinned, one row a sample; ``parameters`` (strings): the dotted config keys, one per column;
 * ``log_probability`` (n_samples): the log posterior of each row;
 * root attributes: ``config`` (the resolved base config as YAML: the fitted keys are overwritten by each
-  sample), ``config_hash`` and the provenance of :func:`biped_sim.io.provenance.provenance`.
+  sample), ``config_hash`` and the provenance of :func:`biped_sim.io.provenance.provenance`; the fit adds
+  the sampler's diagnostics (``acceptance_fraction``, ``autocorrelation_time``, ``discard``, ``thin``,
+  ``seed``);
+* optional datasets beside them (the fit writes ``chain``, steps x walkers x parameters, and
+  ``chain_log_probability``, the whole chain before burn-in and thinning).
 
 The file is written atomically; reading checks its layout and gives one-line errors naming the file.
 """
@@ -43,8 +47,14 @@ class Posterior:
             raise ValueError("log_probability must hold one value per sample")
 
 
-def write_posterior(path: str | Path, posterior: Posterior, attributes: dict[str, Any]) -> None:
-    """Write ``posterior`` to ``path`` atomically, with ``attributes`` (hash, provenance) on the root."""
+def write_posterior(
+    path: str | Path,
+    posterior: Posterior,
+    attributes: dict[str, Any],
+    datasets: dict[str, np.ndarray] | None = None,
+) -> None:
+    """Write ``posterior`` to ``path`` atomically, with ``attributes`` (hash, provenance) on the root and
+    optional further ``datasets`` (read_posterior ignores them)."""
     buffer = io.BytesIO()
     with h5py.File(buffer, "w", track_order=True) as f:
         for key, value in attributes.items():
@@ -54,6 +64,8 @@ def write_posterior(path: str | Path, posterior: Posterior, attributes: dict[str
         names = np.array(list(posterior.parameters), dtype=h5py.string_dtype())
         f.create_dataset("parameters", data=names, track_times=False)
         f.create_dataset("log_probability", data=np.asarray(posterior.log_probability, dtype=np.float64))
+        for name, data in (datasets or {}).items():
+            f.create_dataset(name, data=np.asarray(data, dtype=np.float64), track_times=False)
     image = buffer.getvalue()
     write_with(path, lambda tmp: tmp.write_bytes(image))
 

@@ -15,10 +15,29 @@ A reference file (YAML) says what was measured, where it was published and the v
 Two quantities exist: ``step_period`` (seconds; what ``biped-sim compare`` needs) and
 ``step_period_relative_error`` (percent; another model's published errors against the same
 experiment, shown beside ours). Every malformed field is a ConfigError naming the file and field.
+
+A measured gait may give several quantities per step, each a per-step mean over trials with its standard
+deviation and number of trials, instead of (or beside the periods in) ``quantity``/``values``::
+
+    step_origin: release                     # or heel_strike (see below); default release
+    measurements:
+      - {quantity: step_period, unit: s, mean: [...], std: [...], n_trials: 5}
+      - {quantity: step_length, unit: m, mean: [...], std: [...], n_trials: [5, 5, 4]}
+      - {quantity: stance_angle, unit: rad, steps: [2, 3], mean: [...], std: [...], n_trials: 5}
+
+Quantities per step (MEASURED_UNITS): the period, the length (advance of the contact point between the
+strikes that begin and end the step), the speed (length / period) and the touchdown angles of the leg
+that strikes at the end of the step (``stance_angle``) and of the other leg (``swing_angle``), from the
+slope normal as the config's initial state. ``std`` is the spread of single trials: a fit weights the mean
+of n trials by its standard error std / sqrt(n). ``step_origin`` says how steps are numbered: ``release``
+(step 1 lasts from the release at t = 0, counted as strike 0, to the first heel strike: what ``compare`` and
+``fit`` always did) or ``heel_strike`` (step 1 lasts from the first heel strike to the second: the rows of
+a run's steps.csv and summary.json's ``step_periods``).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +49,16 @@ from biped_sim.config import parse_yaml, read_text_file
 from biped_sim.errors import ConfigError
 
 QUANTITY_UNITS = {"step_period": "s", "step_period_relative_error": "percent"}
+MEASURED_UNITS = {
+    "step_period": "s",
+    "step_length": "m",
+    "step_speed": "m/s",
+    "stance_angle": "rad",
+    "swing_angle": "rad",
+}
+POSITIVE_QUANTITIES = ("step_period", "step_length", "step_speed")
+StepOrigin = Literal["release", "heel_strike"]
+ORIGIN_OFFSET = {"release": 0, "heel_strike": 1}  # reference step k is model step k + offset (release numbering)
 
 
 class _Strict(BaseModel):
@@ -73,6 +102,61 @@ class Quantity(_Strict):
         return self
 
 
+def _check_steps(steps: list[int] | None, n: int, where: str = "steps") -> None:
+    if steps is None:
+        return
+    if len(steps) != n:
+        raise ValueError(f"{where}: {len(steps)} step numbers for {n} values")
+    if any(s < 1 for s in steps) or any(b <= a for a, b in itertools.pairwise(steps)):
+        raise ValueError(f"{where}: must be increasing step numbers starting at 1 or later")
+
+
+def _check_std(std: list[float] | None, n: int, where: str = "std") -> None:
+    if std is None:
+        return
+    if len(std) != n:
+        raise ValueError(f"{where}: {len(std)} entries for {n} values")
+    if any(not math.isfinite(s) or s < 0 for s in std):
+        raise ValueError(f"{where}: entries must be finite and >= 0")
+
+
+class Measurement(_Strict):
+    """One measured quantity per step: the mean over trials, the trials' standard deviation and their number."""
+
+    quantity: Literal[tuple(MEASURED_UNITS)]  # type: ignore[valid-type]
+    unit: str
+    statistic: Literal["mean", "median", "single"] = "mean"
+    steps: list[int] | None = Field(None, description="Step numbers of the values (default 1, 2, ...).")
+    mean: list[float] = Field(..., min_length=1)
+    std: list[float] | None = Field(None, description="Standard deviation of single trials, per step.")
+    n_trials: int | list[int] | None = Field(None, description="Trials per step (one number for all, or a list).")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Measurement:
+        n, name = len(self.mean), self.quantity
+        if self.unit != MEASURED_UNITS[name]:
+            raise ValueError(f"unit: {name} is in {MEASURED_UNITS[name]!r}, not {self.unit!r}")
+        for i, value in enumerate(self.mean):
+            if not math.isfinite(value):
+                raise ValueError(f"mean: entry {i + 1} is not a finite number")
+            if name in POSITIVE_QUANTITIES and value <= 0:
+                raise ValueError(f"mean: entry {i + 1} is a {name} and must be > 0 (got {value})")
+        _check_steps(self.steps, n)
+        _check_std(self.std, n)
+        trials = self.n_trials if isinstance(self.n_trials, list) else [self.n_trials or 1] * n
+        if len(trials) != n or any(t < 1 for t in trials):
+            raise ValueError(f"n_trials: one number >= 1, or {n} of them")
+        return self
+
+    @property
+    def step_numbers(self) -> list[int]:
+        return self.steps or list(range(1, len(self.mean) + 1))
+
+    @property
+    def trials(self) -> list[int]:
+        return self.n_trials if isinstance(self.n_trials, list) else [self.n_trials or 1] * len(self.mean)
+
+
 class ReferenceSpec(_Strict):
     """The content of a reference file."""
 
@@ -80,16 +164,33 @@ class ReferenceSpec(_Strict):
     description: str = ""
     citation: Citation
     source: Source
-    quantity: Quantity
+    quantity: Quantity | None = None
     compared: str | None = Field(None, description="For errors: which model against which measurement.")
+    step_origin: StepOrigin = Field("release", description="How steps are numbered (module docstring).")
     steps: list[int] | None = Field(None, description="Step numbers of the values (default 1, 2, ...).")
-    values: list[float] = Field(..., min_length=1)
+    values: list[float] | None = Field(None, min_length=1)
     std: list[float] | None = None
+    measurements: list[Measurement] | None = Field(None, min_length=1, description="Several quantities per step.")
     published_errors: list[str] = Field(default_factory=list, description="Error files to show beside ours.")
     notes: str = ""
 
     @model_validator(mode="after")
+    def _one_form(self) -> ReferenceSpec:
+        if (self.quantity is None) != (self.values is None):
+            raise ValueError("values: give quantity and values together")
+        if self.values is None and self.measurements is None:
+            raise ValueError("values: give quantity and values, or measurements")
+        names = [m.quantity for m in self.measurements or []]
+        if len(set(names)) != len(names):
+            raise ValueError("measurements: a quantity is listed twice")
+        if self.quantity is not None and self.quantity.name == "step_period" and "step_period" in names:
+            raise ValueError("measurements: step_period is also given as quantity/values")
+        if self.measurements is not None and self.quantity is not None and self.quantity.name != "step_period":
+            raise ValueError("measurements: only a measured reference (not published errors) has measurements")
+        return self._values_consistent() if self.values is not None else self
+
     def _values_consistent(self) -> ReferenceSpec:
+        assert self.quantity is not None and self.values is not None
         n = len(self.values)
         for i, value in enumerate(self.values):
             if not math.isfinite(value):
@@ -98,16 +199,8 @@ class ReferenceSpec(_Strict):
                 raise ValueError(f"values: entry {i + 1} is a step period and must be > 0 (got {value})")
             if self.quantity.name == "step_period_relative_error" and value < 0:
                 raise ValueError(f"values: entry {i + 1} is a relative error and must be >= 0 (got {value})")
-        if self.steps is not None:
-            if len(self.steps) != n:
-                raise ValueError(f"steps: {len(self.steps)} step numbers for {n} values")
-            if any(s < 1 for s in self.steps) or any(b <= a for a, b in zip(self.steps, self.steps[1:], strict=False)):
-                raise ValueError("steps: must be increasing step numbers starting at 1 or later")
-        if self.std is not None:
-            if len(self.std) != n:
-                raise ValueError(f"std: {len(self.std)} entries for {n} values")
-            if any(not math.isfinite(s) or s < 0 for s in self.std):
-                raise ValueError("std: entries must be finite and >= 0")
+        _check_steps(self.steps, n)
+        _check_std(self.std, n)
         if self.published_errors and self.quantity.name != "step_period":
             raise ValueError("published_errors: only a step_period reference can list published errors")
         return self
@@ -121,17 +214,59 @@ class Reference:
     spec: ReferenceSpec
     published_errors: list[Reference] = field(default_factory=list)
 
+    def measured(self) -> list[Measurement]:
+        """Every measured quantity per step, the legacy ``quantity``/``values`` periods as a Measurement first."""
+        spec, out = self.spec, []
+        if spec.quantity is not None and spec.values is not None and spec.quantity.name == "step_period":
+            q = spec.quantity
+            out.append(
+                Measurement(
+                    quantity="step_period", unit="s", statistic=q.statistic or "mean", steps=spec.steps,
+                    mean=spec.values, std=spec.std, n_trials=q.n_trials,
+                )
+            )  # fmt: skip
+        return out + list(spec.measurements or [])
+
+    def _periods(self) -> Measurement | None:
+        return next((m for m in self.measured() if m.quantity == "step_period"), None)
+
     @property
     def steps(self) -> list[int]:
-        return self.spec.steps or list(range(1, len(self.spec.values) + 1))
+        """Step numbers of the periods (or of the published errors), in the file's numbering."""
+        if self.spec.values is not None:
+            return self.spec.steps or list(range(1, len(self.spec.values) + 1))
+        periods = self._periods()
+        return periods.step_numbers if periods is not None else []
 
     @property
     def values(self) -> list[float]:
-        return list(self.spec.values)
+        if self.spec.values is not None:
+            return list(self.spec.values)
+        periods = self._periods()
+        return list(periods.mean) if periods is not None else []
+
+    @property
+    def std(self) -> list[float] | None:
+        """The periods' standard deviation per step, if given."""
+        periods = self._periods()
+        return list(periods.std) if periods is not None and periods.std is not None else None
 
     @property
     def is_periods(self) -> bool:
-        return self.spec.quantity.name == "step_period"
+        return self._periods() is not None
+
+    @property
+    def origin_offset(self) -> int:
+        """Model step (counted from the release) = reference step + this (``step_origin``)."""
+        return ORIGIN_OFFSET[self.spec.step_origin]
+
+    def numbering_text(self) -> str:
+        """The reference's step numbering in one sentence (for file headers and table notes)."""
+        if self.spec.step_origin == "heel_strike":
+            return (
+                "Step k lasts from heel strike k to heel strike k + 1 (as a run's steps.csv; step_origin: heel_strike)."
+            )
+        return "Step k lasts from heel strike k - 1 to heel strike k, the release (t = 0) counting as strike 0."
 
     def citation_text(self) -> str:
         """'Corral, ... (2020), Title. Journal. doi:...' in one line."""
@@ -188,7 +323,7 @@ def load_reference(path: str | Path, *, linked_from: Path | None = None, _chain:
     reference = Reference(path=path, spec=spec)
     for entry in spec.published_errors:
         linked = load_reference(path.parent / entry, linked_from=path, _chain=(*_chain, path.resolve()))
-        if linked.spec.quantity.name != "step_period_relative_error":
+        if linked.spec.quantity is None or linked.spec.quantity.name != "step_period_relative_error":
             raise ConfigError(f"{path}: published_errors", f"{entry} does not hold step_period_relative_error values")
         if linked.spec.experiment != spec.experiment:
             raise ConfigError(

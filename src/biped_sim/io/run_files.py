@@ -10,7 +10,7 @@ HDF5 layout (readable with plain h5py; ``time`` is a dimension scale so xarray s
     /contact/friction_force    (ns, nf)      N
     /contact/slip_velocity     (ns, nf)      m/s
     /contact/{friction_force_lateral,slip_velocity_lateral}   (ns, nf)   N, m/s   (spatial only: along z)
-    /contact/modes             (ns, nf, 3)   armed, touching, remembered impact velocity
+    /contact/modes             (ns, nf, 4)   armed, touching, remembered impact velocity, last lift-off time
     /energy/{kinetic,potential,elastic,dissipated_normal,dissipated_friction,push_work,residual}  (ns,) J
     /constraints/position, /constraints/velocity   (ns,)  m, m/s
     /constraints/normalization (ns,)         ||p.p - 1|| over the bodies (spatial only)

@@ -50,9 +50,9 @@ def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
 
 
 @kernel
-def system_update_modes(y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
-    """Scuffing guard and contact bookkeeping at an event; sets contact.onset; True when a mode changed."""
+def system_update_modes(t: float, y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
+    """Scuffing guard and contact bookkeeping at an event at time t; sets contact.onset; True when a mode changed."""
     system_event_functions(y, system, contact.gates)
     for i in range(system.foot_body.shape[0]):
         contact.approach[i] = system_approach_velocity(y, system, i)
-    return update_contact_modes(y, system, modes, contact)
+    return update_contact_modes(t, y, system, modes, contact)

@@ -8,7 +8,9 @@ against Liu's walker) are shown beside ours, step by step.
 
 Model steps are counted from the release: the initial state is "just after a heel strike" (the
 config's convention), so step 1 lasts from t = 0 to the first heel strike, step k from strike
-k - 1 to strike k. ``skip`` drops the first model steps when the experiment's step 1 is later.
+k - 1 to strike k. ``skip`` drops the first model steps when the experiment's step 1 is later. A
+reference numbered from the first heel strike (``step_origin: heel_strike``, as a run's steps.csv)
+meets model step k + 1 at its step k (:attr:`~biped_sim.io.references.Reference.origin_offset`).
 """
 
 from __future__ import annotations
@@ -82,9 +84,9 @@ def compare_periods(reference: Reference, model_periods: Sequence[float], label:
     """The per-step comparison of ``model_periods`` (step 1 first) with a step-period reference."""
     if not reference.is_periods:
         raise ValueError("compare_periods needs a step_period reference")
-    steps = reference.steps
+    steps, offset = reference.steps, reference.origin_offset
     ref = reference.values
-    model = [float(model_periods[s - 1]) if s <= len(model_periods) else math.nan for s in steps]
+    model = [float(model_periods[s - 1 + offset]) if s + offset <= len(model_periods) else math.nan for s in steps]
     errors = [m - r for m, r in zip(model, ref, strict=True)]
     relative = [abs(e) / r * 100.0 for e, r in zip(errors, ref, strict=True)]
     published: dict[str, list[float]] = {}
@@ -117,7 +119,8 @@ def step_table(comparisons: Sequence[Comparison], name: str = "compare_steps") -
     several = len(comparisons) > 1
     columns = [Column("label", "series")] if several else []
     columns += [Column("step", "step"), Column("reference", "reference period", "s", ".4f")]
-    if reference.spec.std is not None:
+    std = reference.std
+    if std is not None:
         columns.append(Column("std", "reference std", "s", ".4f"))
     columns += [
         Column("model", "model period", "s", ".4f"),
@@ -139,14 +142,14 @@ def step_table(comparisons: Sequence[Comparison], name: str = "compare_steps") -
                 "abs_error": abs(comparison.errors[i]),
                 "relative_error": comparison.relative_errors[i],
             }
-            if reference.spec.std is not None:
-                row["std"] = reference.spec.std[i]
+            if std is not None:
+                row["std"] = std[i]
             for n in published:
                 row[_published_key(n)] = comparison.published[n][i]
             rows.append(row)
     notes = [
         f"Reference: {reference.citation_text()} {reference.source_text()}.",
-        "Model step k lasts from heel strike k - 1 to heel strike k, counting the release (t = 0) as strike 0.",
+        reference.numbering_text(),
     ]
     for other in reference.published_errors:
         notes.append(

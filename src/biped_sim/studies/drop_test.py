@@ -50,7 +50,7 @@ def drop_system(model: str, restitution: float, stiffness: float | None = None, 
         normal_params=normal,
         friction_params=friction_parameters(0, 0, 1e-3, 1e-2, 1e-3, 0, 0, 1e5, 0, 0),
         switches=np.array([NORMAL_LAWS[model].index, FRICTION_LAWS["none"].index, 0], dtype=np.int64),
-        limits=np.array([IMPACT_FLOOR, -math.inf, math.inf]),
+        limits=np.array([IMPACT_FLOOR, -math.inf, math.inf, 0.0]),  # one impact: no re-contact
     )
 
 
@@ -61,7 +61,7 @@ def drop_test(model: str, restitution: float, stiffness: float | None = None) ->
     y0 = np.zeros(6 + 1 + 2)
     y0[1] = DISC_RADIUS + gap
     y0[4] = -APPROACH_SPEED
-    modes0 = np.array([[1.0, 0.0, 0.0]])
+    modes0 = np.array([[1.0, 0.0, 0.0, 0.0]])
     integrator = IntegratorConfig(method="dopri5", rtol=1e-11, atol=1e-14, max_step=1e-4)
     run = integrate_model(system, y0, modes0, integrator, t_end=0.05, sample_rate=100.0)
     log = run.contact_log

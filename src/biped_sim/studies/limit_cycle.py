@@ -148,9 +148,9 @@ class TouchdownSection:
         if self.lugre:
             y[layout.bristle(1)] = z[7]
         modes = np.zeros((2, N_MODE_COLUMNS))
-        modes[0] = (1.0, 1.0, foot_kinematics(y, self.system, 0)[1])
+        modes[0, :3] = (1.0, 1.0, foot_kinematics(y, self.system, 0)[1])
         trailing_down = foot_kinematics(y, self.system, 1)[0] > 0.0
-        modes[1] = (1.0 if trailing_down or not self.guard else 0.0, 1.0 if trailing_down else 0.0, z[6])
+        modes[1, :3] = (1.0 if trailing_down or not self.guard else 0.0, 1.0 if trailing_down else 0.0, z[6])
         return y, modes
 
     def project(self, y: np.ndarray, modes: np.ndarray, striking_foot: int) -> np.ndarray:

@@ -76,12 +76,15 @@ def contact_arrays(
 
 
 def contact_limits(config: Config) -> np.ndarray:
-    """The kernels' ``limits`` array: impact velocity floor, fall hip height [m], fall leg angle [rad]."""
+    """The kernels' ``limits`` array: impact velocity floor, fall hip height [m], fall leg angle [rad], re-contact
+    time [s] (0 for ``contact.impact_memory: touchdown``: every touchdown a new impact)."""
+    contact = config.contact
     return np.array(
         [
-            config.contact.impact_velocity_floor,
+            contact.impact_velocity_floor,
             config.simulation.fall_hip_height * config.walker.leg_length,
             config.simulation.fall_leg_angle,
+            contact.recontact_time if contact.impact_memory == "impact" else 0.0,
         ]
     )
 
@@ -129,7 +132,7 @@ def standing_start(
         modes0[foot, ARMED] = 1.0
         modes0[foot, TOUCHING] = 1.0
         modes0[foot, IMPACT_SPEED] = impact_speed
-    system_update_modes(y0, system, modes0, contact_buffers(system))
+    system_update_modes(0.0, y0, system, modes0, contact_buffers(system))
     return y0, modes0
 
 

@@ -1,0 +1,62 @@
+"""Benchmark rows of calibration (full benchmark only): the global fit and the posterior, 2 workers each.
+
+* Global fit: issue 20's case, the default walker's leg inertia and restitution against its own first seven
+  step periods at 0.0049 kg m^2 and 0.42, rounded to 5 decimals (std 10 us given, so the fit is weighted):
+  ``biped_sim.studies.fit.calibrate`` with the default global stage, the polish and the profile scans,
+  on a local pool of 2 workers (its start and the workers' cache loading included). Target: 60 s.
+* Posterior: the same problem with 4,000 draws of emcee (16 walkers x 250 steps) from the fitted optimum,
+  the fit's own evaluations reused through one checkpoint. Target: 10 minutes.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from biped_sim.config import derive, load_config
+from biped_sim.io.references import Reference, ReferenceSpec
+from biped_sim.studies.fit import calibrate, fit_problems, synthetic_reference_data
+from biped_sim.sweep import study_executor
+
+CONFIG = Path("configs/round_foot_walker.yaml")
+HIDDEN = {"walker.leg_inertia": 0.0049, "contact.restitution": 0.42}
+PARAMETERS = ["walker.leg_inertia=0.004:0.007", "contact.restitution=0.1:0.9"]
+STEPS, STD_S, DRAWS, WORKERS = 7, 1e-5, 4000, 2
+TARGETS_S = {"global_fit": 60.0, "posterior": 600.0}
+
+
+def _problem() -> Any:
+    base = load_config(CONFIG, ["simulation.t_end=3.5"])
+    data = synthetic_reference_data(derive(base, HIDDEN), STEPS, 0.0, 0, decimals=5)
+    data["std"] = [STD_S] * STEPS
+    reference = Reference(Path("synthetic"), ReferenceSpec.model_validate(data))
+    return fit_problems(base, reference, PARAMETERS)[0][1]
+
+
+def fit_bench(posterior: bool = True) -> dict[str, Any]:
+    """The bench.json section ``fit``: wall times, evaluations and what was recovered."""
+    problem = _problem()
+    out: dict[str, Any] = {"hidden": HIDDEN, "steps": STEPS, "workers": WORKERS}
+    with tempfile.TemporaryDirectory(prefix="biped-sim-bench-fit-") as tmp:
+        checkpoint = Path(tmp) / "fit.checkpoint.json"
+        clock = time.perf_counter()
+        with study_executor("local", WORKERS) as pool:
+            fitted = calibrate(problem, pool, checkpoint=checkpoint).result
+        out["global_fit"] = {
+            "wall_s": time.perf_counter() - clock, "target_s": TARGETS_S["global_fit"],
+            "evaluations": fitted.run.evaluations, "parameters": fitted.parameters,
+            "standard_errors": {e.key: e.standard_error for e in fitted.estimates}, "converged": fitted.converged,
+        }  # fmt: skip
+        if posterior:
+            clock = time.perf_counter()
+            with study_executor("local", WORKERS) as pool:
+                sampled = calibrate(problem, pool, checkpoint=checkpoint, draws=DRAWS)
+            assert sampled.posterior is not None
+            out["posterior"] = {
+                "wall_s": time.perf_counter() - clock, "target_s": TARGETS_S["posterior"], "draws": DRAWS,
+                "evaluations": sampled.posterior.evaluations, "intervals_90": sampled.posterior.intervals,
+                "autocorrelation_time": sampled.posterior.autocorrelation, "warnings": sampled.posterior.warnings,
+            }  # fmt: skip
+    return out

@@ -1,0 +1,127 @@
+"""Running a fit's simulations: cached by point, counted, in batches on an executor, checkpointed for resume.
+
+An :class:`Evaluator` maps normalised points to :class:`~biped_sim.studies.fit.problem.Outcome` s. The
+points of one batch that are not yet known run together, on the executor when one is given (the sweep
+layer's local pool or Dask: ``biped_sim.sweep.study_executor``), else here one by one. Every outcome is
+kept, and with a ``checkpoint`` path written there atomically (at most every ``SAVE_INTERVAL_S`` and when
+the evaluator closes, also on Ctrl-C): an interrupted fit or sampler run again with the same checkpoint
+replays its finished evaluations from it instead of simulating them again. The optimizers and the sampler
+are seeded, so the replay takes the same path. A checkpoint of another problem (config, reference,
+parameters) is refused, naming the file.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from biped_sim.errors import ConfigError
+from biped_sim.io.atomic import write_json_atomic
+from biped_sim.studies.fit.problem import FitProblem, Outcome, simulate_outcome
+
+SAVE_INTERVAL_S = 5.0
+CHECKPOINT_FORMAT = "biped-sim fit evaluations 1"
+
+
+def point_key(u: Sequence[float]) -> str:
+    """The exact point as text (hex floats): a cache key that survives JSON."""
+    return ",".join(float(x).hex() for x in np.asarray(u, dtype=float))
+
+
+@dataclass
+class Evaluator:
+    """Runs evaluations of ``problem`` (cached by point, counted), serially or as batches on an executor."""
+
+    problem: FitProblem
+    executor: Executor | None = None
+    checkpoint: Path | None = None
+    progress: Callable[[Evaluator], None] | None = None
+    cache: dict[str, Outcome] = field(default_factory=dict)
+    evaluations: int = 0  # simulations run here
+    replayed: int = 0  # outcomes read from the checkpoint when first asked for
+    best_cost: float = float("inf")
+    stage: str = ""
+    _restored: set[str] = field(default_factory=set)
+    _saved_at: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.checkpoint is not None and self.checkpoint.is_file():
+            self._load(self.checkpoint)
+
+    def _load(self, path: Path) -> None:
+        try:
+            data = json.loads(path.read_text())
+            if data.get("format") != CHECKPOINT_FORMAT:
+                raise ValueError("not a fit checkpoint")
+            entries = {e["u"]: Outcome.from_json(e["outcome"]) for e in data["evaluations"]}
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise ConfigError(
+                str(path), f"unreadable checkpoint ({str(exc)[:80]}); remove it to start afresh"
+            ) from None
+        if data.get("problem") != self.problem.key():
+            raise ConfigError(str(path), "checkpoint of another fit (config, reference or parameters differ)")
+        self.cache.update(entries)
+        self._restored = set(entries)
+
+    def save(self) -> None:
+        """Write the checkpoint (atomically), if there is one."""
+        if self.checkpoint is None:
+            return
+        entries = [{"u": key, "outcome": outcome.to_json()} for key, outcome in self.cache.items()]
+        doc = {"format": CHECKPOINT_FORMAT, "problem": self.problem.key(), "evaluations": entries}
+        write_json_atomic(self.checkpoint, doc)
+        self._saved_at = time.monotonic()
+
+    def outcomes(self, points: Sequence[Sequence[float]]) -> list[Outcome]:
+        """The outcome at each point; the points not yet known run together (in parallel on the executor)."""
+        keys = [point_key(u) for u in points]
+        todo = {k: np.asarray(u, dtype=float) for k, u in zip(keys, points, strict=True) if k not in self.cache}
+        self.replayed += sum(1 for k in set(keys) if k in self._restored)
+        self._restored.difference_update(keys)
+        tasks = [self.problem.evaluation_data(u) for u in todo.values()]
+        if self.executor is None or len(tasks) < 2:
+            results = [simulate_outcome(task) for task in tasks]
+        else:
+            results = list(self.executor.map(simulate_outcome, tasks))
+        self.cache.update(zip(todo, results, strict=True))
+        self.evaluations += len(tasks)
+        if tasks and time.monotonic() - self._saved_at > SAVE_INTERVAL_S:
+            self.save()
+        out = [self.cache[k] for k in keys]
+        for outcome in out:
+            self.best_cost = min(self.best_cost, self.cost_of(outcome))
+        if self.progress is not None and tasks:
+            self.progress(self)
+        return out
+
+    def cost_of(self, outcome: Outcome) -> float:
+        r = self.problem.residuals(outcome)
+        return 0.5 * float(r @ r)
+
+    def residuals(self, u: np.ndarray) -> np.ndarray:
+        return self.problem.residuals(self.outcomes([u])[0])
+
+    def costs(self, points: Sequence[Sequence[float]]) -> list[float]:
+        """Half the sum of squared residuals at each point (one batch)."""
+        return [self.cost_of(o) for o in self.outcomes(points)]
+
+    def cost_map(self, _func: Any, points: Any) -> list[float]:
+        """A ``map(func, points)`` for scipy's differential_evolution ``workers``: the batch's costs."""
+        return self.costs(list(points))
+
+    def jacobian(self, u: np.ndarray, step: float) -> np.ndarray:
+        """Forward differences (backwards at the upper bound) of the residuals, the p shifted runs as one batch."""
+        u = np.asarray(u, dtype=float)
+        steps = np.where(u + step <= 1.0, step, -step)
+        shifted = [u + steps[j] * np.eye(len(u))[j] for j in range(len(u))]
+        outcomes = self.outcomes([u, *shifted])
+        base = self.problem.residuals(outcomes[0])
+        columns = [(self.problem.residuals(o) - base) / steps[j] for j, o in enumerate(outcomes[1:])]
+        return np.column_stack(columns)
