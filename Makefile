@@ -4,6 +4,8 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CONFIG ?= configs/round_foot_walker.yaml
+# pytest-xdist processes for the fast tier (auto: one per core)
+TEST_WORKERS ?= auto
 
 .PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
 
@@ -22,15 +24,15 @@ setup-bench: $(STAMP)      ## also install MuJoCo for the benchmark comparison
 run: $(STAMP)              ## simulate the default walker; print its step table and where its files went
 	$(BIN)/biped-sim run $(CONFIG)
 
-test: $(STAMP)             ## the fast test tier (pytest's default: -m 'not slow'; about a minute)
-	$(BIN)/python -m pytest -q
+test: $(STAMP)             ## the fast test tier (pytest's default: -m 'not slow'; about a minute on 2 cores)
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
 # numpy's SIMD dispatch limited to AVX2 (numpy >= 2.4's feature names) and OpenBLAS's kernels to Haswell: the
 # arithmetic of an older x86 CPU, for the scipy/BLAS/LAPACK paths (tests must pass on any x86 CPU)
 OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CORETYPE=Haswell
 
 test-older-cpu: $(STAMP)   ## the fast tier as on an older (AVX2) CPU
-	$(OLDER_CPU) $(BIN)/python -m pytest -q
+	$(OLDER_CPU) $(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
 validate: $(STAMP)         ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
