@@ -369,12 +369,15 @@ class _Ledger:
 
     def settle(self, runs: list[RunSpec]) -> None:
         """After an interrupt: record the runs that finished on disk meanwhile, so that the table matches the
-        run directories (the others stay pending)."""
+        run directories (the others stay pending). The table is written again at the end: the interrupt may have
+        come between a row's update and its table's write."""
         for run in runs:
             if self.rows[run.index]["status"] == "pending":
                 summary = finished_summary(self.sweep_dir / "runs" / run.name, run.config_hash)
                 if summary is not None:
-                    self.record(run, metrics_from_summary(summary), announce=False)
+                    self.rows[run.index] = _row(run, metrics_from_summary(summary))
+                    self.progress.add(self.rows[run.index]["status"])
+        write_table(self.rows, self.sweep_dir)
 
 
 def _execute(pending: list[RunSpec], executor: Executor, ledger: _Ledger) -> None:
