@@ -9,8 +9,9 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 
+@lru_cache(maxsize=1)
 def package_version() -> str:
-    """Installed version of biped-sim."""
+    """Installed version of biped-sim (read once per process: importlib.metadata scans sys.path)."""
     try:
         return version("biped-sim")
     except PackageNotFoundError:
@@ -34,15 +35,21 @@ def git_commit() -> tuple[str, bool]:
         return "unknown", False
 
 
-def library_versions() -> dict[str, str]:
-    """Versions of the numerical libraries that shape the results."""
-    out = {}
+@lru_cache(maxsize=1)
+def _library_versions() -> tuple[tuple[str, str], ...]:
+    """(name, version) of the numerical libraries, read once per process."""
+    out = []
     for name in ("numpy", "scipy", "numba", "h5py"):
         try:
-            out[name] = version(name)
+            out.append((name, version(name)))
         except PackageNotFoundError:
-            out[name] = "missing"
-    return out
+            out.append((name, "missing"))
+    return tuple(out)
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of the numerical libraries that shape the results."""
+    return dict(_library_versions())
 
 
 def provenance() -> dict[str, str]:
