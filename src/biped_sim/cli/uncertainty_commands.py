@@ -1,0 +1,109 @@
+"""``biped-sim uncertainty``: a walker's predictions with error bars and which parameters matter."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
+from biped_sim.io.output import check_writable_dir
+
+ParamOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--param",
+        help="KEY=DIST:N1:N2 with DIST uniform:LO:HI, normal:MEAN:SD, lognormal:MEDIAN:SIGMA, "
+        "triangular:LO:MODE:HI or interval:LO:HI (repeatable).",
+    ),
+]
+JobsOption = Annotated[int | None, typer.Option("--jobs", "-j", help="Parallel workers (default: all cores).")]
+ExecutorOption = Annotated[str, typer.Option("--executor", help="local (processes) or dask.")]
+SchedulerOption = Annotated[
+    str | None, typer.Option("--scheduler", help="Dask scheduler address (with --executor dask).")
+]
+
+
+def _print_summary(doc: dict[str, Any], out: Path) -> None:
+    console = Console(stderr=True, soft_wrap=True)
+    stats = doc["statistics"]
+    walking = stats["probability_walking"]
+    console.print(
+        f"{doc['runs']} runs in {doc['wall_time_s']:.1f} s ({doc['chunks_reused']} chunks reused): P(walk) = "
+        f"{walking['value']:.3f} [{walking['ci'][0]:.3f}, {walking['ci'][1]:.3f}]",
+        highlight=False,
+    )
+    for name, d in stats["outputs"].items():
+        if d["mean"] is not None:
+            console.print(f"  {name}: {d['mean']:.6g} +- {d['sd']:.3g} (n {d['n']})", highlight=False)
+    for name, o in (doc["sobol"] or {"outputs": {}})["outputs"].items():
+        if o["indices"] is not None:
+            top = ", ".join(f"{k} {o['indices'][k]['ST']:.2f}" for k in o["ranking_total"][:3])
+            console.print(f"  total Sobol index of {name}: {top}", highlight=False)
+    for note in doc["notes"]:
+        console.print(f"  {note}", highlight=False)
+    console.print(f"files: {out}/", highlight=False)
+
+
+@app.command("uncertainty")
+@user_errors
+def uncertainty_command(
+    config_path: ConfigArgument,
+    param: ParamOption = None,
+    spec_file: Annotated[
+        Path | None, typer.Option("--spec", help="YAML file with an 'uncertainty' section: parameters, samples, seed.")
+    ] = None,
+    from_fit: Annotated[
+        Path | None, typer.Option("--from-fit", help="A fit directory: its posterior samples (posterior.h5).")
+    ] = None,
+    set_: SetOption = None,
+    samples: Annotated[
+        int | None,
+        typer.Option("--samples", "-n", help="Samples (a power of two for sobol; base points with --sobol)."),
+    ] = None,
+    method: Annotated[str | None, typer.Option("--method", help="sobol (scrambled, default) or lhs.")] = None,
+    sobol_indices: Annotated[
+        bool, typer.Option("--sobol", help="Sobol indices: Saltelli's design, samples x (keys + 2) runs.")
+    ] = False,
+    seed: Annotated[int | None, typer.Option("--seed", help="Seed of the design.")] = None,
+    jobs: JobsOption = None,
+    executor: ExecutorOption = "local",
+    scheduler: SchedulerOption = None,
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/uncertainty"),
+    as_json: Annotated[bool, typer.Option("--json", help="Print the statistics and indices as JSON.")] = False,
+) -> None:
+    """Propagate what is known of config keys through runs: statistics of the gait, probability of walking,
+    bands, histograms and (--sobol) Sobol indices (uncertainty.h5, samples.csv, PNG, SVG).
+
+    Finished chunks of samples are kept in OUT/samples: a rerun of the same study resumes where it stopped.
+    """
+    from biped_sim.io.posterior import read_posterior
+    from biped_sim.report.uncertainty import save_study_figures
+    from biped_sim.studies.uncertainty.distributions import parse_param, read_spec
+    from biped_sim.studies.uncertainty.files import write_study
+    from biped_sim.studies.uncertainty.study import DEFAULT_SAMPLES, UncertaintySpec, run_study
+    from biped_sim.sweep import study_executor, workers_for
+
+    config = load(config_path, set_)
+    distributions, options = read_spec(str(spec_file)) if spec_file is not None else ([], {})
+    distributions += [parse_param(text) for text in param or []]
+    chosen = "saltelli" if sobol_indices else method or options.get("method", "sobol")
+    spec = UncertaintySpec(
+        config, tuple(distributions), samples or options.get("samples", DEFAULT_SAMPLES), chosen,
+        seed if seed is not None else options.get("seed", 0),
+        read_posterior(from_fit) if from_fit is not None else None,
+    )  # fmt: skip
+    check_writable_dir(out)
+    console = Console(stderr=True)
+    progress = None if as_json else lambda done, total: console.print(f"samples {done}/{total}", end="\r")
+    with study_executor(executor, workers_for(spec.rows, jobs), scheduler) as pool:
+        study = run_study(spec, out, pool, progress)
+    files = write_study(study, out) + save_study_figures(study, out)
+    doc = study.to_json()
+    if as_json:
+        typer.echo(json.dumps({**doc, "files": [str(p) for p in files]}, indent=2))
+        return
+    _print_summary(doc, out)
