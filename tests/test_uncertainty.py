@@ -152,3 +152,18 @@ def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: 
 def test_parse_param_names_the_key_in_its_errors() -> None:
     with pytest.raises(ConfigError, match=r"ground\.slope: triangular"):
         parse_param("ground.slope=triangular:0.03:0.01:0.02")
+
+
+def test_from_fit_runs_evenly_spaced_posterior_draws(tmp_path: Path) -> None:
+    from biped_sim.io.posterior import Posterior, write_posterior
+
+    draws = np.linspace(0.007, 0.011, 40)[:, None]
+    write_posterior(tmp_path / "posterior.h5", Posterior(("ground.slope",), draws, np.zeros(40), "{}"), {})
+    out = tmp_path / "u"
+    result = invoke("uncertainty", str(SIMPLEST), "--from-fit", str(tmp_path), "--samples", "5", *SHORT,
+                    "--out", str(out), "--json")  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads(result.stdout)
+    assert doc["source"] == "posterior" and doc["runs"] == 5 and doc["sobol"] is None
+    with h5py.File(out / "uncertainty.h5") as f:
+        assert f["values"][()][:, 0] == pytest.approx(draws[[0, 10, 20, 29, 39], 0])

@@ -10,6 +10,7 @@ import typer
 from rich.console import Console
 
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
+from biped_sim.errors import ArgumentError
 from biped_sim.io.output import check_writable_dir
 
 ParamOption = Annotated[
@@ -107,3 +108,59 @@ def uncertainty_command(
         typer.echo(json.dumps({**doc, "files": [str(p) for p in files]}, indent=2))
         return
     _print_summary(doc, out)
+
+
+@app.command("mfpt")
+@user_errors
+def mfpt_command(
+    config_path: ConfigArgument,
+    set_: SetOption = None,
+    roughness: Annotated[
+        str, typer.Option("--roughness", help="Comma-separated levels: height sd [leg lengths] or slope sd [rad].")
+    ] = "0.0005,0.001,0.002",
+    ground: Annotated[
+        str | None, typer.Option("--ground", help="height (random profile, any walker) or slope (rimless wheel).")
+    ] = None,
+    seeds: Annotated[int, typer.Option("--seeds", help="Walks (seeds) per roughness level.")] = 20,
+    cap: Annotated[int, typer.Option("--cap", help="Steps after which a walk stops (censored).")] = 100,
+    jobs: JobsOption = None,
+    executor: ExecutorOption = "local",
+    scheduler: SchedulerOption = None,
+    out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/mfpt"),
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+) -> None:
+    """Mean first-passage time (steps before a fall) on random ground against roughness, with its confidence
+    interval; for the rigid rimless wheel on random slopes also the Markov chain's (mfpt.json, PNG, SVG)."""
+    from biped_sim.io.atomic import write_json_atomic
+    from biped_sim.plots import save_figure
+    from biped_sim.report.uncertainty import mfpt_figure
+    from biped_sim.studies.uncertainty.mfpt import mfpt_curve
+    from biped_sim.sweep import study_executor, workers_for
+
+    config = load(config_path, set_)
+    try:
+        levels = [float(text) for text in roughness.split(",")]
+    except ValueError:
+        raise ArgumentError("roughness", f"{roughness[:60]!r}: expected comma-separated numbers") from None
+    wheel = config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"
+    chosen = ground or ("slope" if wheel else "height")
+    check_writable_dir(out)
+    workers = 1 if chosen == "slope" else workers_for(len(levels) * seeds, jobs)
+    with study_executor(executor, workers, scheduler) as pool:
+        curve = mfpt_curve(config, chosen, levels, seeds, cap, pool)
+    doc = curve.to_json()
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / "mfpt.json", doc)
+    files = [out / "mfpt.json", *save_figure(mfpt_figure([curve]), out, "mfpt")]
+    if as_json:
+        typer.echo(json.dumps({**doc, "files": [str(p) for p in files]}, indent=2))
+        return
+    console = Console(soft_wrap=True)
+    for row in doc["levels"]:
+        chain = f", chain {row['chain_mfpt']:.4g}" if "chain_mfpt" in row else ""
+        console.print(
+            f"roughness {row['roughness']:g}: MFPT {row['mfpt']:.4g} steps [{row['ci'][0]:.4g}, {row['ci'][1]:.4g}] "
+            f"({row['falls']} falls, {row['censored']} at the cap{chain})",
+            highlight=False,
+        )
+    console.print(f"files: {out}/", highlight=False)

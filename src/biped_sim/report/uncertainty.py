@@ -3,12 +3,14 @@ ranked Sobol indices(each PNG + SVG, house style)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from biped_sim.plots import COLUMN_WIDTH_IN, new_figure, save_figure, styled
+from biped_sim.studies.uncertainty.mfpt import MfptCurve
 from biped_sim.studies.uncertainty.sobol import SobolIndices, ranking
 from biped_sim.studies.uncertainty.statistics import column, walking_mask
 from biped_sim.studies.uncertainty.study import Uncertainty
@@ -76,6 +78,27 @@ def sobol_figure(indices: SobolIndices) -> Figure:
         ax.grid(axis="y", visible=False)
     axes[0].legend(loc="lower right")
     axes[-1].set_xlabel("Sobol index")
+    return fig
+
+
+@styled
+def mfpt_figure(curves: Sequence[MfptCurve]) -> Figure:
+    """Mean first-passage time (steps) against roughness: the walks' estimates with their intervals, and the
+    Markov chain's where there is one."""
+    fig, (ax,) = new_figure()
+    for i, curve in enumerate(curves):
+        x = np.array(curve.roughness)
+        mfpt = np.array([e.mfpt for e in curve.estimates])
+        ci = np.array([e.ci for e in curve.estimates])
+        upper = np.where(np.isfinite(ci[:, 1]), ci[:, 1], mfpt)
+        ax.errorbar(x, mfpt, yerr=[mfpt - ci[:, 0], upper - mfpt], marker="o", ls="", color=f"C{i}", capsize=2,
+                    label=f"{curve.ground} walks ({curve.seeds} seeds)")  # fmt: skip
+        if curve.chain is not None:
+            ax.plot(x, curve.chain, color=f"C{i}", label="Markov chain")
+    ax.set_yscale("log")
+    ax.set_xlabel(curves[0].roughness_label if curves else "roughness")
+    ax.set_ylabel("mean first-passage time [steps]")
+    ax.legend(loc="best")
     return fig
 
 
