@@ -7,9 +7,12 @@ intervals (``RESAMPLES`` resamples of the base points). SALib is the field's ref
 outputs of runs already made, so it could not be fed resumed, recorded runs (docs/experiments.md).
 
 Failed samples are never dropped silently. A continuous output (the steady period, the speed) is defined only
-for a sample that walked, so its indices are computed on the base points whose whole block (A, every AB_i, B)
-walked, and say so (``blocks_used`` of ``blocks``); when fewer than ``MIN_BLOCK_FRACTION`` of the blocks
-qualify, most samples fell and the output gets no indices, only that note. The survival indicator (1 walked,
+for a sample that walked. Key i's estimators read the rows A, AB_i and B of each block, so its indices are
+computed (SALib on that key alone) on the blocks whose three rows walked, and say so (``blocks_used``: the
+fewest over the keys, of ``blocks``); when fewer than ``MIN_BLOCK_FRACTION`` of the blocks qualify for a key,
+most samples fell and the output gets no indices, only that note. The variance each key's indices divide by
+is that of its own subset's A and B rows; with every sample walking it is the whole design's, and the indices
+are SALib's on the whole design. The survival indicator (1 walked,
 0 did not) is defined for every sample, and its indices, over all blocks, say which keys decide survival.
 """
 
@@ -97,17 +100,24 @@ def _blocks(values: np.ndarray, size: int) -> np.ndarray:
 
 
 def output_indices(name: str, y: np.ndarray, ok: np.ndarray, dimensions: int, seed: int, subset: str) -> OutputIndices:
-    """Indices of ``y`` on the blocks where every row is ``ok``, or the reason there are none."""
-    size = dimensions + 2
-    keep = _blocks(ok, size).all(axis=1)
-    used, blocks = int(np.count_nonzero(keep)), keep.size
-    if used < MIN_BLOCK_FRACTION * blocks:
-        reason = f"most samples fell or lack it: only {used} of {blocks} blocks complete; no indices"
-        return OutputIndices(name, used, blocks, subset, None, reason)
-    y_kept = _blocks(y, size)[keep].ravel()
-    if np.ptp(y_kept) == 0.0:
-        return OutputIndices(name, used, blocks, subset, None, "the output does not vary over the samples")
-    return OutputIndices(name, used, blocks, subset, saltelli_indices(y_kept, dimensions, seed))
+    """Indices of ``y``, key by key on the blocks whose A, AB_i and B rows are ``ok`` (the rows that key's
+    estimators read), or the reason there are none."""
+    blocks_y, blocks_ok = _blocks(y, dimensions + 2), _blocks(ok, dimensions + 2)
+    per_key: list[dict[str, np.ndarray]] = []
+    used = []
+    for i in range(dimensions):
+        columns = [0, 1 + i, dimensions + 1]  # A, AB_i, B
+        keep = blocks_ok[:, columns].all(axis=1)
+        used.append(int(np.count_nonzero(keep)))
+        if used[-1] < MIN_BLOCK_FRACTION * len(keep):
+            reason = f"most samples fell or lack it: for key {i + 1} only {used[-1]} of {len(keep)} blocks; no indices"
+            return OutputIndices(name, min(used), len(keep), subset, None, reason)
+        y_kept = blocks_y[keep][:, columns].ravel()
+        if np.ptp(y_kept) == 0.0:
+            return OutputIndices(name, min(used), len(keep), subset, None, "the output does not vary over the samples")
+        per_key.append(saltelli_indices(y_kept, 1, seed))
+    indices = {field: np.array([k[field][0] for k in per_key]) for field in ("S1", "S1_conf", "ST", "ST_conf")}
+    return OutputIndices(name, min(used), len(blocks_ok), subset, indices)
 
 
 def sobol_study(outputs: Sequence[dict[str, Any]], keys: Sequence[str], base: int, seed: int) -> SobolIndices:
@@ -118,7 +128,8 @@ def sobol_study(outputs: Sequence[dict[str, Any]], keys: Sequence[str], base: in
     for name in INDEX_OUTPUTS:
         y = column(outputs, name)
         ok = walks & np.isfinite(y)
-        results.append(output_indices(name, np.where(ok, y, 0.0), ok, d, seed, "blocks whose every sample walked"))
+        subset = "per key, the blocks whose A, AB_i and B samples walked"
+        results.append(output_indices(name, np.where(ok, y, 0.0), ok, d, seed, subset))
     results.append(output_indices(SURVIVAL, walks.astype(float), np.ones_like(walks), d, seed, "every sample"))
     notes = [
         f"Sobol indices: {base} base points x ({d} keys + 2) = {len(outputs)} runs; "
