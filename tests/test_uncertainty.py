@@ -130,8 +130,9 @@ def test_wilson_interval_covers_the_proportion_and_stays_in_0_1() -> None:
 
 def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: Path) -> None:
     out = tmp_path / "u"
-    args = ("uncertainty", str(SIMPLEST), "--param", SLOPE, "--param", "walker.leg_inertia=uniform:0.001:0.01",
-            "--samples", "4", "--sobol", *SHORT, "--jobs", "1", "--out", str(out), "--json")  # fmt: skip
+    inertia = "walker.leg_inertia=uniform:0.001:0.01"
+    args = ("uncertainty", str(SIMPLEST), "--param", SLOPE, "--param", inertia, "--samples", "4", "--sobol",
+            "--surrogate", "1", *SHORT, "--jobs", "1", "--out", str(out), "--json")  # fmt: skip
     first = invoke(*args)
     assert first.exit_code == 0, first.stderr
     doc = json.loads(first.stdout)
@@ -139,6 +140,8 @@ def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: 
     assert doc["statistics"]["status_counts"] == {"walking": 16}
     assert doc["sobol"]["outputs"]["steady_period"]["ranking_total"] == ["ground.slope", "walker.leg_inertia"]
     assert doc["sobol"]["outputs"]["steady_period"]["indices"]["walker.leg_inertia"]["ST"] == pytest.approx(0, abs=1e-9)
+    surrogate = doc["surrogate"]["steady_period"]["indices"]
+    assert surrogate["ground.slope"]["ST"] > 0.99 and surrogate["walker.leg_inertia"]["ST"] < 0.01
     names = {p.name for p in out.iterdir()}
     assert {"uncertainty.h5", "samples.csv", "bands.png", "bands.svg", "histograms.svg", "sobol.svg"} <= names
     with h5py.File(out / "uncertainty.h5") as f:
@@ -147,6 +150,9 @@ def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: 
     assert len((out / "samples.csv").read_text().splitlines()) == 17
     again = json.loads(invoke(*args).stdout)
     assert again["chunks_reused"] == 1 and again["statistics"] == doc["statistics"]
+    (out / "samples" / "chunk_000000.json").write_text("{")  # a chunk cut short by an interruption: run again
+    resumed = json.loads(invoke(*args).stdout)
+    assert resumed["chunks_reused"] == 0 and resumed["statistics"] == doc["statistics"]
 
 
 def test_parse_param_names_the_key_in_its_errors() -> None:
@@ -167,3 +173,17 @@ def test_from_fit_runs_evenly_spaced_posterior_draws(tmp_path: Path) -> None:
     assert doc["source"] == "posterior" and doc["runs"] == 5 and doc["sobol"] is None
     with h5py.File(out / "uncertainty.h5") as f:
         assert f["values"][()][:, 0] == pytest.approx(draws[[0, 10, 20, 29, 39], 0])
+
+
+def test_the_polynomial_chaos_surrogate_recovers_ishigami_s_indices() -> None:
+    from biped_sim.studies.uncertainty.checks import ISHIGAMI, ishigami
+    from biped_sim.studies.uncertainty.distributions import Distribution
+    from biped_sim.studies.uncertainty.surrogate import surrogate_indices
+
+    dists = [Distribution(f"x{i}", "uniform", (-math.pi, math.pi)) for i in range(3)]
+    x = -math.pi + 2 * math.pi * unit_design(1024, 3, "sobol", 0)
+    found = surrogate_indices("f", dists, x, ishigami(x), order=8)
+    assert found.s1 == pytest.approx(ISHIGAMI["S1"], abs=0.01) and found.st == pytest.approx(ISHIGAMI["ST"], abs=0.01)
+    assert found.holdout_error is not None and found.holdout_error < 0.05
+    few = surrogate_indices("f", dists, x[:100], ishigami(x[:100]), order=8)
+    assert few.st is None and "too few" in (few.reason or "")

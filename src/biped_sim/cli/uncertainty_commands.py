@@ -44,6 +44,15 @@ def _print_summary(doc: dict[str, Any], out: Path) -> None:
         if o["indices"] is not None:
             top = ", ".join(f"{k} {o['indices'][k]['ST']:.2f}" for k in o["ranking_total"][:3])
             console.print(f"  total Sobol index of {name}: {top}", highlight=False)
+    for name, o in (doc["surrogate"] or {}).items():
+        if o["indices"] is not None:
+            top = sorted(o["indices"], key=lambda k: -o["indices"][k]["ST"])[:3]
+            ranked = ", ".join(f"{k} {o['indices'][k]['ST']:.2f}" for k in top)
+            console.print(
+                f"  surrogate total index of {name}: {ranked} "
+                f"(hold-out error {o['holdout_relative_rms_error']:.2g} sd)",
+                highlight=False,
+            )
     for note in doc["notes"]:
         console.print(f"  {note}", highlight=False)
     console.print(f"files: {out}/", highlight=False)
@@ -70,6 +79,9 @@ def uncertainty_command(
         bool, typer.Option("--sobol", help="Sobol indices: Saltelli's design, samples x (keys + 2) runs.")
     ] = False,
     seed: Annotated[int | None, typer.Option("--seed", help="Seed of the design.")] = None,
+    surrogate_order: Annotated[
+        int | None, typer.Option("--surrogate", help="Also a polynomial-chaos surrogate's indices, of this degree.")
+    ] = None,
     jobs: JobsOption = None,
     executor: ExecutorOption = "local",
     scheduler: SchedulerOption = None,
@@ -95,7 +107,7 @@ def uncertainty_command(
     spec = UncertaintySpec(
         config, tuple(distributions), samples or options.get("samples", DEFAULT_SAMPLES), chosen,
         seed if seed is not None else options.get("seed", 0),
-        read_posterior(from_fit) if from_fit is not None else None,
+        read_posterior(from_fit) if from_fit is not None else None, surrogate_order,
     )  # fmt: skip
     check_writable_dir(out)
     console = Console(stderr=True)

@@ -4,7 +4,8 @@ samples drawn, their runs, and what they say.
 :class:`UncertaintySpec` holds the config, the keys and where their samples come from; :func:`run_study` draws
 the design (:mod:`.sampling`), maps it through the distributions, runs every sample (:mod:`.samples`, on the
 executor passed in, resumable), and returns an :class:`Uncertainty`: the statistics (:mod:`.statistics`) and,
-for a Saltelli design, the Sobol indices (:mod:`.sobol`).
+for a Saltelli design, the Sobol indices (:mod:`.sobol`); on request the indices of a polynomial-chaos
+surrogate fitted to the same runs (:mod:`.surrogate`).
 """
 
 from __future__ import annotations
@@ -26,8 +27,9 @@ from biped_sim.studies.fit.parameters import numeric_value
 from biped_sim.studies.uncertainty.distributions import Distribution, check_distributions
 from biped_sim.studies.uncertainty.samples import RIGID_SCALARS, SCALARS, SampleRuns, run_samples
 from biped_sim.studies.uncertainty.sampling import block_size, check_count, unit_design
-from biped_sim.studies.uncertainty.sobol import SobolIndices, sobol_study
-from biped_sim.studies.uncertainty.statistics import period_bands, statistics
+from biped_sim.studies.uncertainty.sobol import INDEX_OUTPUTS, SobolIndices, sobol_study
+from biped_sim.studies.uncertainty.statistics import column, period_bands, statistics, walking_mask
+from biped_sim.studies.uncertainty.surrogate import SurrogateIndices, surrogate_indices
 
 DEFAULT_SAMPLES = 256
 
@@ -43,6 +45,7 @@ class UncertaintySpec:
     method: str = "sobol"
     seed: int = 0
     posterior: Posterior | None = None
+    surrogate_order: int | None = None  # also a polynomial-chaos surrogate's indices, of this total degree
 
     def __post_init__(self) -> None:
         if self.posterior is not None:
@@ -58,6 +61,8 @@ class UncertaintySpec:
             check_distributions(self.config, self.distributions)
             check_count(self.samples, self.method)
         check_run_count(self.rows, "samples", "runs (samples x (keys + 2) for Sobol indices)")
+        if self.surrogate_order is not None and (self.posterior is not None or not 1 <= self.surrogate_order <= 10):
+            raise ArgumentError("surrogate_order", "a surrogate takes distributions and a degree from 1 to 10")
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -104,6 +109,7 @@ class Uncertainty:
     stats: dict[str, Any]
     bands: dict[str, np.ndarray]
     indices: SobolIndices | None = None
+    surrogate: list[SurrogateIndices] = field(default_factory=list)
     wall_time_s: float = 0.0
     notes: list[str] = field(default_factory=list)
 
@@ -121,6 +127,7 @@ class Uncertainty:
             "chunks_reused": self.runs.chunks_reused,
             "statistics": self.stats,
             "sobol": self.indices.to_json() if self.indices is not None else None,
+            "surrogate": {s.output: s.to_json(self.spec.keys) for s in self.surrogate} or None,
             "wall_time_s": self.wall_time_s,
             "notes": self.notes,
         }
@@ -163,5 +170,22 @@ def run_study(
     if spec.method == "saltelli" and spec.posterior is None:
         indices = sobol_study(runs.outputs, spec.keys, spec.samples, spec.seed)
         notes += indices.notes
-    return Uncertainty(spec, unit, values, runs, stats, period_bands(runs.outputs), indices,
+    surrogate = _surrogates(spec, values, runs)
+    notes += [f"surrogate of {s.output}: {s.reason}" for s in surrogate if s.reason]
+    return Uncertainty(spec, unit, values, runs, stats, period_bands(runs.outputs), indices, surrogate,
                        time.perf_counter() - clock, notes)  # fmt: skip
+
+
+def _walking(runs: SampleRuns, name: str, walks: np.ndarray) -> np.ndarray:
+    return np.where(walks, column(runs.outputs, name), np.nan)
+
+
+def _surrogates(spec: UncertaintySpec, values: np.ndarray, runs: SampleRuns) -> list[SurrogateIndices]:
+    """The polynomial-chaos surrogate's indices of the outputs that have Sobol indices (walking samples only)."""
+    if spec.surrogate_order is None:
+        return []
+    walks = walking_mask(runs.outputs)
+    return [
+        surrogate_indices(name, spec.distributions, values, _walking(runs, name, walks), spec.surrogate_order)
+        for name in INDEX_OUTPUTS
+    ]
