@@ -3,8 +3,8 @@
 ``uncertainty.h5``: ``keys`` (strings) and ``values`` (runs x keys), ``unit`` (the design in the unit cube,
 absent for posterior samples), ``status`` (strings), one dataset per scalar output (NaN where a sample has
 none), ``periods`` (runs x step number, NaN past a sample's last step), ``bands/`` (step, count, quantiles,
-quantile levels); root attributes: ``statistics``, ``sobol`` and ``notes`` (JSON), the resolved config and its
-hash, the samples' source, and the provenance. Both files are written atomically.
+quantile levels); root attributes: ``statistics``, ``sobol``, ``surrogate`` and ``notes`` (JSON), the resolved
+config and its hash, the samples' source, and the provenance. Both files are written atomically.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def _write_h5(study: Uncertainty, tmp: Path) -> None:
         for name, data in study.bands.items():
             bands.create_dataset(name, data=data)
         bands.attrs["quantile_levels"] = np.array(BAND_QUANTILES)
-        for name in ("statistics", "sobol", "notes"):
+        for name in ("statistics", "sobol", "surrogate", "notes"):
             f.attrs[name] = json.dumps(json_safe(doc[name]))
         f.attrs["source"] = json.dumps(study.spec.source())
         f.attrs["config"] = json.dumps(study.spec.config.model_dump(mode="json"), sort_keys=True)

@@ -31,7 +31,8 @@ def check_count(samples: int, method: str) -> None:
         raise ArgumentError("samples", "need at least 2 samples")
     if method in ("sobol", "saltelli") and not is_power_of_two(samples):
         what = "Sobol indices (Saltelli's design)" if method == "saltelli" else "a Sobol sequence"
-        raise ArgumentError("samples", f"{samples} is not a power of two, which {what} needs (e.g. 256, 512, 1024)")
+        hint = "" if method == "saltelli" else "; or the Latin hypercube, method lhs, which takes any count"
+        raise ArgumentError("samples", f"{samples} is not a power of two, which {what} needs (e.g. 256, 512{hint})")
 
 
 def block_size(method: str, dimensions: int) -> int:
