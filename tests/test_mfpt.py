@@ -54,6 +54,14 @@ def test_the_mfpt_cli_writes_json_and_a_figure(tmp_path: Path) -> None:
     assert {p.name for p in out.iterdir()} == {"mfpt.json", "mfpt.png", "mfpt.svg"}
 
 
+@pytest.mark.slow
+def test_the_default_walker_walks_random_heights_until_a_fall_or_the_cap() -> None:
+    curve = mfpt_curve(load_config(CONFIGS / "round_foot_walker.yaml"), "height", [0.002, 0.02], seeds=3, cap=5)
+    rough, very = curve.estimates
+    assert rough.falls + rough.censored == 3 and very.falls == 3  # 2 % of the leg length: every walk falls
+    assert very.mfpt < 5 and curve.chain is None
+
+
 @pytest.mark.parametrize(
     ("config", "args", "field"),
     [
