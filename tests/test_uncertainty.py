@@ -71,6 +71,7 @@ def test_a_yaml_section_gives_the_same_distributions_in_either_form(tmp_path: Pa
         (("--param", SLOPE, "--samples", "12", "--sobol"), "--samples"),
         (("--param", SLOPE, "--method", "grid"), "--method"),
         (("--param", SLOPE, "--surrogate", "0"), "--surrogate"),
+        (("--param", SLOPE, "--from-fit", "no_such_fit"), "no_such_fit"),
         ((), "parameters"),
     ],
 )

@@ -66,7 +66,7 @@ def uncertainty_command(
     spec_file: Annotated[
         Path | None, typer.Option("--spec", help="YAML file with an 'uncertainty' section: parameters, samples, seed.")
     ] = None,
-    from_fit: Annotated[
+    posterior: Annotated[
         Path | None, typer.Option("--from-fit", help="A fit directory: its posterior samples (posterior.h5).")
     ] = None,
     set_: SetOption = None,
@@ -107,7 +107,7 @@ def uncertainty_command(
     spec = UncertaintySpec(
         config, tuple(distributions), samples or options.get("samples", DEFAULT_SAMPLES), chosen,
         seed if seed is not None else options.get("seed", 0),
-        read_posterior(from_fit) if from_fit is not None else None, surrogate_order,
+        read_posterior(posterior) if posterior is not None else None, surrogate_order,
     )  # fmt: skip
     check_writable_dir(out)
     console = Console(stderr=True)
