@@ -182,6 +182,22 @@ def test_bench_markdown_reports_the_rigid_map_rows_and_the_basin_targets() -> No
     assert met["basin simplest_41x41x30, 2 workers < 60 s"] and not met["basin compliant_21x21x10, 2 workers < 600 s"]
 
 
+def test_bench_markdown_reports_the_uncertainty_rows_and_their_targets() -> None:
+    result = made_up_result()
+    result["uncertainty"] = {
+        "t_end": 4.0,
+        "ensemble": {"runs": 1024, "wall_s": 120.0, "runs_per_s": 8.5, "target_s": 300.0},
+        "sobol": {"runs": 1536, "wall_s": 700.0, "runs_per_s": 2.2, "target_s": 600.0},
+        "mujoco_rollout": {"available": True, "version": "3.3", "rollouts": 32, "threads": 2, "timestep": 1e-4,
+                           "runs_per_s": 2.5, "ensemble_over_mujoco": 3.4},
+    }  # fmt: skip
+    text = markdown(result)
+    assert "8.50 runs/s on 2 workers" in text and "ratio 3.40x" in text
+    met = {name: ok for name, _, ok in targets(result)}
+    assert met["1,024-sample ensemble (4 s runs), 2 workers < 300 s"]
+    assert not met["Sobol indices, 4 keys, N = 256, 2 workers < 600 s"]
+
+
 @pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="MuJoCo is the optional extra 'bench'")
 def test_mujoco_walker_matches_initial_state_and_walks_one_step() -> None:
     from biped_sim import load_config

@@ -104,6 +104,7 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
         if row:
             ok = row["wall_s"] < row["target_s"]
             out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
+    out += uncertainty_targets(result.get("uncertainty"))
     mj = result.get("mujoco") or {}
     best = fastest_accurate_row(result)
     if mj.get("available") and best is not None:
@@ -115,6 +116,33 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
             )
         )
     return out
+
+
+def uncertainty_targets(section: dict[str, Any] | None) -> list[tuple[str, str, bool | None]]:
+    """Issue 21's targets: the 1,024-sample ensemble and the N = 256 Sobol study, 2 workers."""
+    out: list[tuple[str, str, bool | None]] = []
+    for name, label in (("ensemble", "1,024-sample ensemble (4 s runs)"), ("sobol", "Sobol indices, 4 keys, N = 256")):
+        row = (section or {}).get(name)
+        if row:
+            ok = row["wall_s"] < row["target_s"]
+            out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
+    return out
+
+
+def uncertainty_notes(section: dict[str, Any] | None) -> list[str]:
+    """The ensemble's throughput against MuJoCo's rollouts."""
+    if not section:
+        return []
+    ens, mj = section["ensemble"], section["mujoco_rollout"]
+    line = f"Uncertainty ensemble: {ens['runs']} runs of {section['t_end']:g} s, {ens['runs_per_s']:.2f} runs/s"
+    line += " on 2 workers"
+    if mj.get("available"):
+        line += f"; MuJoCo {mj['version']} rollout ({mj['rollouts']} rollouts, {mj['threads']} threads, timestep "
+        line += f"{mj['timestep']:g} s, open loop): {mj['runs_per_s']:.2f} runs/s"
+        line += f"; ratio {mj['ensemble_over_mujoco']:.2f}x"
+    else:
+        line += f"; MuJoCo rollout not run ({mj['reason']})"
+    return [line + "."]
 
 
 def notes(result: dict[str, Any]) -> list[str]:
@@ -160,6 +188,7 @@ def notes(result: dict[str, Any]) -> list[str]:
             + (f" ({sweep['speedup_2_vs_1']:.2f}x)." if "speedup_2_vs_1" in sweep else ".")
         )  # fmt: skip
     lines += rigid_map_notes(result.get("rigid_map"))
+    lines += uncertainty_notes(result.get("uncertainty"))
     mj = result.get("mujoco")
     if mj is not None:
         if mj.get("available"):

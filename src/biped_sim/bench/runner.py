@@ -34,6 +34,7 @@ from biped_sim.bench.baseline import integrate_baseline
 from biped_sim.bench.fit import fit_bench
 from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
+from biped_sim.bench.uncertainty import uncertainty_bench
 from biped_sim.config import Config, load_config
 from biped_sim.integrate.driver import Integration, integrate_model
 from biped_sim.kernel import kernel
@@ -88,6 +89,9 @@ class BenchSettings:
     sweep_runs: int = 32  # 0: no sweep throughput
     basins: bool = True  # the rigid map's basin wall times (minutes; bench.rigid_map)
     fits: bool = True  # the global fit and the 4,000-draw posterior (about 10 minutes; bench.fit)
+    uncertainty: bool = (
+        True  # the 1,024-sample ensemble, the N = 256 Sobol study, MuJoCo's rollouts (bench.uncertainty)
+    )
     compile_time: bool = True
     mujoco: bool = True
     quick: bool = False
@@ -103,6 +107,7 @@ class BenchSettings:
             sweep_runs=0,
             basins=False,
             fits=False,
+            uncertainty=False,
             compile_time=False,
             mujoco=False,
             quick=True,
@@ -343,6 +348,9 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     if settings.fits:
         result["fit"] = fit_bench()
         log(f"fit: {json.dumps(result['fit'])}")
+    if settings.uncertainty:
+        result["uncertainty"] = uncertainty_bench()
+        log(f"uncertainty: {json.dumps({k: v for k, v in result['uncertainty'].items() if k != 'sobol'})}")
     if settings.mujoco:
         result["mujoco"] = mujoco_comparison(settings, base, reference, log)
     result["environment"] = environment()

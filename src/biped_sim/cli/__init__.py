@@ -14,6 +14,7 @@ from biped_sim.cli import (
     fit_commands,  # noqa: F401
     robustness_commands,  # noqa: F401
     run_commands,  # noqa: F401  (registers commands)
+    uncertainty_commands,  # noqa: F401
 )
 from biped_sim.cli.common import app
 

@@ -31,7 +31,7 @@ from biped_sim.errors import ArgumentError, ConfigError, clipped
 # studies, then the tools
 COMMAND_ORDER = (
     "run", "sweep", "report", "plot", "animate", "compare", "fit",
-    "limit-cycle", "bifurcation", "basin", "robustness", "converge",
+    "limit-cycle", "bifurcation", "basin", "robustness", "uncertainty", "mfpt", "converge",
     "validate", "bench", "warmup", "drop-test",
 )  # fmt: skip
 ARGUMENT_FLAGS = {"overrides": "--set"}  # API arguments every command takes under another name

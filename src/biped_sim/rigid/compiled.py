@@ -45,6 +45,7 @@ from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.kernels import (
     COMPASS,
+    P_SLOPE,
     SIMPLEST,
     WHEEL,
     fall_check,
@@ -104,6 +105,14 @@ def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
     ]
     rows = [[b.mass, b.inertia, b.leg, b.distance, float(getattr(b, "offset", 0.0))] for b in bodies]
     return kind, np.array(header + [v for row in rows for v in row], dtype=float)
+
+
+def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
+    """``cw`` on a ground of another slope (a copy of the parameters; the buffers are shared): the step of a
+    walk on ground whose slope changes from step to step."""
+    params = cw.params.copy()
+    params[P_SLOPE] = slope
+    return cw._replace(params=params)
 
 
 def compile_walker(walker: RigidWalker) -> CompiledWalker:

@@ -29,7 +29,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import Executor, Future, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +46,7 @@ from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
 from biped_sim.rigid.models import rigid_walker
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
+from biped_sim.studies.tasks import results_as_done
 
 LEG_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
 KEY_PREFIX = "simulation.initial."
@@ -265,13 +266,7 @@ def _rows(
     spec: BasinSpec, pending: list[int], target: dict[str, float] | None, executor: Executor | None
 ) -> Iterator[dict[str, Any]]:
     """The finished rows' records as they come: from ``executor``, or computed here when it is None."""
-    tasks = [RowTask(spec, row, target) for row in pending]
-    if executor is None:
-        yield from map(basin_row, tasks)
-        return
-    futures: list[Future[dict[str, Any]]] = [executor.submit(basin_row, task) for task in tasks]
-    for future in as_completed(futures):
-        yield future.result()
+    return results_as_done(basin_row, [RowTask(spec, row, target) for row in pending], executor)
 
 
 def map_basin(

@@ -25,6 +25,7 @@ from biped_sim.simulate import simulate
 from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config
 from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
 from biped_sim.studies.drop_test import drop_test_table
+from biped_sim.studies.uncertainty.checks import uncertainty_checks
 from biped_sim.studies.validation_studies import (
     basin_checks,
     convergence_checks,
@@ -250,6 +251,7 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         ("contact laws", contact_law_checks),
         ("energy balance", energy_balance_checks),
         ("fit recovery", fit_recovery_checks),
+        ("uncertainty: Sobol indices, mean period, rimless wheel MFPT", uncertainty_checks),
     ]
     for name, stage in stages:
         if progress:

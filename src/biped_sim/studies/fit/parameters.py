@@ -100,7 +100,11 @@ def check_parameters(parameters: tuple[FitParameter, ...]) -> None:
     """At least one parameter, no key twice."""
     if not parameters:
         raise ConfigError("parameters", "give at least one config key to fit (KEY=LO:HI)")
-    keys = [p.key for p in parameters]
+    check_distinct([p.key for p in parameters], "is fitted twice")
+
+
+def check_distinct(keys: list[str], reason: str) -> None:
+    """ConfigError naming the first key (in sorted order) that ``keys`` holds twice."""
     twice = sorted({k for k in keys if keys.count(k) > 1})
     if twice:
-        raise ConfigError(twice[0], "is fitted twice")
+        raise ConfigError(twice[0], reason)

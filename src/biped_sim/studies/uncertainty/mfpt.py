@@ -1,0 +1,152 @@
+"""Survival on stochastic ground: the mean first-passage time (MFPT, Byl and Tedrake 2009), the expected number
+of steps before a fall, from walks over seeds, as a function of the roughness.
+
+Two grounds:
+
+* ``height`` (any walker): a ``random`` ground profile (heights drawn every ``SPACING`` leg lengths, standard
+  deviation ``roughness`` leg lengths, seeded) from the start on; a run stops at a fall or after ``cap`` heel
+  strikes;
+* ``slope`` (the rigid rimless wheel): the slope of every step drawn from N(slope, roughness^2), walked by the
+  compiled rigid step map, with the Markov chain of its analytic apex-to-apex map beside it as a check
+  (:mod:`.rimless_chain`).
+
+The estimate (:func:`mfpt_estimate`): when no walk reached the cap, the mean of the strike counts with a
+Student-t interval (no assumption on their distribution); when some did (censored), the maximum-likelihood
+mean of a geometric first passage (a metastable walker: a constant chance of falling per step), total strikes
+over falls, with the exact Poisson (chi-square) interval of the fall rate; with no fall at all, only a lower
+bound.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from biped_sim.config import Config, derive
+from biped_sim.errors import ArgumentError
+from biped_sim.studies.tasks import results_as_done
+from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, wheel_walks
+from biped_sim.studies.uncertainty.samples import run_formulation
+
+CONFIDENCE = 0.95
+SPACING = 0.1  # [leg lengths] between the random heights
+GROUNDS = ("height", "slope")
+TIME_PER_STEP = 10.0  # a height walk's t_end: this many sqrt(l / g) per step (it stops at the cap)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """MFPT [steps] with its interval, and what it rests on."""
+
+    mfpt: float
+    ci: tuple[float, float]
+    falls: int
+    censored: int
+    method: str
+
+
+def mfpt_estimate(strikes: np.ndarray, fell: np.ndarray, confidence: float = CONFIDENCE) -> Estimate:
+    """The MFPT of walks that took ``strikes`` steps and fell (``fell``) or reached the cap (see module)."""
+    strikes, fell = np.asarray(strikes, dtype=float), np.asarray(fell, dtype=bool)
+    n, k, total = strikes.size, int(np.count_nonzero(fell)), float(np.sum(strikes))
+    a = 1.0 - confidence
+    if k == n:
+        mean = float(np.mean(strikes))
+        half = float(stats.t.ppf(1 - a / 2, n - 1) * np.std(strikes, ddof=1) / math.sqrt(n)) if n > 1 else math.inf
+        return Estimate(mean, (mean - half, mean + half), k, 0, "mean of uncensored walks, Student-t interval")
+    rate_low = stats.chi2.ppf(a / 2, 2 * k) / (2 * total) if k else 0.0
+    rate_high = stats.chi2.ppf(1 - a / 2, 2 * k + 2) / (2 * total)
+    ci = (1.0 / rate_high, 1.0 / rate_low if k else math.inf)
+    mfpt = total / k if k else math.inf
+    return Estimate(mfpt, ci, k, n - k, "censored: geometric maximum likelihood, chi-square interval")
+
+
+def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
+    """One walk on random heights of ``roughness`` leg lengths: (strikes, fell)."""
+    from biped_sim.simulate import simulate  # the engine: imported by the workers that walk
+
+    leg = config.walker.leg_length
+    t_end = TIME_PER_STEP * cap * math.sqrt(leg / config.gravity)
+    profile = {"kind": "random", "spacing": SPACING * leg, "roughness": roughness * leg, "seed": seed,
+               "start": 0.0, "length": 2.0 * cap * leg}  # fmt: skip
+    values: dict[str, Any] = {"ground.profile": profile, "simulation.max_steps": cap, "simulation.t_end": t_end}
+    if config.dynamics == "compliant":
+        values |= {"formulation.kind": run_formulation(config), "output.sample_rate": 100.0}
+    result = simulate(derive(config, values))
+    strikes = len(result.steps.strike_time)
+    return min(strikes, cap), not (result.status == "walking" and strikes >= cap)
+
+
+def _height_task(task: tuple[Config, float, int, int]) -> tuple[float, int, int, bool]:
+    config, roughness, seed, cap = task
+    strikes, fell = height_walk(config, roughness, seed, cap)
+    return roughness, seed, strikes, fell
+
+
+@dataclass
+class MfptCurve:
+    """MFPT against roughness: the walks' estimates and, for the rimless wheel on random slopes, the chain's."""
+
+    ground: str
+    roughness: list[float]
+    estimates: list[Estimate]
+    chain: list[float] | None
+    seeds: int
+    cap: int
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def roughness_label(self) -> str:
+        return "slope sd per step [rad]" if self.ground == "slope" else "height sd [leg lengths]"
+
+    def to_json(self) -> dict[str, Any]:
+        rows = []
+        for i, (h, e) in enumerate(zip(self.roughness, self.estimates, strict=True)):
+            row = {"roughness": h, "mfpt": e.mfpt, "ci": list(e.ci), "falls": e.falls, "censored": e.censored,
+                   "method": e.method}  # fmt: skip
+            if self.chain is not None:
+                row["chain_mfpt"] = self.chain[i]
+            rows.append(row)
+        return {"ground": self.ground, "roughness_unit": self.roughness_label, "seeds": self.seeds, "cap": self.cap,
+                "confidence": CONFIDENCE, "levels": rows, "notes": self.notes}  # fmt: skip
+
+
+def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], seeds: int, cap: int) -> None:
+    """ArgumentError naming the argument at fault."""
+    if ground not in GROUNDS:
+        raise ArgumentError("ground", f"unknown ground {ground!r}; expected one of {', '.join(GROUNDS)}")
+    if ground == "slope" and not (config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"):
+        raise ArgumentError("ground", "random slopes per step are walked by the rigid rimless wheel only")
+    if not roughness or not all(math.isfinite(h) and h >= 0 for h in roughness):
+        raise ArgumentError("roughness", "give non-negative roughness levels")
+    if seeds < 2:
+        raise ArgumentError("seeds", "need at least 2 seeds")
+    if cap < 1:
+        raise ArgumentError("cap", "must be at least 1 step")
+
+
+def mfpt_curve(
+    config: Config, ground: str, roughness: Sequence[float], seeds: int, cap: int, executor: Executor | None = None
+) -> MfptCurve:
+    """The MFPT at each roughness level over ``seeds`` walks capped at ``cap`` strikes."""
+    check_mfpt_input(config, ground, roughness, seeds, cap)
+    levels = [float(h) for h in roughness]
+    if ground == "slope":
+        walks = [wheel_walks(config, h, range(seeds), cap) for h in levels]
+        estimates = [mfpt_estimate(*w) for w in walks]
+        chain = [chain_mfpt(Wheel.of(config), h) if h > 0 else math.inf for h in levels]
+        notes = ["slope of each step ~ N(slope, roughness^2); chain: the analytic apex-to-apex map (Byl & Tedrake)"]
+        return MfptCurve(ground, levels, estimates, chain, seeds, cap, notes)
+    tasks = [(config, h, seed, cap) for h in levels for seed in range(seeds)]
+    done: dict[float, list[tuple[int, bool]]] = {h: [] for h in levels}
+    for h, _seed, strikes, fell in results_as_done(_height_task, tasks, executor):
+        done[h].append((strikes, fell))
+    estimates = [mfpt_estimate(*np.array(done[h], dtype=float).T) for h in levels]
+    notes = [f"random heights every {SPACING:g} leg lengths from the start; a walk stops at a fall or {cap} strikes"]
+    return MfptCurve(ground, levels, estimates, None, seeds, cap, notes)
