@@ -177,6 +177,17 @@ def test_from_fit_runs_evenly_spaced_posterior_draws(tmp_path: Path) -> None:
         assert f["values"][()][:, 0] == pytest.approx(draws[[0, 10, 20, 29, 39], 0])
 
 
+def test_sobol_indices_of_a_posterior_are_refused_naming_from_fit(tmp_path: Path) -> None:
+    from biped_sim.io.posterior import Posterior, write_posterior
+
+    write_posterior(
+        tmp_path / "posterior.h5", Posterior(("ground.slope",), np.full((8, 1), 0.009), np.zeros(8), "{}"), {}
+    )
+    result = invoke("uncertainty", str(SIMPLEST), "--from-fit", str(tmp_path), "--sobol", "--out", str(tmp_path / "u"))
+    assert result.exit_code == 2 and result.stderr.strip().startswith("error: --from-fit: Sobol indices"), result.stderr
+    assert not (tmp_path / "u").exists()
+
+
 def test_the_polynomial_chaos_surrogate_recovers_ishigami_s_indices() -> None:
     from biped_sim.studies.uncertainty.checks import ISHIGAMI, ishigami
     from biped_sim.studies.uncertainty.distributions import Distribution

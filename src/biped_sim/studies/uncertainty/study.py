@@ -52,7 +52,8 @@ class UncertaintySpec:
             if self.distributions:
                 raise ArgumentError("posterior", "give distributions or a fit's posterior, not both")
             if self.method == "saltelli":
-                raise ArgumentError("method", "Sobol indices need independent distributions, not a posterior")
+                reason = "Sobol indices (Saltelli's design) need independent distributions, not a posterior"
+                raise ArgumentError("posterior", reason)
             for key in self.posterior.parameters:
                 numeric_value(self.config, key)
             if self.samples < 2:
