@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from biped_sim.config import LEG_KEYS
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.models import RigidWalker, RimlessWheel
 from biped_sim.rigid.start import RigidStart, touchdown_legs
@@ -67,10 +68,7 @@ def rigid_step_table(walker: RigidWalker, trace: RigidTrace) -> StepTable:
         length[:-1] = trace.step_lengths[1:n]
         slip[:-1] = 0.0
     touchdown = [touchdown_legs(walker, x) for x in trace.strike_pre]
-    legs = {
-        key: np.array([state[key] for state in touchdown], dtype=float)
-        for key in ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
-    }
+    legs = {key: np.array([state[key] for state in touchdown], dtype=float) for key in LEG_KEYS}
     return StepTable(strike_time, strike_feet(walker, n), period, length, slip, **legs)
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import STATE_KEYS, Config, InitialState
 
 Guard = Callable[[np.ndarray], float]
 
@@ -71,7 +71,7 @@ class RigidWalker:
 
     name: str = ""
     n_q: int = 2
-    state_names: tuple[str, ...] = ("stance_angle", "swing_angle", "stance_rate", "swing_rate")
+    state_names: tuple[str, ...] = STATE_KEYS
     section_names: tuple[str, ...] = ()
     gravity: float = 1.0
     leg_length: float = 1.0

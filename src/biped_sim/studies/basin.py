@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState, derive
+from biped_sim.config import LEG_KEYS, Config, InitialState, derive
 from biped_sim.config.schema import MAX_STEPS
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
@@ -47,7 +47,6 @@ from biped_sim.rigid.models import rigid_walker
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
 
-LEG_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
 KEY_PREFIX = "simulation.initial."
 DEFAULT_STEPS = 30
 CONVERGED_TOLERANCE = 1e-4  # rad and rad/s (the simplest walker: nondimensional)
