@@ -63,7 +63,7 @@ def test_initial_state_of_a_described_walker_takes_its_own_keys() -> None:
         (lambda d: d["legs"][1].pop(), "legs: every leg needs the same number of bodies"),
         (lambda d: d["legs"][1].reverse(), "same roles in the same order"),
         (lambda d: d["joints"][1]["stops"].append({"side": "upper", "angle": 0.1}), "at most one stop per side"),
-        (lambda d: d["joints"][1]["stops"].append({"side": "lower", "angle": 0.1}), "the lower stop's angle"),
+        (lambda d: d["joints"][1]["stops"].append({"side": "lower", "angle": 0.1}), "must not be above the upper"),
         (lambda d: d["bodies"][0].update(mass=-1.0), "mass"),
     ],
 )

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from biped_sim.config import load_config
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import compile_walker, compiled_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
 from biped_sim.sweep import local_executor

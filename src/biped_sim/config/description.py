@@ -77,8 +77,8 @@ class JointSpec(Strict):
         sides = [stop.side for stop in self.stops]
         if len(set(sides)) != len(sides):
             raise ValueError("stops: at most one stop per side")
-        if len(self.stops) == 2 and self.lower_upper()[0] >= self.lower_upper()[1]:
-            raise ValueError("stops: the lower stop's angle must be below the upper stop's")
+        if len(self.stops) == 2 and self.lower_upper()[0] > self.lower_upper()[1]:
+            raise ValueError("stops: the lower stop's angle must not be above the upper stop's (equal: locked)")
         return self
 
     def lower_upper(self) -> tuple[float, float]:

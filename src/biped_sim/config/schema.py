@@ -319,12 +319,17 @@ class Config(Strict):
         return self
 
     def _initial_keys_match(self) -> None:
-        initial, described = self.simulation.initial, self.walker.description
+        initial = self.simulation.initial
         if not isinstance(initial, dict):
             return
-        expected = described.state_keys() if described is not None else LEG_KEYS
+        expected = self.initial_keys()
         if set(initial) != set(expected) or len(expected) == len(LEG_KEYS):
             raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}")
+
+    def initial_keys(self) -> tuple[str, ...]:
+        """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
+        described = self.walker.description
+        return described.state_keys() if described is not None else LEG_KEYS
 
     def hash(self) -> str:
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""

@@ -9,8 +9,9 @@ import numpy as np
 
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker, rigid_walker
+from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.stepping import RTOL
 
 NONDIMENSIONAL = "1 (g = l = 1)"

@@ -14,8 +14,9 @@ import numpy as np
 from biped_sim.config import STATE_KEYS, Config, derive
 from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
-from biped_sim.rigid.models import CompassChain, rigid_walker
+from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.strike_check import StrikeCheck, strike_check
 from biped_sim.simulate import simulate
 from biped_sim.walkers.model import contact_stiffness
