@@ -25,7 +25,9 @@ from biped_sim.rigid.tree import TreeWalker
 from biped_sim.rigid.tree_kernels import PAST, STOP, T_NPTS, point, point_velocity, row_offset
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
 
-KNEED = Path(__file__).parent / "data" / "kneed_walker.yaml"
+from .conftest import CONFIGS
+
+KNEED = CONFIGS / "kneed_walker.yaml"
 CHEN_SLOPE = math.asin(7.25 / 144.0)
 CHEN_FIXED_POINT = np.array([0.1877, -0.2884, -1.1014, -0.0399])  # q1, q2 = q3, q1dot, q2dot = q3dot
 EULER_STEP = 1e-3
@@ -189,7 +191,7 @@ def test_a_massless_shank_and_a_locked_knee_make_the_compass_gait(tmp_path: Path
     path.write_text(_compass_as_knees(0.0))
     kneed = rigid_limit_cycle(load_config(path))
     point_feet = ["dynamics=rigid", "walker.foot_radius=0", "contact.stiffness=1e7"]
-    compass = rigid_limit_cycle(load_config(Path(__file__).parents[1] / "configs" / "compass_goswami.yaml", point_feet))
+    compass = rigid_limit_cycle(load_config(CONFIGS / "compass_goswami.yaml", point_feet))
     assert kneed.stable and kneed.step_period == pytest.approx(0.7344, abs=1e-3)  # Goswami's, as in test_limit_cycle
     assert kneed.step_period == pytest.approx(compass.step_period, abs=1e-10)
     got = np.array([kneed.fixed_point[k] for k in ("stance_thigh_angle", "stance_thigh_rate", "swing_thigh_rate")])

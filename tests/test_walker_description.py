@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,7 +14,9 @@ from biped_sim.errors import ConfigError
 from biped_sim.walkers import build_model
 from biped_sim.walkers.describe import describe
 
-KNEED = load_config(Path(__file__).parent / "data" / "kneed_walker.yaml")  # configs/ once it runs
+from .conftest import CONFIGS
+
+KNEED = load_config(CONFIGS / "kneed_walker.yaml")
 
 
 def _kneed_dict() -> dict[str, Any]:

@@ -41,6 +41,7 @@ class RigidTrace:
     step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
     strike_levels: list[float] = field(default_factory=list)  # on a ground profile: the new stance foot's level
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # (time, work, ground normal impulse)
+    stop_losses: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (time, energy lost)
 
     def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
         if not len(t):
@@ -106,6 +107,8 @@ def rigid_energy_and_hip(
     kinetic_0, potential_0 = walker.energy(start.state)
     energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
     dissipated = dissipated_by_step[step_of_sample]
+    for at, loss in trace.stop_losses:  # a sample at a stop strike's time holds the state after it
+        dissipated[times >= at] += loss
     push_work = np.zeros(len(times))
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it

@@ -121,6 +121,11 @@ class RigidWalker:
         return float(x_minus[1])
 
     @property
+    def landing_index(self) -> int:
+        """The coordinate of the leg (its hip body) that touches down at the strike: the last one."""
+        return self.n_q - 1
+
+    @property
     def strike_angle_offset(self) -> float:
         """phi = atan2(d, l - R): the hip is above the stance arc centre at theta_st = -phi, and the legs strike
         symmetrically about that direction, theta_sw + phi = -(theta_st + phi)."""

@@ -50,6 +50,7 @@ class RigidStep:
     samples_x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     accepted_steps: int = 0  # DOP853 steps taken
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # applied: (t, work, ground normal impulse)
+    stop_strikes: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (t, energy lost)
 
 
 def _guard_event(guard, direction: float):  # type: ignore[no-untyped-def]
@@ -110,11 +111,13 @@ def rigid_step(
     samples_t: list[np.ndarray] = []
     samples_x: list[np.ndarray] = []
     applied: list[tuple[float, float, float]] = []
+    stops: list[tuple[float, float]] = []
 
     def finish(step: RigidStep) -> RigidStep:
         # every outcome keeps its samples, counters and pushes (a run records the fall's trajectory too)
         step.accepted_steps = accepted
         step.pushes = applied
+        step.stop_strikes = stops
         if samples_t:
             step.samples_t = np.concatenate(samples_t)
             step.samples_x = np.vstack(samples_x)
@@ -155,7 +158,10 @@ def rigid_step(
         if on_profile and profile.tripped(x):  # type: ignore[union-attr]
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
         t, x = _polish(walker, guard, t, x)
-        x = walker.after_phase(index, x)
+        x_after = walker.after_phase(index, x)
+        if x_after is not x:  # a joint stop struck: book its plastic loss
+            stops.append((t, walker.energy(x)[0] - walker.energy(x_after)[0]))
+        x = x_after
     x_plus = walker.impact(x) if profile is None else profile.impact(x)
     return finish(RigidStep("strike", x_start, x, x_plus, t, walker.step_length(x_start, x), evals))
 

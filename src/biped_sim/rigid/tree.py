@@ -263,7 +263,11 @@ class TreeWalker(RigidWalker):
         return np.concatenate([angles, np.full(half, z[1]), np.full(half, z[2])])
 
     def next_stance_angle(self, x_minus: np.ndarray) -> float:
-        return float(x_minus[self.n_q // 2])
+        return float(x_minus[self.landing_index])
+
+    @property
+    def landing_index(self) -> int:
+        return self.n_q // 2
 
     def hip_height(self, x: np.ndarray) -> float:
         return float(point(self.params, self.n_points, np.asarray(x[: self.n_q], dtype=float))[1])

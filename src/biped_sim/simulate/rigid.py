@@ -181,6 +181,7 @@ def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] |
         pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
         step = rigid_step(walker, x, rate, pending, profile)
         trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
+        trace.stop_losses += [(t0 + at, loss) for at, loss in step.stop_strikes]
         evals += step.rhs_evals
         accepted += step.accepted_steps
         local = step.samples_t < step.period  # the strike (or fall) state is recorded below, not interpolated
