@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
