@@ -24,6 +24,7 @@ from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import TreeWalker
 from biped_sim.rigid.tree_kernels import PAST, STOP, T_NPTS, point, point_velocity, row_offset
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
+from biped_sim.studies.continuation import continue_cycle, flip_margin
 
 from .conftest import CONFIGS
 
@@ -237,3 +238,12 @@ def test_a_new_walker_written_only_as_yaml_finds_its_gait_and_basin(tmp_path: Pa
     basin = map_basin(BasinSpec(config, *axes, steps=20), None)
     converged = basin.outcome == CONVERGED
     assert converged[1, 1] == cycle.stable and converged.any()
+
+
+def test_kneed_walker_loses_its_period_one_gait_by_a_flip_on_steeper_slopes() -> None:
+    config = load_config(CONFIGS / "kneed_walker.yaml")
+    gait = rigid_limit_cycle(config)
+    for slope in (0.07, 0.095, 0.12):  # natural continuation in slope, each cycle the next guess
+        gait = continue_cycle(config, slope, gait.fixed_point)
+        assert gait.converged
+    assert not gait.stable and flip_margin(gait) < 0  # a real multiplier past -1: period doubling
