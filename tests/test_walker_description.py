@@ -147,3 +147,17 @@ def test_the_rigid_walkers_describe_their_keys() -> None:
         "stance_rate",
         "swing_rate",
     )
+
+
+def test_the_registry_refuses_what_a_described_walker_does_not_support_yet() -> None:
+    data = _kneed_dict()
+    assert describe(config_from_dict(data)) == KNEED.walker.description
+    with pytest.raises(ConfigError, match=r"walker\.kind: 'description' is available with dynamics: rigid only"):
+        config_from_dict({**data, "dynamics": "compliant"})
+    data["simulation"] = {"t_end": 2.0, "pushes": [{"time": 1.0, "impulse": [1.0, 0.0]}]}
+    with pytest.raises(ConfigError, match=r"simulation\.pushes: the description walker takes no pushes"):
+        config_from_dict(data)
+    data["simulation"] = {}
+    data["ground"]["profile"] = {"kind": "steps", "steps": [{"at": 0.3, "height": -0.01}]}
+    with pytest.raises(ConfigError, match=r"ground\.profile: the description walker walks on flat ground only"):
+        config_from_dict(data)

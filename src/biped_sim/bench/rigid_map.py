@@ -30,6 +30,7 @@ STEP_CASES = {  # walker -> (config, overrides)
     "simplest": ("simplest_walker.yaml", ["dynamics=rigid"]),
     "compass": ("compass_goswami.yaml", ["dynamics=rigid"]),
     "rimless_wheel": ("rimless_wheel.yaml", ["dynamics=rigid"]),
+    "kneed": ("kneed_walker.yaml", []),  # a described walker: its tree kernels against scipy over the same ones
 }
 BASINS = {  # name -> (config, x, y, steps, target wall time [s])
     "simplest_41x41x30": ("simplest_walker.yaml", "stance_angle=0.02:0.42:41", "stance_rate=-0.6:0.0:41", 30, 60.0),
