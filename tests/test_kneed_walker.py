@@ -34,6 +34,7 @@ from biped_sim.rigid.tree_kernels import (
 )
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.continuation import continue_cycle, flip_margin
+from biped_sim.studies.robustness import gait_start, largest_disturbance, trial
 
 from .conftest import CONFIGS
 
@@ -269,3 +270,23 @@ def test_the_tree_kernels_run_as_plain_python_give_the_same_bits() -> None:
         function(walker.params.copy(), *args, compiled)
         getattr(function, "py_func", function)(walker.params.copy(), *args, plain)
         assert np.array_equal(compiled, plain) and np.all(np.isfinite(compiled))
+
+
+def test_a_described_walker_runs_pushed_and_down_a_step_with_its_energy_booked() -> None:
+    from biped_sim import simulate  # the run API, above the rigid layer
+
+    def run(*overrides: str):  # type: ignore[no-untyped-def]
+        return simulate(load_config(CONFIGS / "kneed_walker.yaml", ["simulation.t_end=3", *overrides]))
+
+    pushed = run("simulation.pushes=[{time: 1.3, impulse: [0.05, 0.0]}]")
+    stepped = run("ground.profile={kind: steps, steps: [{at: 1.0, height: -0.005}]}")
+    for result in (pushed, stepped):  # the push's work and the strikes' losses close the energy balance
+        assert result.status == "walking" and result.summary["energy_residual_max_relative"] < 1e-9
+    assert stepped.summary["step_periods"] != run().summary["step_periods"]  # the step down changed the gait
+
+
+def test_robustness_finds_the_kneed_walkers_largest_push() -> None:
+    gait = gait_start(load_config(CONFIGS / "kneed_walker.yaml"))
+    survived, failed = largest_disturbance(gait, "push", 1.0)
+    assert 0.0 < survived < (failed if failed is not None else math.inf)
+    assert trial(gait, "push", survived).survived and not trial(gait, "push", failed or 10.0).survived

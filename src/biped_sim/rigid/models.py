@@ -120,6 +120,14 @@ class RigidWalker:
         """Angle of the leg about to touch down, just before the strike."""
         return float(x_minus[1])
 
+    def swing_foot(self, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
+        """(x, height) of the lowest point of the swing foot's arc (the next spoke's tip for the wheel), the stance
+        contact point at (origin - R theta_st, level): straight legs, the arc centres l - R from the hip."""
+        arm = self.leg_length - self.foot_radius
+        stance, swing = float(x[0]), self.next_stance_angle(x)
+        foot_x = origin - self.foot_radius * stance + arm * (math.sin(swing) - math.sin(stance))
+        return foot_x, level + arm * (math.cos(stance) - math.cos(swing))
+
     @property
     def landing_index(self) -> int:
         """The coordinate of the leg (its hip body) that touches down at the strike: the last one."""

@@ -22,6 +22,7 @@ from biped_sim.rigid.tree_kernels import (
     STRIKE,
     T_NPHASE,
     T_NPTS,
+    T_RSW,
     after_phase,
     begin_step,
     layout_size,
@@ -32,6 +33,7 @@ from biped_sim.rigid.tree_kernels import (
     skip_phase,
     tree_guard,
     tree_impact,
+    tree_push,
     tree_rhs,
 )
 
@@ -238,6 +240,17 @@ class TreeWalker(RigidWalker):
         out = np.zeros(2 * self.n_q)
         tree_impact(self.params, np.asarray(x_minus, dtype=float), True, out)
         return out
+
+    def hip_push(self, x: np.ndarray, impulse: np.ndarray) -> tuple[np.ndarray, float]:
+        """(the state just after an impulse on the hip, the ground's normal impulse): :func:`tree_push`."""
+        out = np.zeros(2 * self.n_q)
+        normal = tree_push(self.params, np.asarray(x, dtype=float), float(impulse[0]), float(impulse[1]), out)
+        return out, float(normal)
+
+    def swing_foot(self, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
+        """(x, height) of the swing foot's lowest point, the stance contact at (origin - R theta, level)."""
+        fx, fy = point(self.params, self.n_points + 1, np.asarray(x[: self.n_q], dtype=float))
+        return origin + fx, level + fy - float(self.params[T_RSW])
 
     def energy(self, x: np.ndarray) -> tuple[float, float]:
         n = self.n_q

@@ -339,3 +339,33 @@ def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
         return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
     _, hip_y = point(p, int(p[T_NPTS]), x[: _n(p)])
     return hip_y - FALL_HIP_FRACTION * p[P_L]
+
+
+@kernel
+def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarray) -> float:
+    """out = the state just after an impulse (px, py) on the hip, ``[M A^T; A 0] [dqd; Lambda] = [J_hip^T p; 0]``
+    (the stance foot and the locked stops hold); returns the ground's normal impulse (the walker's momentum change
+    minus p, normal part: negative when the push would lift the stance foot)."""
+    n = _n(p)
+    m = n + int(p[T_NLOCK])
+    q, qd = x[:n], x[n:]
+    w = work_offset(p)
+    r = w + m * m
+    npts = int(p[T_NPTS])
+    used = _assemble(p, 0, q, w, m)
+    for a in range(m):
+        p[r + a] = 0.0
+    for k in range(n):
+        jx, jy = _jacobian(p, 0, npts, q, k)
+        p[r + k] = jx * px + jy * py
+    _solve(p, w, m, used, r)
+    normal = -py
+    for i in range(npts):
+        mass = p[row_offset(p, 0, i)]
+        for k in range(n):
+            _, jy = _jacobian(p, 0, i, q, k)
+            normal += mass * jy * p[r + k]
+    for k in range(n):
+        out[k] = q[k]
+        out[n + k] = qd[k] + p[r + k]
+    return normal
