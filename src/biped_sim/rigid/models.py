@@ -1,15 +1,12 @@
 """Rigid (impulsive-impact) walkers in reduced coordinates: flow, heel-strike guard and impact map.
 
-State convention (README): ``x = (theta_st, theta_sw, thetadot_st, thetadot_sw)`` for the bipeds,
-``x = (theta, thetadot)`` for the rimless wheel; leg angles from the slope normal, positive with the
-foot downhill of the hip. Between strikes the stance foot rolls without slip and the swing leg swings
-freely; the swing foot's mid-stance scuffing is ignored.
+State (README): ``x = (theta_st, theta_sw, thetadot_st, thetadot_sw)``, the wheel's ``(theta, thetadot)``; leg
+angles from the slope normal, + with the foot downhill of the hip. Between strikes the stance foot rolls without
+slip, the swing leg swings freely, its foot's mid-stance scuffing ignored.
 
-The compass and the rimless wheel come from one multibody description (:class:`LegChain`): point
-bodies and leg inertias placed on legs that hang from a hip carried by a stance foot arc rolling on the
-slope. The rolling contact is a bilateral holonomic constraint (arc centre at height R, x_C + R theta
-constant), so the reduced coordinates are the leg angles and every body's position is an explicit
-function of them. From that description:
+The compass and the rimless wheel are one chain (:class:`LegChain`): bodies on legs hung from a hip that a
+stance foot arc, rolling on the slope (a bilateral constraint: x_C + R theta constant), carries; the reduced
+coordinates are the leg angles. From that description (a described walker's tree: :mod:`.tree`):
 
 * the flow is Kane's (projected Newton-Euler) equations, ``M(q) qdd = sum_b J_b^T m_b (g - Jdot_b qd)``,
   ``M = sum_b m_b J_b^T J_b + I_b e_b e_b^T``;
@@ -19,9 +16,8 @@ function of them. From that description:
   content is the conservation of the whole walker's angular momentum about the new contact point and of
   the trailing leg's about the hip (both checked in the tests).
 
-Garcia's simplest walker (massless legs, a hip mass, infinitesimal foot masses, g = l = 1) is the limit
-the chain cannot reach with a regular mass matrix; it uses the equations and heel-strike map of MODEL.md
-8 exactly as published.
+Garcia's simplest walker (massless legs, a hip mass, infinitesimal foot masses, g = l = 1), a limit the chain
+cannot reach with a regular mass matrix, uses MODEL.md 8's equations and heel-strike map as published.
 """
 
 from __future__ import annotations
@@ -121,10 +117,9 @@ class RigidWalker:
         return float(x_minus[1])
 
     def swing_foot(self, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
-        """(x, height) of the lowest point of the swing foot's arc (the next spoke's tip for the wheel), the stance
-        contact point at (origin - R theta_st, level): straight legs, the arc centres l - R from the hip."""
-        arm = self.leg_length - self.foot_radius
-        stance, swing = float(x[0]), self.next_stance_angle(x)
+        """(x, height) of the swing foot arc's lowest point (the wheel's next spoke tip), the stance contact at
+        (origin - R theta_st, level): straight legs, the arc centres l - R from the hip."""
+        arm, stance, swing = self.leg_length - self.foot_radius, float(x[0]), self.next_stance_angle(x)
         foot_x = origin - self.foot_radius * stance + arm * (math.sin(swing) - math.sin(stance))
         return foot_x, level + arm * (math.cos(stance) - math.cos(swing))
 
