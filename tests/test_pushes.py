@@ -12,7 +12,7 @@ from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of, measures
 from biped_sim.multibody.euler_parameters import point_state
 from biped_sim.multibody.minimal import star_state, star_system
-from biped_sim.rigid.models import rigid_walker
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.pushes import hip_push
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import prepare_model

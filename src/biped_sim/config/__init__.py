@@ -7,6 +7,17 @@ so that ``1e7`` is a number), applies ``--set key=value`` overrides and validate
 becomes a :class:`~biped_sim.errors.ConfigError` naming the dotted field and the reason.
 """
 
+from biped_sim.config.base import is_number_annotation
+from biped_sim.config.description import (
+    LEG_KEYS,
+    STATE_KEYS,
+    BodySpec,
+    FootSpec,
+    JointSpec,
+    PointMassSpec,
+    StopSpec,
+    WalkerDescription,
+)
 from biped_sim.config.loading import (
     apply_override,
     config_from_dict,
@@ -32,24 +43,31 @@ from biped_sim.config.schema import (
     Push,
     SimulationConfig,
     WalkerConfig,
-    is_number_annotation,
 )
 
 __all__ = [
+    "LEG_KEYS",
+    "STATE_KEYS",
     "BaumgarteConfig",
+    "BodySpec",
     "Config",
     "ContactConfig",
+    "FootSpec",
     "FormulationConfig",
     "FrictionConfig",
     "GroundConfig",
     "InitialState",
     "IntegratorConfig",
+    "JointSpec",
     "MaterialConfig",
     "MaterialsConfig",
     "OutputConfig",
+    "PointMassSpec",
     "Push",
     "SimulationConfig",
+    "StopSpec",
     "WalkerConfig",
+    "WalkerDescription",
     "apply_override",
     "config_from_dict",
     "default_output_dir",

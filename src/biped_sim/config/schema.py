@@ -5,64 +5,33 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import types
-import typing
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
-from biped_sim.contact.friction import FRICTION_LAWS
-from biped_sim.contact.normal import NORMAL_LAWS
+from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
+from biped_sim.config.description import LEG_KEYS, WalkerDescription
+from biped_sim.config.walker_registry import capabilities, refusal
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import quote
 
 
-def is_number_annotation(annotation: Any) -> bool:
-    """Whether a field's type is a number (float, int, or one of them or None)."""
-    if annotation in (float, int):
-        return True
-    if typing.get_origin(annotation) is tuple:  # a vector of numbers (simulation.pushes' impulse)
-        return all(is_number_annotation(arg) for arg in typing.get_args(annotation))
-    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
-        return any(is_number_annotation(arg) for arg in typing.get_args(annotation))
-    return False
-
-
-class _Strict(BaseModel):
-    """Base for every section: unknown keys are rejected, numbers are finite and never true/false."""
-
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _booleans_are_not_numbers(cls, data: Any) -> Any:
-        # YAML reads `true` as a boolean and pydantic would take it as 1.0 for a mass or a time
-        if isinstance(data, dict):
-            for name, value in data.items():
-                field = cls.model_fields.get(name)
-                numbers = value if isinstance(value, list) else [value]
-                if (
-                    field is not None
-                    and is_number_annotation(field.annotation)
-                    and any(isinstance(v, bool) for v in numbers)
-                ):
-                    raise ValueError(f"{name}: expected a number, got {quote(value).lower()}")
-        return data
-
-
-class WalkerConfig(_Strict):
+class WalkerConfig(Strict):
     """Geometry and inertia of the walker (MODEL.md 1)."""
 
-    kind: Literal["compass", "simplest", "rimless_wheel", "four_legged"] = Field(
+    kind: Literal["compass", "simplest", "rimless_wheel", "four_legged", "description"] = Field(
         "compass",
         description=(
             "Walker builder: 'compass' = two straight legs, round feet, hip joint; 'simplest' = Garcia's "
             "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only); "
             "'four_legged' = Liu's machine: an outer and an inner pair of legs, each pair joined rigidly by a cross "
             "bar, the pairs by a hip axle, four disc feet (compliant; formulation.kind: spatial, or minimal for its "
-            "sagittal motion)."
+            "sagittal motion); 'description' = the walker written in walker.description (bodies, joints, feet)."
         ),
+    )
+    description: WalkerDescription | None = Field(
+        None, description="walker.kind: description: the walker as a tree of bodies (WalkerDescription)."
     )
     spokes: int = Field(8, ge=3, description="Number of spokes (rimless_wheel).")
     leg_length: float = Field(0.5, gt=0, description="Hip to foot bottom, l [m].")
@@ -91,6 +60,8 @@ class WalkerConfig(_Strict):
 
     @model_validator(mode="after")
     def _geometry_is_possible(self) -> WalkerConfig:
+        if (self.kind == "description") != (self.description is not None):
+            raise ValueError("description: given exactly when walker.kind is 'description'")
         if self.foot_radius >= self.leg_length:
             raise ValueError("foot_radius: must be smaller than walker.leg_length")
         if self.leg_com_from_hip > self.leg_length:
@@ -103,21 +74,21 @@ class WalkerConfig(_Strict):
         return self
 
 
-class GroundConfig(_Strict):
+class GroundConfig(Strict):
     """The slope: a plane through the origin inclined downhill by ``slope``, shaped by ``profile`` in its frame."""
 
     slope: float = Field(0.02, gt=-math.pi / 2, lt=math.pi / 2, description="Downhill slope angle gamma [rad].")
     profile: GroundProfile = Field(default_factory=FlatProfile, description="Shape (biped_sim.contact.profile).")
 
 
-class MaterialConfig(_Strict):
+class MaterialConfig(Strict):
     """Elastic constants of one contacting body."""
 
     youngs_modulus: float = Field(..., gt=0, description="Young's modulus E [Pa].")
     poisson_ratio: float = Field(..., ge=0, lt=0.5, description="Poisson ratio nu [-].")
 
 
-class MaterialsConfig(_Strict):
+class MaterialsConfig(Strict):
     """Foot and ground materials; the contact stiffness then follows from Hertz theory."""
 
     foot: MaterialConfig = Field(
@@ -130,13 +101,10 @@ class MaterialsConfig(_Strict):
     )
 
 
-# the law names come from the registries: a new law is one function and one registry line
-NormalModelName = Literal[tuple(NORMAL_LAWS)]  # type: ignore[valid-type]
-FrictionModelName = Literal[tuple(FRICTION_LAWS)]  # type: ignore[valid-type]
 IntegratorName = Literal["euler", "rk2", "rk4", "dopri5", "dop853", "radau", "bdf"]
 
 
-class ContactConfig(_Strict):
+class ContactConfig(Strict):
     """Normal contact force law (MODEL.md 3-4)."""
 
     model: NormalModelName = Field("flores", description="Normal force law.")
@@ -179,7 +147,7 @@ class ContactConfig(_Strict):
         return self
 
 
-class FrictionConfig(_Strict):
+class FrictionConfig(Strict):
     """Tangential friction law (MODEL.md 5); each law reads the parameters it names."""
 
     model: FrictionModelName = Field("ambrosio", description="Friction law.")
@@ -205,14 +173,14 @@ class FrictionConfig(_Strict):
         return self
 
 
-class BaumgarteConfig(_Strict):
+class BaumgarteConfig(Strict):
     """Baumgarte stabilisation gains; alpha = beta = 0 is the standard method (MODEL.md 2)."""
 
     alpha: float = Field(10.0, ge=0, description="Velocity gain alpha [1/s].")
     beta: float = Field(10.0, ge=0, description="Position gain beta [1/s].")
 
 
-class FormulationConfig(_Strict):
+class FormulationConfig(Strict):
     """Multibody formulation."""
 
     kind: Literal["planar", "spatial", "minimal"] = Field(
@@ -226,7 +194,7 @@ class FormulationConfig(_Strict):
 MIN_RTOL = 100 * 2.220446049250313e-16  # as scipy's solve_ivp: tighter is below round-off
 
 
-class IntegratorConfig(_Strict):
+class IntegratorConfig(Strict):
     """Time integrator (MODEL.md 6)."""
 
     method: IntegratorName = Field("dopri5", description="Integration method.")
@@ -249,7 +217,16 @@ class IntegratorConfig(_Strict):
         return self
 
 
-class InitialState(_Strict):
+def _not_a_boolean(value: Any) -> Any:
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got {quote(value).lower()}")
+    return value
+
+
+Number = Annotated[float, BeforeValidator(_not_a_boolean)]  # YAML's true is not 1.0
+
+
+class InitialState(Strict):
     """Leg angles from the slope normal, positive when the foot is downhill of the hip (README)."""
 
     stance_angle: float = Field(0.25, description="Stance leg angle theta_st [rad].")
@@ -258,7 +235,7 @@ class InitialState(_Strict):
     swing_rate: float = Field(-0.5, description="Swing leg angular rate [rad/s].")
 
 
-class Push(_Strict):
+class Push(Strict):
     """An impulse on the hip (joint 0's point): an instantaneous velocity change consistent with the joints."""
 
     time: float = Field(..., ge=0, description="When [s]; before simulation.t_end.")
@@ -268,16 +245,18 @@ class Push(_Strict):
 MAX_STEPS = 1_000_000_000  # heel strikes: more than any run within the integration budget can take
 
 
-class SimulationConfig(_Strict):
+class SimulationConfig(Strict):
     """What to simulate and when to stop."""
 
     t_end: float = Field(15.0, gt=0, description="Simulated time [s].")
     max_steps: int | None = Field(
         None, gt=0, le=MAX_STEPS, description="Stop after this many heel strikes (none = run to t_end; at most 1e9)."
     )
-    initial: InitialState | Literal["rigid_limit_cycle"] = Field(
+    initial: InitialState | dict[str, Number] | Literal["rigid_limit_cycle"] = Field(
         default_factory=InitialState,
-        description="Initial leg angles and rates, or 'rigid_limit_cycle' to start on the rigid model's fixed point.",
+        union_mode="left_to_right",  # the README's keys (missing ones defaulted) before a described walker's own
+        description="Initial leg angles and rates, or 'rigid_limit_cycle' to start on the rigid model's fixed point; "
+        "a walker.description with several bodies per leg names its own keys (WalkerDescription.state_keys).",
     )
     fall_hip_height: float = Field(0.5, gt=0, lt=1, description="Fall when the hip is below this x leg_length.")
     fall_leg_angle: float = Field(1.4, gt=0, description="Fall when a leg is this far from the slope normal [rad].")
@@ -287,14 +266,14 @@ class SimulationConfig(_Strict):
     pushes: list[Push] = Field(default_factory=list, description="Impulses on the hip, applied in time order.")
 
 
-class OutputConfig(_Strict):
+class OutputConfig(Strict):
     """Where and how densely results are written."""
 
     dir: str | None = Field(None, description="Run directory; default results/runs/<config stem>.")
     sample_rate: float = Field(1000.0, gt=0, description="Trajectory samples per simulated second [Hz].")
 
 
-class Config(_Strict):
+class Config(Strict):
     """A complete, validated simulation description."""
 
     dynamics: Literal["compliant", "rigid"] = Field(
@@ -314,17 +293,14 @@ class Config(_Strict):
 
     @model_validator(mode="after")
     def _cross_checks(self) -> Config:
-        if self.dynamics == "compliant" and self.walker.kind in ("simplest", "rimless_wheel"):
-            raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
-        if self.walker.kind == "four_legged" and (
-            self.dynamics != "compliant" or self.formulation.kind not in ("spatial", "minimal")
-        ):
-            raise ValueError(
-                "walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial (or minimal, "
-                "its sagittal motion)"
-            )
-        if self.formulation.kind != "planar" and self.dynamics != "compliant":
-            raise ValueError(f"formulation.kind: {self.formulation.kind!r} is available with dynamics: compliant only")
+        if refused := refusal(self.walker.kind, self.dynamics, self.formulation.kind):
+            raise ValueError(": ".join(refused))
+        caps = capabilities(self.walker.kind)
+        if self.simulation.pushes and not caps.pushes:
+            raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
+        if self.ground.profile.kind != "flat" and not caps.profiles:
+            raise ValueError(f"ground.profile: the {self.walker.kind} walker walks on flat ground only")
+        self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
         if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
@@ -341,6 +317,19 @@ class Config(_Strict):
                 "the stance foot cannot hold"
             )
         return self
+
+    def _initial_keys_match(self) -> None:
+        initial = self.simulation.initial
+        if not isinstance(initial, dict):
+            return
+        expected = self.initial_keys()
+        if set(initial) != set(expected) or len(expected) == len(LEG_KEYS):
+            raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}")
+
+    def initial_keys(self) -> tuple[str, ...]:
+        """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
+        described = self.walker.description
+        return described.state_keys() if described is not None else LEG_KEYS
 
     def hash(self) -> str:
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""

@@ -85,11 +85,7 @@ class ProfileStrike:
 
     def swing_foot(self, x: np.ndarray) -> tuple[float, float]:
         """(x, height) of the lowest point of the swing foot's arc (the next spoke's tip for the wheel)."""
-        w = self.walker
-        arm = w.leg_length - w.foot_radius
-        stance, swing = float(x[0]), w.next_stance_angle(x)
-        foot_x = self.footing.origin - w.foot_radius * stance + arm * (math.sin(swing) - math.sin(stance))
-        return foot_x, self.footing.level + arm * (math.cos(stance) - math.cos(swing))
+        return self.walker.swing_foot(x, self.footing.origin, self.footing.level)
 
     def clearance(self, x: np.ndarray) -> float:
         """Height of the swing foot's lowest point above the profile below it: the strike guard."""

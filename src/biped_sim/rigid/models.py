@@ -1,15 +1,12 @@
 """Rigid (impulsive-impact) walkers in reduced coordinates: flow, heel-strike guard and impact map.
 
-State convention (README): ``x = (theta_st, theta_sw, thetadot_st, thetadot_sw)`` for the bipeds,
-``x = (theta, thetadot)`` for the rimless wheel; leg angles from the slope normal, positive with the
-foot downhill of the hip. Between strikes the stance foot rolls without slip and the swing leg swings
-freely; the swing foot's mid-stance scuffing is ignored.
+State (README): ``x = (theta_st, theta_sw, thetadot_st, thetadot_sw)``, the wheel's ``(theta, thetadot)``; leg
+angles from the slope normal, + with the foot downhill of the hip. Between strikes the stance foot rolls without
+slip, the swing leg swings freely, its foot's mid-stance scuffing ignored.
 
-The compass and the rimless wheel come from one multibody description (:class:`LegChain`): point
-bodies and leg inertias placed on legs that hang from a hip carried by a stance foot arc rolling on the
-slope. The rolling contact is a bilateral holonomic constraint (arc centre at height R, x_C + R theta
-constant), so the reduced coordinates are the leg angles and every body's position is an explicit
-function of them. From that description:
+The compass and the rimless wheel are one chain (:class:`LegChain`): bodies on legs hung from a hip that a
+stance foot arc, rolling on the slope (a bilateral constraint: x_C + R theta constant), carries; the reduced
+coordinates are the leg angles. From that description (a described walker's tree: :mod:`.tree`):
 
 * the flow is Kane's (projected Newton-Euler) equations, ``M(q) qdd = sum_b J_b^T m_b (g - Jdot_b qd)``,
   ``M = sum_b m_b J_b^T J_b + I_b e_b e_b^T``;
@@ -19,9 +16,8 @@ function of them. From that description:
   content is the conservation of the whole walker's angular momentum about the new contact point and of
   the trailing leg's about the hip (both checked in the tests).
 
-Garcia's simplest walker (massless legs, a hip mass, infinitesimal foot masses, g = l = 1) is the limit
-the chain cannot reach with a regular mass matrix; it uses the equations and heel-strike map of MODEL.md
-8 exactly as published.
+Garcia's simplest walker (massless legs, a hip mass, infinitesimal foot masses, g = l = 1), a limit the chain
+cannot reach with a regular mass matrix, uses MODEL.md 8's equations and heel-strike map as published.
 """
 
 from __future__ import annotations
@@ -32,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import STATE_KEYS, Config
 
 Guard = Callable[[np.ndarray], float]
 
@@ -71,7 +67,7 @@ class RigidWalker:
 
     name: str = ""
     n_q: int = 2
-    state_names: tuple[str, ...] = ("stance_angle", "swing_angle", "stance_rate", "swing_rate")
+    state_names: tuple[str, ...] = STATE_KEYS
     section_names: tuple[str, ...] = ()
     gravity: float = 1.0
     leg_length: float = 1.0
@@ -105,9 +101,32 @@ class RigidWalker:
         """Post-impact state from its section coordinates."""
         raise NotImplementedError
 
+    def begin_step(self) -> None:
+        """A step begins (a walker with joint stops unlocks its swing stops)."""
+
+    def skip_phase(self, index: int, x: np.ndarray) -> bool:
+        """Whether guard phase ``index`` has nothing to wait for at x (none of the bundled walkers')."""
+        return False
+
+    def after_phase(self, index: int, x: np.ndarray) -> np.ndarray:
+        """The state after guard phase ``index`` ended (a stop strike's impact; otherwise x)."""
+        return x
+
     def next_stance_angle(self, x_minus: np.ndarray) -> float:
         """Angle of the leg about to touch down, just before the strike."""
         return float(x_minus[1])
+
+    def swing_foot(self, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
+        """(x, height) of the swing foot arc's lowest point (the wheel's next spoke tip), the stance contact at
+        (origin - R theta_st, level): straight legs, the arc centres l - R from the hip."""
+        arm, stance, swing = self.leg_length - self.foot_radius, float(x[0]), self.next_stance_angle(x)
+        foot_x = origin - self.foot_radius * stance + arm * (math.sin(swing) - math.sin(stance))
+        return foot_x, level + arm * (math.cos(stance) - math.cos(swing))
+
+    @property
+    def landing_index(self) -> int:
+        """The coordinate of the leg (its hip body) that touches down at the strike: the last one."""
+        return self.n_q - 1
 
     @property
     def strike_angle_offset(self) -> float:
@@ -429,21 +448,3 @@ class SimplestWalker(RigidWalker):
         theta, theta_d = z
         c2 = math.cos(2.0 * theta)
         return np.array([theta, -theta, theta_d, c2 * theta_d])
-
-
-def rigid_walker(config: Config) -> RigidWalker:
-    """The rigid model of ``config.walker``."""
-    kind = config.walker.kind
-    if kind == "compass":
-        return CompassChain(config)
-    if kind == "simplest":
-        return SimplestWalker(config)
-    return RimlessWheel(config)
-
-
-def initial_state(config: Config, walker: RigidWalker) -> np.ndarray:
-    """The config's initial state as a rigid state vector (legs as configured)."""
-    initial = config.simulation.initial
-    if not isinstance(initial, InitialState):
-        raise ValueError("initial_state: the config asks for the rigid limit cycle, resolve it first")
-    return walker.state_from_legs(initial.model_dump())

@@ -26,6 +26,7 @@ import math
 import numpy as np
 
 from biped_sim.rigid.models import LegChain, RigidWalker, SimplestWalker
+from biped_sim.rigid.tree import TreeWalker
 
 
 def hip_push(walker: RigidWalker, x: np.ndarray, impulse: np.ndarray) -> tuple[np.ndarray, float]:
@@ -37,6 +38,8 @@ def hip_push(walker: RigidWalker, x: np.ndarray, impulse: np.ndarray) -> tuple[n
         ground_normal = -math.sin(theta) * d_theta - py  # the hip mass's momentum change minus p, normal part
         after = np.array([theta, theta_sw, theta_d + d_theta, theta_sw_d + d_theta * math.cos(theta - theta_sw)])
         return after, ground_normal
+    if isinstance(walker, TreeWalker):
+        return walker.hip_push(x, impulse)
     if not isinstance(walker, LegChain):
         raise TypeError(f"no push model for the rigid {walker.name} walker")
     n = walker.n_q

@@ -38,8 +38,10 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config, derive
+from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.tables import Column, Table
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.simulate import RunResult, simulate
 from biped_sim.simulate.budget import check_run_count
@@ -127,16 +129,14 @@ def _hip_x(result: RunResult, t: float) -> float:
 
 def _total_mass(config: Config) -> float:
     """The planar walker's mass, the unit of the pushes (1 for the nondimensional walker and per kg of hub)."""
-    w = config.walker
-    return 1.0 if w.kind in ("simplest", "rimless_wheel") else 2 * w.leg_mass + w.hip_mass
+    return rigid_walker(config).reference_mass
 
 
 def gait_start(config: Config) -> Gait:
     """Start the walker of ``config`` on its gait (rigid limit cycle, or settled) and run the reference."""
-    if config.walker.kind == "four_legged":
-        raise ConfigError("walker.kind", "robustness needs a planar walker (ground profiles are planar only)")
-    simplest = config.walker.kind == "simplest"
-    leg, gravity = (1.0, 1.0) if simplest else (config.walker.leg_length, config.gravity)
+    require_study(config.walker.kind, "robustness", "robustness pushes a planar walker and steps its ground")
+    model = rigid_walker(config)  # its leg and gravity (the simplest walker's are 1), either dynamics
+    leg, gravity = model.leg_length, model.gravity
     time_scale = math.sqrt(leg / gravity)
     undisturbed: dict[str, Any] = {
         "ground.profile": {"kind": "flat"}, "simulation.pushes": [], "simulation.max_steps": None,

@@ -30,9 +30,10 @@ import numpy as np
 from scipy import stats
 
 from biped_sim.config import Config
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_kernel, with_slope
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import RimlessWheel, rigid_walker
+from biped_sim.rigid.models import RimlessWheel
 
 CHAIN_STATES = 800
 CHAIN_NODES = 4000

@@ -1,0 +1,165 @@
+"""The walker description: a walker as data, a planar tree of rigid bodies joined by revolute joints (with
+one-sided stops), its feet and its legs (``walker.kind: description``; the bundled kinds expand into it)."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from biped_sim.config.base import NormalModelName, Strict
+
+Vector2 = tuple[float, float]
+SIDES = ("stance", "swing")
+
+
+def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
+    """Initial-state keys of ``n_legs`` legs (stance, then swing) with these body roles ('' for a one-body leg):
+    per leg and body, angle then rate (the README's order)."""
+    prefixes = [""] if roles == [""] else [f"{role}_" for role in roles]
+    return tuple(
+        f"{side}_{p}{what}" for side in SIDES[: min(n_legs, 2)] for p in prefixes for what in ("angle", "rate")
+    )
+
+
+def angles_then_rates(keys: tuple[str, ...]) -> tuple[str, ...]:
+    """The state-vector order of the keys: every angle, then every rate (stance first)."""
+    return tuple(k for k in keys if k.endswith("_angle")) + tuple(k for k in keys if k.endswith("_rate"))
+
+
+LEG_KEYS = leg_keys(2, [""])  # stance_angle, stance_rate, swing_angle, swing_rate: a two-legged walker's keys
+STATE_KEYS = angles_then_rates(LEG_KEYS)  # the rigid state vector's and the touchdown's order
+
+
+class BodySpec(Strict):
+    """A rigid body of a walker's tree (its frame: origin at its joint to the parent, -y along it to the foot)."""
+
+    name: str = Field(..., min_length=1, description="Unique body name.")
+    mass: float = Field(..., ge=0, description="Mass [kg].")
+    inertia: float = Field(0.0, ge=0, description="Moment of inertia about its centre of mass [kg m^2].")
+    com: Vector2 = Field((0.0, 0.0), description="Centre of mass in the body frame [m]: (across + downhill, along).")
+
+
+class PointMassSpec(Strict):
+    """A point mass fixed on a body (folded into it: mass, centre of mass, parallel-axis inertia)."""
+
+    name: str = Field(..., min_length=1, description="Unique name.")
+    body: str = Field(..., description="The body carrying it.")
+    at: Vector2 = Field((0.0, 0.0), description="Where, in the body frame [m].")
+    mass: float = Field(..., ge=0, description="Mass [kg].")
+
+
+class StopSpec(Strict):
+    """A one-sided limit of a joint's relative angle (child angle - parent angle), e.g. a knee's hyperextension."""
+
+    side: Literal["upper", "lower"] = Field(..., description="'upper': angle <= limit; 'lower': angle >= limit.")
+    angle: float = Field(0.0, description="The limit [rad].")
+    model: NormalModelName = Field(
+        "hunt_crossley", description="Compliant dynamics: the normal law of the stop (rigid: a plastic strike)."
+    )
+    stiffness: float = Field(1.0e4, gt=0, description="Compliant dynamics: the stop's stiffness [N m/rad^n].")
+    restitution: float = Field(0.0, ge=0, le=1, description="Compliant dynamics: the stop's restitution.")
+
+
+class JointSpec(Strict):
+    """A revolute joint: the child body's origin at ``at`` in the parent's frame, free about the plane normal."""
+
+    name: str = Field(..., min_length=1, description="Unique joint name.")
+    kind: Literal["revolute"] = Field("revolute", description="Joint type (a spatial walker adds roll and yaw).")
+    parent: str = Field(..., description="Parent body.")
+    child: str = Field(..., description="Child body.")
+    at: Vector2 = Field((0.0, 0.0), description="The child's origin in the parent frame [m].")
+    stops: list[StopSpec] = Field(default_factory=list, description="One-sided limits of the relative angle.")
+
+    @model_validator(mode="after")
+    def _one_stop_per_side(self) -> JointSpec:
+        sides = [stop.side for stop in self.stops]
+        if len(set(sides)) != len(sides):
+            raise ValueError("stops: at most one stop per side")
+        if len(self.stops) == 2 and self.lower_upper()[0] > self.lower_upper()[1]:
+            raise ValueError("stops: the lower stop's angle must not be above the upper stop's (equal: locked)")
+        return self
+
+    def lower_upper(self) -> tuple[float, float]:
+        """The (lower, upper) limits of the relative angle (-inf / +inf where the joint has no stop)."""
+        lower = next((s.angle for s in self.stops if s.side == "lower"), -math.inf)
+        upper = next((s.angle for s in self.stops if s.side == "upper"), math.inf)
+        return lower, upper
+
+
+class FootSpec(Strict):
+    """A foot: an arc (radius > 0) or a point (radius 0) on a body, its centre in the body frame."""
+
+    name: str = Field(..., min_length=1, description="Unique foot name.")
+    body: str = Field(..., description="The body carrying it.")
+    centre: Vector2 = Field(..., description="Arc centre in the body frame [m].")
+    radius: float = Field(0.0, ge=0, description="Arc radius [m]; 0 = point foot.")
+
+
+class WalkerDescription(Strict):
+    """A walker as data: a tree of rigid bodies joined by revolute joints, with feet, and its legs.
+
+    The first body is the root (its origin is the hip). A body's angle is its -y axis's angle from the slope
+    normal, positive when the distal end is downhill (the README's leg-angle convention). ``legs`` lists the
+    bodies that swap stance and swing at a heel strike, from the hip down; the initial-state keys follow from it
+    (:meth:`state_keys`).
+    """
+
+    bodies: list[BodySpec] = Field(..., min_length=1, description="The bodies; the first is the root.")
+    point_masses: list[PointMassSpec] = Field(default_factory=list, description="Point masses on bodies.")
+    joints: list[JointSpec] = Field(default_factory=list, description="Revolute joints, one per non-root body.")
+    feet: list[FootSpec] = Field(..., min_length=1, description="Feet (arcs or points on bodies).")
+    legs: list[list[str]] = Field(..., min_length=1, description="Each leg's bodies, hip first; legs alike.")
+
+    @model_validator(mode="after")
+    def _a_tree(self) -> WalkerDescription:
+        names = [b.name for b in self.bodies]
+        for field_name, items in (("bodies", self.bodies), ("joints", self.joints), ("feet", self.feet)):
+            labels = [item.name for item in items]
+            if len(set(labels)) != len(labels):
+                raise ValueError(f"{field_name}: names must be unique")
+        for field_name, bodies in (
+            ("point_masses", [p.body for p in self.point_masses]),
+            ("feet", [f.body for f in self.feet]),
+            ("joints", [j.parent for j in self.joints] + [j.child for j in self.joints]),
+            ("legs", [b for leg in self.legs for b in leg]),
+        ):
+            if unknown := [b for b in bodies if b not in names]:
+                raise ValueError(f"{field_name}: unknown body {unknown[0]!r}")
+        children = [j.child for j in self.joints]
+        if sorted(children) != sorted(names[1:]):
+            raise ValueError("joints: every body but the first (the root) must be the child of exactly one joint")
+        depth = {names[0]: 0}
+        for _ in self.joints:  # a tree: every body reached from the root
+            depth.update({j.child: depth[j.parent] + 1 for j in self.joints if j.parent in depth})
+        if len(depth) != len(names):
+            raise ValueError("joints: the bodies must form one tree hanging from the first body")
+        self._legs_alike()
+        return self
+
+    def _legs_alike(self) -> None:
+        flat = [b for leg in self.legs for b in leg]
+        if len(set(flat)) != len(flat):
+            raise ValueError("legs: a body belongs to one leg at most")
+        if len({len(leg) for leg in self.legs}) != 1:
+            raise ValueError("legs: every leg needs the same number of bodies")
+        if len(self.legs[0]) > 1 and len(set(self.roles())) != len(self.legs[0]):
+            raise ValueError("legs: the bodies of a leg need distinct roles (names like thigh_1, shank_1)")
+
+    def roles(self) -> list[str]:
+        """The body roles of a leg, hip down: a body's name without its trailing '_<leg>' (thigh_1 -> thigh)."""
+        first = self.legs[0]
+        roles = [name.rsplit("_", 1)[0] if "_" in name else name for name in first]
+        for leg in self.legs[1:]:
+            if [name.rsplit("_", 1)[0] if "_" in name else name for name in leg] != roles:
+                raise ValueError("legs: every leg's bodies need the same roles in the same order (thigh_1, thigh_2)")
+        return roles
+
+    def state_keys(self) -> tuple[str, ...]:
+        """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate.
+
+        A one-body leg keeps the README's keys (stance_angle, stance_rate, swing_angle, swing_rate); a kneed
+        leg gives stance_thigh_angle, stance_thigh_rate, stance_shank_angle, ...
+        """
+        return leg_keys(len(self.legs), [""] if len(self.legs[0]) == 1 else self.roles())
