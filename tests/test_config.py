@@ -17,6 +17,7 @@ from .conftest import CONFIGS, DEFAULT_CONFIG
 BUNDLED = {
     "compass_goswami": ("compliant", "compass", "planar"),
     "four_legged_walker": ("compliant", "four_legged", "spatial"),
+    "kneed_walker": ("rigid", "description", "planar"),
     "rimless_wheel": ("rigid", "rimless_wheel", "planar"),
     "round_foot_walker": ("compliant", "compass", "planar"),
     "simplest_walker": ("rigid", "simplest", "planar"),

@@ -13,7 +13,7 @@ from biped_sim.multibody.dispatch import formulation_of, measures
 from biped_sim.multibody.euler_parameters import point_state
 from biped_sim.multibody.minimal import tree_system
 from biped_sim.multibody.tree import tree_state
-from biped_sim.rigid.models import rigid_walker
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.pushes import hip_push
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import prepare_model

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from biped_sim import config_from_dict, load_config
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import CompassChain, rigid_walker
+from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.stepping import rigid_step
 
 from .conftest import CONFIGS

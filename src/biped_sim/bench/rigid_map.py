@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from biped_sim.config import load_config
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import compile_walker, compiled_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
 from biped_sim.sweep import local_executor
@@ -30,6 +30,7 @@ STEP_CASES = {  # walker -> (config, overrides)
     "simplest": ("simplest_walker.yaml", ["dynamics=rigid"]),
     "compass": ("compass_goswami.yaml", ["dynamics=rigid"]),
     "rimless_wheel": ("rimless_wheel.yaml", ["dynamics=rigid"]),
+    "kneed": ("kneed_walker.yaml", []),  # a described walker: its tree kernels against scipy over the same ones
 }
 BASINS = {  # name -> (config, x, y, steps, target wall time [s])
     "simplest_41x41x30": ("simplest_walker.yaml", "stance_angle=0.02:0.42:41", "stance_rate=-0.6:0.0:41", 30, 60.0),

@@ -8,7 +8,16 @@ becomes a :class:`~biped_sim.errors.ConfigError` naming the dotted field and the
 """
 
 from biped_sim.config.base import is_number_annotation
-from biped_sim.config.description import BodySpec, FootSpec, JointSpec, PointMassSpec, StopSpec, WalkerDescription
+from biped_sim.config.description import (
+    LEG_KEYS,
+    STATE_KEYS,
+    BodySpec,
+    FootSpec,
+    JointSpec,
+    PointMassSpec,
+    StopSpec,
+    WalkerDescription,
+)
 from biped_sim.config.loading import (
     apply_override,
     config_from_dict,
@@ -37,6 +46,8 @@ from biped_sim.config.schema import (
 )
 
 __all__ = [
+    "LEG_KEYS",
+    "STATE_KEYS",
     "BaumgarteConfig",
     "BodySpec",
     "Config",

@@ -11,6 +11,25 @@ from pydantic import Field, model_validator
 from biped_sim.config.base import NormalModelName, Strict
 
 Vector2 = tuple[float, float]
+SIDES = ("stance", "swing")
+
+
+def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
+    """Initial-state keys of ``n_legs`` legs (stance, then swing) with these body roles ('' for a one-body leg):
+    per leg and body, angle then rate (the README's order)."""
+    prefixes = [""] if roles == [""] else [f"{role}_" for role in roles]
+    return tuple(
+        f"{side}_{p}{what}" for side in SIDES[: min(n_legs, 2)] for p in prefixes for what in ("angle", "rate")
+    )
+
+
+def angles_then_rates(keys: tuple[str, ...]) -> tuple[str, ...]:
+    """The state-vector order of the keys: every angle, then every rate (stance first)."""
+    return tuple(k for k in keys if k.endswith("_angle")) + tuple(k for k in keys if k.endswith("_rate"))
+
+
+LEG_KEYS = leg_keys(2, [""])  # stance_angle, stance_rate, swing_angle, swing_rate: a two-legged walker's keys
+STATE_KEYS = angles_then_rates(LEG_KEYS)  # the rigid state vector's and the touchdown's order
 
 
 class BodySpec(Strict):
@@ -58,8 +77,8 @@ class JointSpec(Strict):
         sides = [stop.side for stop in self.stops]
         if len(set(sides)) != len(sides):
             raise ValueError("stops: at most one stop per side")
-        if len(self.stops) == 2 and self.lower_upper()[0] >= self.lower_upper()[1]:
-            raise ValueError("stops: the lower stop's angle must be below the upper stop's")
+        if len(self.stops) == 2 and self.lower_upper()[0] > self.lower_upper()[1]:
+            raise ValueError("stops: the lower stop's angle must not be above the upper stop's (equal: locked)")
         return self
 
     def lower_upper(self) -> tuple[float, float]:
@@ -137,12 +156,10 @@ class WalkerDescription(Strict):
                 raise ValueError("legs: every leg's bodies need the same roles in the same order (thigh_1, thigh_2)")
         return roles
 
-    def state_keys(self) -> list[str]:
+    def state_keys(self) -> tuple[str, ...]:
         """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate.
 
         A one-body leg keeps the README's keys (stance_angle, stance_rate, swing_angle, swing_rate); a kneed
         leg gives stance_thigh_angle, stance_thigh_rate, stance_shank_angle, ...
         """
-        sides = ("stance", "swing")[: min(len(self.legs), 2)]
-        roles = [""] if len(self.legs[0]) == 1 else [f"{role}_" for role in self.roles()]
-        return [f"{side}_{role}{what}" for side in sides for role in roles for what in ("angle", "rate")]
+        return leg_keys(len(self.legs), [""] if len(self.legs[0]) == 1 else self.roles())

@@ -11,7 +11,8 @@ import yaml
 from pydantic import BeforeValidator, Field, model_validator
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
-from biped_sim.config.description import WalkerDescription
+from biped_sim.config.description import LEG_KEYS, WalkerDescription
+from biped_sim.config.walker_registry import capabilities, refusal
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import quote
 
@@ -292,17 +293,13 @@ class Config(Strict):
 
     @model_validator(mode="after")
     def _cross_checks(self) -> Config:
-        if self.dynamics == "compliant" and self.walker.kind in ("simplest", "rimless_wheel"):
-            raise ValueError(f"walker.kind: {self.walker.kind!r} is available with dynamics: rigid only")
-        if self.walker.kind == "four_legged" and (
-            self.dynamics != "compliant" or self.formulation.kind not in ("spatial", "minimal")
-        ):
-            raise ValueError(
-                "walker.kind: 'four_legged' needs dynamics: compliant and formulation.kind: spatial (or minimal, "
-                "its sagittal motion)"
-            )
-        if self.formulation.kind != "planar" and self.dynamics != "compliant":
-            raise ValueError(f"formulation.kind: {self.formulation.kind!r} is available with dynamics: compliant only")
+        if refused := refusal(self.walker.kind, self.dynamics, self.formulation.kind):
+            raise ValueError(": ".join(refused))
+        caps = capabilities(self.walker.kind)
+        if self.simulation.pushes and not caps.pushes:
+            raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
+        if self.ground.profile.kind != "flat" and not caps.profiles:
+            raise ValueError(f"ground.profile: the {self.walker.kind} walker walks on flat ground only")
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
@@ -322,12 +319,17 @@ class Config(Strict):
         return self
 
     def _initial_keys_match(self) -> None:
-        initial, described = self.simulation.initial, self.walker.description
+        initial = self.simulation.initial
         if not isinstance(initial, dict):
             return
-        expected = described.state_keys() if described is not None else list(InitialState.model_fields)
-        if set(initial) != set(expected) or len(expected) == len(InitialState.model_fields):
+        expected = self.initial_keys()
+        if set(initial) != set(expected) or len(expected) == len(LEG_KEYS):
             raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}")
+
+    def initial_keys(self) -> tuple[str, ...]:
+        """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
+        described = self.walker.description
+        return described.state_keys() if described is not None else LEG_KEYS
 
     def hash(self) -> str:
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from biped_sim.config import LEG_KEYS
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.models import RigidWalker, RimlessWheel
 from biped_sim.rigid.start import RigidStart, touchdown_legs
@@ -40,6 +41,7 @@ class RigidTrace:
     step_lengths: list[float] = field(default_factory=list)  # of the completed steps, the first from t = 0
     strike_levels: list[float] = field(default_factory=list)  # on a ground profile: the new stance foot's level
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # (time, work, ground normal impulse)
+    stop_losses: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (time, energy lost)
 
     def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
         if not len(t):
@@ -67,10 +69,7 @@ def rigid_step_table(walker: RigidWalker, trace: RigidTrace) -> StepTable:
         length[:-1] = trace.step_lengths[1:n]
         slip[:-1] = 0.0
     touchdown = [touchdown_legs(walker, x) for x in trace.strike_pre]
-    legs = {
-        key: np.array([state[key] for state in touchdown], dtype=float)
-        for key in ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
-    }
+    legs = {key: np.array([state[key] for state in touchdown], dtype=float) for key in LEG_KEYS}
     return StepTable(strike_time, strike_feet(walker, n), period, length, slip, **legs)
 
 
@@ -108,6 +107,8 @@ def rigid_energy_and_hip(
     kinetic_0, potential_0 = walker.energy(start.state)
     energy_0 = kinetic_0 + potential_0 - weight * math.sin(walker.slope) * origin[0]
     dissipated = dissipated_by_step[step_of_sample]
+    for at, loss in trace.stop_losses:  # a sample at a stop strike's time holds the state after it
+        dissipated[times >= at] += loss
     push_work = np.zeros(len(times))
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it

@@ -46,17 +46,23 @@ from biped_sim.kernel import kernel
 from biped_sim.rigid.kernels import (
     COMPASS,
     SIMPLEST,
+    TREE,
     WHEEL,
+    end_phase,
     fall_check,
     first_phase,
     guard,
     guard_rate,
     n_fall_checks,
+    n_phases,
+    phase_skipped,
     rigid_impact,
     rigid_rhs,
+    start_step,
 )
 from biped_sim.rigid.models import LegChain, RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.stepping import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
+from biped_sim.rigid.tree import TreeWalker
 
 STRIKE, FELL, STALLED = 0, 1, 2
 STATUS_NAMES = ("strike", "fell", "stalled")
@@ -83,6 +89,8 @@ def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
     The compass's leg centre-of-mass offset (``offset`` of a body) and foot-arc offset (``foot_offset`` of
     the walker) default to 0 for models that do not define them.
     """
+    if isinstance(walker, TreeWalker):  # its own layout, a copy: the kernels keep their workspace in it
+        return TREE, walker.params.copy()
     if isinstance(walker, SimplestWalker):
         kind, bodies, n_q, half = SIMPLEST, [], 2, 0.0
     elif isinstance(walker, RimlessWheel):
@@ -109,7 +117,7 @@ def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work)."""
     kind, params = walker_params(walker)
-    ny = 2 if kind == WHEEL else 4
+    ny = 2 * walker.n_q if kind == TREE else (2 if kind == WHEEL else 4)
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     return CompiledWalker(kind, params, tableau("dop853"), make_scratch(ny, 1, N_EVENTS), np.zeros(4), t_limit)
 
@@ -251,14 +259,18 @@ def _polish(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, counters: n
 @kernel
 def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_plus: np.ndarray, counters: np.ndarray):
     """One step from a post-impact state: (status, duration); x_minus = the state at its end, x_plus after
-    the strike (left untouched unless the status is STRIKE)."""
+    the strike (meaningful only if the status is STRIKE: a stop strike uses it as scratch)."""
     x_minus[:] = x_start
     t = 0.0
-    for phase in range(first_phase(cw.kind), 2):
+    start_step(cw.kind, cw.params)
+    for phase in range(first_phase(cw.kind), n_phases(cw.kind, cw.params)):
+        if phase_skipped(cw.kind, cw.params, phase, x_minus):
+            continue
         status, t = _phase(cw, phase, t, x_minus, counters)
         if status != STRIKE:
             return status, t
         t = _polish(cw, phase, t, x_minus, counters)
+        end_phase(cw.kind, cw.params, phase, x_minus, x_plus)
     rigid_impact(cw.kind, cw.params, x_minus, cw.q_work, x_plus)
     return STRIKE, t
 
@@ -294,6 +306,8 @@ def compiled_step(walker: RigidWalker, x_start: np.ndarray, cw: CompiledWalker |
     x_minus, x_plus = np.zeros_like(x0), np.zeros_like(x0)
     counters = np.zeros(2, dtype=np.int64)
     code, period = step_kernel(cw, x0, x_minus, x_plus, counters)
+    if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
+        code = STALLED  # as in walk_kernel: a strike in no time is no step (the start sits on the guard)
     if code != STRIKE:
         return RigidStep(
             STATUS_NAMES[code], x0, x_minus, None, period, math.nan, int(counters[0]), accepted_steps=int(counters[1])

@@ -10,7 +10,8 @@ with), written allocation-free for the compiled step map of :mod:`biped_sim.rigi
   leg centre-of-mass offset ``w`` (perpendicular to the leg) and the foot-arc offset ``d``: slope frame x
   downhill, y normal; axis(theta) = (sin, -cos) (hip -> foot), perp(theta) = (cos, sin); body = hip + c
   axis + w perp; hip = C - (l - R) axis(theta_st) - d perp(theta_st), C = (x_C0 - R theta_st, R);
-* ``WHEEL``: the rimless wheel, one hub mass on a spoke of the chain (n_q = 1).
+* ``WHEEL``: the rimless wheel, one hub mass on a spoke of the chain (n_q = 1);
+* ``TREE``: a described walker (:mod:`biped_sim.rigid.tree_kernels`: any tree, its stops as phases).
 
 Each body of a chain is (mass, inertia, leg, distance along the leg, offset perpendicular to it).
 """
@@ -22,11 +23,22 @@ import math
 import numpy as np
 
 from biped_sim.kernel import kernel
+from biped_sim.rigid.tree_kernels import (
+    FALL_HIP_FRACTION,
+    T_NPHASE,
+    after_phase,
+    begin_step,
+    skip_phase,
+    tree_fall,
+    tree_guard,
+    tree_guard_rate,
+    tree_impact,
+    tree_rhs,
+)
 
-SIMPLEST, COMPASS, WHEEL = 0, 1, 2
+SIMPLEST, COMPASS, WHEEL, TREE = 0, 1, 2, 3
 P_NQ, P_L, P_R, P_D, P_G, P_SLOPE, P_FALL, P_HALF, P_NB, P_BODIES = range(10)
 BODY_FIELDS = 5  # mass, inertia, leg, distance, offset
-FALL_HIP_FRACTION = 0.05  # the hip below this fraction of l counts as a fall (as rigid/stepping.py)
 
 
 @kernel
@@ -107,6 +119,8 @@ def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt of the walker ``kind``."""
     if kind == SIMPLEST:
         _simplest_rhs(p, x, out)
+    elif kind == TREE:
+        tree_rhs(p, x, out)
     else:
         _chain_rhs(p, x, out)
 
@@ -127,6 +141,8 @@ def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
     factors as 2 A sin((th_st + th_sw + 2 phi) / 2) sin((th_sw - th_st) / 2) (A = hypot(l - R, d)), so the
     strike is th_st + th_sw + 2 phi = 0, as in :class:`~biped_sim.rigid.models.CompassChain` (phi = 0 without d).
     """
+    if kind == TREE:
+        return tree_guard(p, phase, x)
     phi = strike_angle_offset(kind, p)
     if phase == 0:
         return x[0] if phi == 0.0 else x[0] + phi
@@ -138,6 +154,8 @@ def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
 @kernel
 def guard_rate(kind: int, p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarray) -> float:
     """Time derivative of :func:`guard` along the flow f = dx/dt."""
+    if kind == TREE:
+        return tree_guard_rate(p, phase, x)
     if phase == 0 or kind == WHEEL:
         return f[0]
     return f[0] + f[1]
@@ -150,14 +168,42 @@ def first_phase(kind: int) -> int:
 
 
 @kernel
+def n_phases(kind: int, p: np.ndarray) -> int:
+    """The phases of a step (the last ends at the heel strike): a described walker's come from its stops."""
+    return int(p[T_NPHASE]) if kind == TREE else 2
+
+
+@kernel
+def start_step(kind: int, p: np.ndarray) -> None:
+    """A step begins: a described walker's swing stops unlock."""
+    if kind == TREE:
+        begin_step(p)
+
+
+@kernel
+def phase_skipped(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> bool:
+    """Whether the phase has already ended when it starts (a described walker's hip past the stance foot)."""
+    return kind == TREE and skip_phase(p, phase, x)
+
+
+@kernel
+def end_phase(kind: int, p: np.ndarray, phase: int, x: np.ndarray, out: np.ndarray) -> None:
+    """After a phase's guard (before the last): a described walker's stop strike (x in place; out: scratch)."""
+    if kind == TREE:
+        after_phase(p, phase, x, out)
+
+
+@kernel
 def n_fall_checks(kind: int, p: np.ndarray) -> int:
     """Fall functions: one per leg angle, then the hip height."""
-    return (2 if kind == SIMPLEST else int(p[P_NQ])) + 1
+    return 3 if kind == TREE else (2 if kind == SIMPLEST else int(p[P_NQ])) + 1
 
 
 @kernel
 def fall_check(kind: int, p: np.ndarray, i: int, x: np.ndarray) -> float:
     """Fall function i (positive while standing): fall angle - |leg angle i|, or hip height - 0.05 l."""
+    if kind == TREE:
+        return tree_fall(p, i, x)
     n = n_fall_checks(kind, p) - 1
     if i < n:
         return p[P_FALL] - abs(x[i])
@@ -223,5 +269,7 @@ def rigid_impact(kind: int, p: np.ndarray, x: np.ndarray, q_work: np.ndarray, ou
     """out = the post-impact state (new stance leg first) from the pre-impact state x (q_work: 4 scratch floats)."""
     if kind == SIMPLEST:
         _simplest_impact(x, out)
+    elif kind == TREE:
+        tree_impact(p, x, True, out)
     else:
         _chain_impact(kind, p, x, q_work, out)

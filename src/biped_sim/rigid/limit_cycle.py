@@ -24,8 +24,9 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import CompiledWalker, compile_walker, compiled_step
-from biped_sim.rigid.models import RigidWalker, initial_state, rigid_walker
+from biped_sim.rigid.models import RigidWalker, initial_state
 from biped_sim.rigid.stepping import RTOL, RigidStep, rigid_step
 
 RIGID_TOLERANCE = 1e-10
@@ -312,11 +313,10 @@ def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
     scale = math.sqrt(walker.gravity / walker.leg_length)
     if walker.name == "rimless_wheel":
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
-    swing_offset = 2.0 * walker.strike_angle_offset  # the legs just after a strike: theta_sw = -theta_st - 2 phi
-    return [
-        np.array([angle, -angle - swing_offset, -k * scale, -0.4 * k * scale])
-        for angle, k in ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
-    ]
+    starts = ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
+    if len(walker.section_names) == 3:  # the legs just after a strike, as the walker's section places them
+        return [walker.from_section(np.array([angle, -k * scale, -0.4 * k * scale])) for angle, k in starts]
+    return [np.array([angle, -angle, -k * scale, -0.4 * k * scale]) for angle, k in starts]
 
 
 def rigid_limit_cycle_initial(config: Config) -> dict[str, float]:

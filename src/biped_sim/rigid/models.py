@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import STATE_KEYS, Config
 
 Guard = Callable[[np.ndarray], float]
 
@@ -71,7 +71,7 @@ class RigidWalker:
 
     name: str = ""
     n_q: int = 2
-    state_names: tuple[str, ...] = ("stance_angle", "swing_angle", "stance_rate", "swing_rate")
+    state_names: tuple[str, ...] = STATE_KEYS
     section_names: tuple[str, ...] = ()
     gravity: float = 1.0
     leg_length: float = 1.0
@@ -105,9 +105,25 @@ class RigidWalker:
         """Post-impact state from its section coordinates."""
         raise NotImplementedError
 
+    def begin_step(self) -> None:
+        """A step begins (a walker with joint stops unlocks its swing stops)."""
+
+    def skip_phase(self, index: int, x: np.ndarray) -> bool:
+        """Whether guard phase ``index`` has nothing to wait for at x (none of the bundled walkers')."""
+        return False
+
+    def after_phase(self, index: int, x: np.ndarray) -> np.ndarray:
+        """The state after guard phase ``index`` ended (a stop strike's impact; otherwise x)."""
+        return x
+
     def next_stance_angle(self, x_minus: np.ndarray) -> float:
         """Angle of the leg about to touch down, just before the strike."""
         return float(x_minus[1])
+
+    @property
+    def landing_index(self) -> int:
+        """The coordinate of the leg (its hip body) that touches down at the strike: the last one."""
+        return self.n_q - 1
 
     @property
     def strike_angle_offset(self) -> float:
@@ -431,19 +447,9 @@ class SimplestWalker(RigidWalker):
         return np.array([theta, -theta, theta_d, c2 * theta_d])
 
 
-def rigid_walker(config: Config) -> RigidWalker:
-    """The rigid model of ``config.walker``."""
-    kind = config.walker.kind
-    if kind == "compass":
-        return CompassChain(config)
-    if kind == "simplest":
-        return SimplestWalker(config)
-    return RimlessWheel(config)
-
-
 def initial_state(config: Config, walker: RigidWalker) -> np.ndarray:
     """The config's initial state as a rigid state vector (legs as configured)."""
     initial = config.simulation.initial
-    if not isinstance(initial, InitialState):
+    if isinstance(initial, str):
         raise ValueError("initial_state: the config asks for the rigid limit cycle, resolve it first")
-    return walker.state_from_legs(initial.model_dump())
+    return walker.state_from_legs(initial if isinstance(initial, dict) else initial.model_dump())

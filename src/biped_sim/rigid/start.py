@@ -7,10 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import Config
 from biped_sim.errors import ConfigError
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker, rigid_walker
+from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.stepping import RTOL
 
 NONDIMENSIONAL = "1 (g = l = 1)"
@@ -56,9 +57,9 @@ def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None
                 f"the rimless wheel's stance spoke must be within pi/N = {walker.half_angle:.6g} rad of the slope "
                 "normal (else another spoke starts below the ground)",
             )
-    elif legs["stance_angle"] + walker.strike_angle_offset < 0.0:
+    elif legs[walker.state_names[0]] + walker.strike_angle_offset < 0.0:
         raise ConfigError(
-            "simulation.initial.stance_angle",
+            f"simulation.initial.{walker.state_names[0]}",
             "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal "
             "(>= 0; with a walker.foot_offset d, the hip not past the arc centre: >= -atan2(d, l - R))",
         )
@@ -73,7 +74,10 @@ def rigid_start(config: Config) -> RigidStart:
         raise ValueError("rigid_start: the config has dynamics: compliant")
     walker = rigid_walker(config)
     initial = config.simulation.initial
-    legs = initial.model_dump() if isinstance(initial, InitialState) else rigid_limit_cycle_initial(config)
+    if isinstance(initial, str):
+        legs = rigid_limit_cycle_initial(config)
+    else:
+        legs = initial if isinstance(initial, dict) else initial.model_dump()
     state = walker.state_from_legs(legs)
     _check_start(config, walker, state)
     return RigidStart(walker, state)
@@ -82,13 +86,13 @@ def rigid_start(config: Config) -> RigidStart:
 def touchdown_legs(walker: RigidWalker, x_minus: np.ndarray) -> dict[str, float]:
     """A pre-impact state named as at touchdown: 'stance' the leg (spoke) landing, 'swing' the one leaving.
 
-    The landing leg is the last coordinate of a biped (the swing leg until now) and the rimless wheel's next
-    spoke, which turns at the wheel's single rate.
+    The landing leg is the swing leg until now (its hip body: ``landing_index``) and the rimless wheel's next
+    spoke, which turns at the wheel's single rate. A leg of several bodies is named by its hip body.
     """
     n = walker.n_q
     return {
         "stance_angle": walker.next_stance_angle(x_minus),
-        "stance_rate": float(x_minus[2 * n - 1]),
+        "stance_rate": float(x_minus[n + walker.landing_index]),
         "swing_angle": float(x_minus[0]),
         "swing_rate": float(x_minus[n]),
     }

@@ -23,6 +23,7 @@ from typing import Literal
 import numpy as np
 
 from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.pushes import hip_push
 
@@ -49,6 +50,7 @@ class RigidStep:
     samples_x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     accepted_steps: int = 0  # DOP853 steps taken
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # applied: (t, work, ground normal impulse)
+    stop_strikes: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (t, energy lost)
 
 
 def _guard_event(guard, direction: float):  # type: ignore[no-untyped-def]
@@ -101,7 +103,7 @@ def rigid_step(
     scale = math.sqrt(walker.leg_length / walker.gravity)
     t_limit = MAX_STEP_TIME * scale
     fall_events = [_guard_event(lambda x, i=i: walker.fall_leg_angle - abs(x[i]), 0.0) for i in range(walker.n_q)] + [
-        _guard_event(lambda x: walker.hip_height(x) - 0.05 * walker.leg_length, 0.0)
+        _guard_event(lambda x: walker.hip_height(x) - FALL_HIP_FRACTION * walker.leg_length, 0.0)
     ]
     t, x = 0.0, np.asarray(x_start, dtype=float)
     evals = 0
@@ -109,11 +111,13 @@ def rigid_step(
     samples_t: list[np.ndarray] = []
     samples_x: list[np.ndarray] = []
     applied: list[tuple[float, float, float]] = []
+    stops: list[tuple[float, float]] = []
 
     def finish(step: RigidStep) -> RigidStep:
         # every outcome keeps its samples, counters and pushes (a run records the fall's trajectory too)
         step.accepted_steps = accepted
         step.pushes = applied
+        step.stop_strikes = stops
         if samples_t:
             step.samples_t = np.concatenate(samples_t)
             step.samples_x = np.vstack(samples_x)
@@ -123,9 +127,10 @@ def rigid_step(
     if profile is not None:
         plane_strike = phases[-1][1]
         phases = [*phases[:-1], ("swing_foot_out", lambda y: -plane_strike(y)), ("heel_strike", profile.clearance)]
+    walker.begin_step()
     for index, (name, guard) in enumerate(phases):
         on_profile = profile is not None and index == len(phases) - 1
-        if name == "swing_foot_out" and guard(x) <= 0.0:
+        if walker.skip_phase(index, x) or (name == "swing_foot_out" and guard(x) <= 0.0):
             continue  # the swing foot is already past its mid-stance scuff
         if on_profile and guard(x) < -RISER_TOLERANCE * walker.leg_length:  # below the profile: in a riser
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
@@ -153,6 +158,10 @@ def rigid_step(
         if on_profile and profile.tripped(x):  # type: ignore[union-attr]
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
         t, x = _polish(walker, guard, t, x)
+        x_after = walker.after_phase(index, x)
+        if x_after is not x:  # a joint stop struck: book its plastic loss
+            stops.append((t, walker.energy(x)[0] - walker.energy(x_after)[0]))
+        x = x_after
     x_plus = walker.impact(x) if profile is None else profile.impact(x)
     return finish(RigidStep("strike", x_start, x, x_plus, t, walker.step_length(x_start, x), evals))
 

@@ -59,13 +59,13 @@ from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import MAX_STEP_TIME, RigidStep, rigid_step
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
-HIP_ON_GROUND = 0.05  # [leg lengths] the rigid step's fall event on the hip (rigid.stepping)
 
 
 @dataclass
@@ -153,10 +153,10 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
         return "the swing foot met the ground profile short of a heel strike (a riser, or below it)"
     x = step.x_minus
     leg_margin = walker.fall_leg_angle - float(np.max(np.abs(x[: walker.n_q])))
-    hip_margin = walker.hip_height(x) / walker.leg_length - HIP_ON_GROUND
+    hip_margin = walker.hip_height(x) / walker.leg_length - FALL_HIP_FRACTION
     if leg_margin <= hip_margin:
         return FALL_REASONS[LEG_TOO_FAR]
-    return f"the hip within {HIP_ON_GROUND:g} leg lengths of the ground"
+    return f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"
 
 
 def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:
@@ -181,6 +181,7 @@ def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] |
         pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
         step = rigid_step(walker, x, rate, pending, profile)
         trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
+        trace.stop_losses += [(t0 + at, loss) for at, loss in step.stop_strikes]
         evals += step.rhs_evals
         accepted += step.accepted_steps
         local = step.samples_t < step.period  # the strike (or fall) state is recorded below, not interpolated

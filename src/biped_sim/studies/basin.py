@@ -36,18 +36,17 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState, derive
+from biped_sim.config import LEG_KEYS, Config, derive
 from biped_sim.config.schema import MAX_STEPS
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, walk_starts
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
-from biped_sim.rigid.models import rigid_walker
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
 
-LEG_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")
 KEY_PREFIX = "simulation.initial."
 DEFAULT_STEPS = 30
 CONVERGED_TOLERANCE = 1e-4  # rad and rad/s (the simplest walker: nondimensional)
@@ -76,8 +75,10 @@ def parse_axis(name: str, text: str) -> GridAxis:
     (the axis: ``x`` or ``y``)."""
     key, sep, rest = text.partition("=")
     key = key.strip().removeprefix(KEY_PREFIX)
-    if not sep or key not in LEG_KEYS:
-        raise ArgumentError(name, f"expected KEY=LO:HI:N with KEY one of {KEY_PREFIX}{{{', '.join(LEG_KEYS)}}}")
+    if not sep or not key.endswith(("_angle", "_rate")):
+        raise ArgumentError(
+            name, f"expected KEY=LO:HI:N with KEY a key of {KEY_PREFIX[:-1]} ({', '.join(LEG_KEYS)}, ...)"
+        )
     parts = rest.split(":")
     try:
         lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
@@ -101,8 +102,13 @@ class BasinSpec:
     def __post_init__(self) -> None:
         if self.x.key == self.y.key:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
-        if not isinstance(self.config.simulation.initial, InitialState):
-            raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its four keys")
+        if isinstance(self.config.simulation.initial, str):
+            raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its keys")
+        for axis, key in (("x", self.x.key), ("y", self.y.key)):
+            if key not in self.config.initial_keys():
+                raise ArgumentError(
+                    axis, f"{key} is not a key of simulation.initial ({', '.join(self.config.initial_keys())})"
+                )
         check_run_count(self.x.n * self.y.n, "y", "cells (x times y values)")
         if not 1 <= self.steps <= MAX_STEPS:
             raise ArgumentError("steps", f"must be from 1 to {MAX_STEPS:.0e}")
@@ -122,8 +128,9 @@ class BasinSpec:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def cell_legs(self, x_value: float, y_value: float) -> dict[str, float]:
-        """The four README keys of the cell at (x_value, y_value)."""
-        legs = self.config.simulation.initial.model_dump()  # type: ignore[union-attr]
+        """The initial-state keys of the cell at (x_value, y_value)."""
+        initial = self.config.simulation.initial
+        legs = dict(initial) if isinstance(initial, dict) else initial.model_dump()  # type: ignore[union-attr]
         legs[self.x.key], legs[self.y.key] = float(x_value), float(y_value)
         if self.garcia_section:
             theta, rate = legs["stance_angle"], legs["stance_rate"]
@@ -141,7 +148,7 @@ class RowTask:
 
 
 def _close(legs: dict[str, float], target: dict[str, float] | None, tolerance: float) -> bool:
-    return target is not None and max(abs(legs[k] - target[k]) for k in LEG_KEYS) <= tolerance
+    return target is not None and max(abs(legs[k] - target[k]) for k in target) <= tolerance
 
 
 def _rigid_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:

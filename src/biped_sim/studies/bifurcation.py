@@ -19,8 +19,8 @@ import numpy as np
 from biped_sim.config import Config, derive
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.io.atomic import write_text_atomic
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
-from biped_sim.rigid.models import rigid_walker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.continuation import bisect_flip, continue_cycle, flip_margin
@@ -127,14 +127,15 @@ def write_bifurcation(diagram: BifurcationDiagram, out_dir) -> None:  # type: ig
         if cycle is None:
             writer.writerow([repr(float(slope)), False, "", "", "", "", "", "", ""])
             continue
-        fp = cycle.fixed_point
+        # the section's coordinates (a kneed walker's hip bodies), else the fixed point's (the simplest's swing rate)
+        point = {**cycle.fixed_point, **dict(zip(cycle.section_names, cycle.section_point, strict=True))}
         writer.writerow(
             [
                 repr(float(slope)),
                 cycle.converged,
-                repr(fp["stance_angle"]),
-                repr(fp["stance_rate"]),
-                repr(fp["swing_rate"]),
+                repr(float(point["stance_angle"])),
+                repr(float(point["stance_rate"])),
+                repr(float(point["swing_rate"])),
                 repr(cycle.step_period),
                 repr(cycle.max_multiplier_modulus),
                 cycle.stable,

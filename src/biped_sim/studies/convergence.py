@@ -11,13 +11,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, derive
-from biped_sim.errors import ArgumentError, ConfigError
+from biped_sim.config import STATE_KEYS, Config, derive
+from biped_sim.config.walker_registry import require_study
+from biped_sim.errors import ArgumentError
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
-from biped_sim.rigid.models import CompassChain, rigid_walker
+from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.strike_check import StrikeCheck, strike_check
 from biped_sim.simulate import simulate
-from biped_sim.studies.limit_cycle import TOUCHDOWN_KEYS
 from biped_sim.walkers.model import contact_stiffness
 
 CONVERGE_LEVELS = 5
@@ -68,8 +69,7 @@ def strike_violations(
 def check_converge(config: Config, levels: int, mu_kinetic: float, mu_static: float) -> None:
     """What :func:`converge` refuses: a walker other than the compass (ConfigError), ``levels`` outside
     ``LEVELS``, negative friction coefficients or ``mu_static`` below ``mu_kinetic`` (ArgumentError)."""
-    if config.walker.kind != "compass":
-        raise ConfigError("walker.kind", "converge compares the compliant and rigid compass walker")
+    require_study(config.walker.kind, "converge", "converge compares the compliant and rigid compass walker")
     if levels not in LEVELS:
         raise ArgumentError("levels", f"must be from {LEVELS.start} to {LEVELS.stop - 1} (stiffness x10 each)")
     for name, value in (("mu_kinetic", mu_kinetic), ("mu_static", mu_static)):
@@ -107,7 +107,7 @@ def converge(
     mu_static = MU_STATIC if mu_static is None else mu_static
     check_converge(config, levels, mu_kinetic, mu_static)
     rigid = rigid_limit_cycle(config)
-    rigid_touchdown = np.array([rigid.touchdown[k] for k in TOUCHDOWN_KEYS])
+    rigid_touchdown = np.array([rigid.touchdown[k] for k in STATE_KEYS])
     base_stiffness = contact_stiffness(config)
     rows = []
     for k in range(levels):
@@ -127,7 +127,7 @@ def converge(
                 ConvergenceRow(stiffness, restitution, sigma0, result.status, math.nan, math.nan, math.nan, math.nan)
             )
             continue
-        touchdowns = np.array([[s[key] for key in TOUCHDOWN_KEYS] for s in states])
+        touchdowns = np.array([[s[key] for key in STATE_KEYS] for s in states])
         rows.append(
             ConvergenceRow(
                 stiffness=stiffness,

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, derive, parse_yaml
+from biped_sim.config import LEG_KEYS, STATE_KEYS, Config, derive, parse_yaml
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import integrate_model
@@ -49,8 +49,6 @@ COMPLIANT_SETTLE_STEPS = 20
 MAP_HORIZON = 10.0  # [sqrt(l / g)] a step not ended by then has stalled (periods are about 2 sqrt(l / g))
 NOISE_PROBES = 4  # map evaluations that measure the noise floor at the fixed point
 NOISE_PROBE_STEP = 1e-8  # their relative offset: the map is linear there to 1e-16
-TOUCHDOWN_KEYS = ("stance_angle", "swing_angle", "stance_rate", "swing_rate")
-GUESS_KEYS = ("stance_angle", "stance_rate", "swing_angle", "swing_rate")  # the README's initial-state order
 
 
 def _rotate(angle: float, v: np.ndarray) -> np.ndarray:
@@ -186,7 +184,7 @@ class TouchdownSection:
 
     def legs(self, z: np.ndarray) -> dict[str, float]:
         """The four README keys of a section point (the touchdown state, stance = leg A)."""
-        return {name: float(z[self.names.index(name)]) for name in TOUCHDOWN_KEYS}
+        return {name: float(z[self.names.index(name)]) for name in STATE_KEYS}
 
 
 def touchdown_guesses(
@@ -301,23 +299,23 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
 
 def parse_guess(text: str | None) -> dict[str, float] | None:
     """A guess of the gait from text: a YAML/JSON mapping of the four README keys, or four numbers in
-    ``GUESS_KEYS`` order (None for None); ArgumentError naming ``guess`` otherwise."""
+    ``LEG_KEYS`` order (None for None); ArgumentError naming ``guess`` otherwise."""
     if text is None:
         return None
     try:
         value = parse_yaml(text, source="guess")
     except ConfigError as exc:
         raise ArgumentError("guess", exc.reason) from None
-    if isinstance(value, list) and len(value) == len(GUESS_KEYS):
-        value = dict(zip(GUESS_KEYS, value, strict=True))
-    if not isinstance(value, dict) or set(value) != set(GUESS_KEYS):
-        raise ArgumentError("guess", f"expected the four keys {', '.join(GUESS_KEYS)} (or four numbers in that order)")
-    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in GUESS_KEYS):
+    if isinstance(value, list) and len(value) == len(LEG_KEYS):
+        value = dict(zip(LEG_KEYS, value, strict=True))
+    if not isinstance(value, dict) or set(value) != set(LEG_KEYS):
+        raise ArgumentError("guess", f"expected the four keys {', '.join(LEG_KEYS)} (or four numbers in that order)")
+    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in LEG_KEYS):
         raise ArgumentError("guess", "values must be numbers")
-    bad = [k for k in GUESS_KEYS if not math.isfinite(value[k])]
+    bad = [k for k in LEG_KEYS if not math.isfinite(value[k])]
     if bad:
         raise ArgumentError("guess", f"{bad[0]} must be a finite number")
-    return {k: float(value[k]) for k in GUESS_KEYS}
+    return {k: float(value[k]) for k in LEG_KEYS}
 
 
 def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_steps: int | None = None) -> LimitCycle:

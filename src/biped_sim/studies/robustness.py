@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config, derive
+from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.tables import Column, Table
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -133,8 +134,9 @@ def _total_mass(config: Config) -> float:
 
 def gait_start(config: Config) -> Gait:
     """Start the walker of ``config`` on its gait (rigid limit cycle, or settled) and run the reference."""
-    if config.walker.kind == "four_legged":
-        raise ConfigError("walker.kind", "robustness needs a planar walker (ground profiles are planar only)")
+    require_study(
+        config.walker.kind, "robustness", "robustness needs a planar walker (ground profiles are planar only)"
+    )
     simplest = config.walker.kind == "simplest"
     leg, gravity = (1.0, 1.0) if simplest else (config.walker.leg_length, config.gravity)
     time_scale = math.sqrt(leg / gravity)

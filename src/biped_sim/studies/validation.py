@@ -18,8 +18,9 @@ import numpy as np
 
 from biped_sim.config import config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import SimplestWalker, rigid_walker
+from biped_sim.rigid.models import SimplestWalker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import simulate
 from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.compass import build_compass
+from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described
 from biped_sim.walkers.four_legged import build_four_legged, build_four_legged_sagittal
 from biped_sim.walkers.model import BuiltModel, minimal_model
@@ -48,4 +49,4 @@ def build_model(config: Config, initial: InitialState | dict[str, float] | None 
     return builder(config, initial)
 
 
-__all__ = ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model"]
+__all__ = ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model", "describe"]

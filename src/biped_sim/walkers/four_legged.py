@@ -73,7 +73,7 @@ def pair_properties(config: Config, spacing: float) -> tuple[float, tuple[float,
     return mass, (d, e), np.array([[j_xx, j_xy, 0.0], [j_xy, j_yy, 0.0], [0.0, 0.0, j_zz]])
 
 
-def _leg_pairs(config: Config) -> tuple[np.ndarray, list[float], np.ndarray]:
+def leg_pairs(config: Config) -> tuple[np.ndarray, list[float], np.ndarray]:
     """(masses, hip-to-centre-of-mass distances, inertias J') of the outer and inner pair."""
     props = [pair_properties(config, s) for s in (config.walker.foot_spacing_outer, config.walker.foot_spacing_inner)]
     if min(np.linalg.eigvalsh(j).min() for _, _, j in props) <= 0.0:
@@ -96,7 +96,7 @@ def build_four_legged_sagittal(config: Config, initial: InitialState) -> BuiltMo
     at the hip, each pair's two feet at one place of its sagittal plane, standing on the outer pair."""
     w = config.walker
     l, R = w.leg_length, w.foot_radius
-    masses, offsets, inertia = _leg_pairs(config)
+    masses, offsets, inertia = leg_pairs(config)
     total_mass = float(masses.sum())
     stiffness = contact_stiffness(config)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
@@ -132,7 +132,7 @@ def build_four_legged(config: Config, initial: InitialState) -> BuiltModel:
     w = config.walker
     l, R = w.leg_length, w.foot_radius
     spacings = (w.foot_spacing_outer, w.foot_spacing_inner)
-    masses, offsets, inertia = _leg_pairs(config)
+    masses, offsets, inertia = leg_pairs(config)
     total_mass = float(masses.sum())
     stiffness = contact_stiffness(config)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)

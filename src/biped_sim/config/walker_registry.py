@@ -1,0 +1,80 @@
+"""The walker registry: what each walker kind supports, declared once (as a propagator declares its capabilities).
+
+For each ``walker.kind``: the formulations it runs in under each dynamics (compliant: planar, minimal, spatial;
+rigid: the reduced planar model), whether it walks on ground profiles and takes pushes, and the studies it
+supports. The schema's cross-checks, the ground-profile rules and the studies' guards read :func:`refusal` and
+:func:`supports_study`, so a rule lives here and nowhere else. (It sits in the config layer because the schema
+reads it; the builders live in :mod:`biped_sim.walkers`.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from biped_sim.errors import ConfigError
+
+DYNAMICS = ("compliant", "rigid")
+STUDIES = ("limit_cycle", "bifurcation", "basin", "robustness", "converge", "compliant_limit_cycle")
+RIGID_STUDIES = ("limit_cycle", "bifurcation", "basin", "robustness")
+
+
+@dataclass(frozen=True)
+class WalkerCapabilities:
+    """What one walker kind supports."""
+
+    formulations: dict[str, tuple[str, ...]]  # dynamics -> formulation kinds
+    profiles: bool  # ground profiles other than flat
+    pushes: bool  # simulation.pushes
+    studies: tuple[str, ...]  # names from STUDIES
+
+    @property
+    def dynamics(self) -> tuple[str, ...]:
+        """The dynamics the walker has a model in."""
+        return tuple(self.formulations)
+
+
+WALKERS: dict[str, WalkerCapabilities] = {
+    "compass": WalkerCapabilities(
+        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, STUDIES
+    ),
+    "simplest": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
+    "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
+    # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
+    "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ()),
+    "description": WalkerCapabilities(
+        {"compliant": ("planar", "minimal"), "rigid": ("planar",)},
+        False,
+        False,
+        ("limit_cycle", "basin", "bifurcation", "converge"),
+    ),
+}
+
+
+def capabilities(kind: str) -> WalkerCapabilities:
+    """The registry's entry of ``walker.kind``."""
+    return WALKERS[kind]
+
+
+def refusal(kind: str, dynamics: str, formulation: str) -> tuple[str, str] | None:
+    """(field, reason) when walker ``kind`` has no model in this dynamics and formulation, else None."""
+    caps = WALKERS[kind]
+    if dynamics not in caps.formulations:
+        only = " and ".join(caps.dynamics)
+        return "walker.kind", f"{kind!r} is available with dynamics: {only} only"
+    if formulation not in caps.formulations[dynamics]:
+        kinds = ", ".join(caps.formulations[dynamics])
+        return "formulation.kind", f"{formulation!r} is not available for the {kind} walker with dynamics: " + (
+            f"{dynamics} (formulation.kind: {kinds})"
+        )
+    return None
+
+
+def supports_study(kind: str, study: str) -> bool:
+    """Whether walker ``kind`` supports ``study`` (a name from STUDIES)."""
+    return study in WALKERS[kind].studies
+
+
+def require_study(kind: str, study: str, what: str) -> None:
+    """ConfigError naming walker.kind when ``kind`` does not support ``study``; ``what`` says what it needs."""
+    if not supports_study(kind, study):
+        raise ConfigError("walker.kind", f"{what} (the {kind} walker does not support it)")
