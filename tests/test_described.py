@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from biped_sim.config import Config, IntegratorConfig, config_from_dict, load_config
+from biped_sim.config import Config, IntegratorConfig, config_from_dict, derive, load_config
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.stop import make_stops
 from biped_sim.integrate.driver import integrate_model
@@ -17,6 +17,7 @@ from biped_sim.multibody.minimal import HIP, tree_system
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.tree import tree_state
 from biped_sim.simulate import simulate
+from biped_sim.studies.convergence import converge, stops_level, touchdown_states
 from biped_sim.testing import default_walker, pendulum
 from biped_sim.walkers import build_model
 from biped_sim.walkers.compass import build_compass
@@ -221,3 +222,28 @@ def test_planar_and_minimal_coordinates_walk_the_same_kneed_gait() -> None:
     assert planar.summary["step_feet"] == minimal.summary["step_feet"]
     np.testing.assert_allclose(minimal.summary["step_times"], planar.summary["step_times"], rtol=0, atol=1e-7)
     np.testing.assert_allclose(minimal.summary["step_lengths"], planar.summary["step_lengths"], rtol=0, atol=1e-7)
+
+
+@pytest.mark.slow
+def test_converge_the_compliant_kneed_gait_settles_as_feet_and_knee_stops_stiffen() -> None:
+    """``converge`` on the kneed walker: the compliant gait converges as the feet and the knee stops stiffen
+    (each level moves the period several times less than the one before) and, one step from the rigid fixed
+    point, lands where the rigid walker lands; its own cycle keeps a period about 9 ms shorter than the rigid
+    one, whose heel strike holds the trailing knee locked through the impulse, while a one-sided compliant stop
+    lets it flex (the trailing knee's stop releases at the strike with a flexion rate of about 2 rad/s)."""
+    rigid, rows = converge(_kneed(), levels=3, steps=8)
+    assert all(row.status == "walking" for row in rows)
+    periods = [row.period_difference for row in rows]
+    assert abs(periods[2] - periods[1]) < 0.25 * abs(periods[1] - periods[0])
+    assert -0.012 < periods[-1] < -0.006  # the trailing knee's strike: see the docstring
+    level = {**stops_level(_kneed(), 2), "contact.stiffness": 1e8, "contact.restitution": 0.03,
+             "friction.model": "lugre", "friction.mu_kinetic": 1.0, "friction.mu_static": 1.2,
+             "friction.sigma0": 1e6, "friction.sigma1": 20.0,
+             "simulation.initial": rigid.fixed_point, "simulation.max_steps": 2, "simulation.t_end": 5.0}  # fmt: skip
+    result = simulate(derive(_kneed(), level))
+    first = touchdown_states(result)[0]
+    for key, value in rigid.touchdown.items():
+        assert first[key] == pytest.approx(value, abs=2e-3 * max(1.0, abs(value))), key
+    log = result.run.contact_log
+    trailing_knee = log[(log[:, 0] > result.run.strike_t[0]) & (log[:, 1] >= 2) & (log[:, 2] < 0)][0]
+    assert trailing_knee[0] - result.run.strike_t[0] < 1e-3 and trailing_knee[3] < -1.0
