@@ -11,6 +11,9 @@ import pytest
 from biped_sim.config import LEG_KEYS, STATE_KEYS, InitialState, config_from_dict, derive, load_config
 from biped_sim.config.walker_registry import WALKERS, refusal
 from biped_sim.errors import ConfigError
+from biped_sim.studies.bifurcation import check_bifurcation
+from biped_sim.studies.convergence import check_converge
+from biped_sim.studies.robustness import gait_start
 from biped_sim.walkers import build_model
 from biped_sim.walkers.describe import describe
 
@@ -152,7 +155,7 @@ def test_the_rigid_walkers_describe_their_keys() -> None:
 def test_the_registry_refuses_what_a_described_walker_does_not_support_yet() -> None:
     data = _kneed_dict()
     assert describe(config_from_dict(data)) == KNEED.walker.description
-    with pytest.raises(ConfigError, match=r"formulation\.kind: 'spatial' is not available for the description walker"):
+    with pytest.raises(ConfigError, match=r"walker\.kind: 'description' needs formulation\.kind: planar or minimal"):
         config_from_dict({**data, "dynamics": "compliant", "formulation": {"kind": "spatial"}})
     data["simulation"] = {"t_end": 2.0, "pushes": [{"time": 1.0, "impulse": [1.0, 0.0]}]}
     with pytest.raises(ConfigError, match=r"simulation\.pushes: the description walker takes no pushes"):
@@ -161,3 +164,14 @@ def test_the_registry_refuses_what_a_described_walker_does_not_support_yet() -> 
     data["ground"]["profile"] = {"kind": "steps", "steps": [{"at": 0.3, "height": -0.01}]}
     with pytest.raises(ConfigError, match=r"ground\.profile: the description walker walks on flat ground only"):
         config_from_dict(data)
+
+
+def test_the_studies_guards_read_the_registry() -> None:
+    four_legged = derive(config_from_dict({}), {"walker.kind": "four_legged", "formulation.kind": "minimal"})
+    with pytest.raises(ConfigError, match=r"^walker\.kind: bifurcation .* \(the four_legged walker does not"):
+        check_bifurcation(four_legged, 0.01, 0.02, 3)
+    with pytest.raises(
+        ConfigError, match=r"^walker\.kind: robustness pushes a planar walker and steps its ground \(the description"
+    ):
+        gait_start(KNEED)
+    check_converge(load_config(CONFIGS / "kneed_walker_compliant.yaml"), 3, 0.6, 0.8)  # the compliant one converges

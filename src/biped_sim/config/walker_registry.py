@@ -40,7 +40,7 @@ WALKERS: dict[str, WalkerCapabilities] = {
     "simplest": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
     "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
     # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
-    "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ()),
+    "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ("basin",)),
     "description": WalkerCapabilities(
         {"compliant": ("planar", "minimal"), "rigid": ("planar",)},
         False,
@@ -61,12 +61,13 @@ def refusal(kind: str, dynamics: str, formulation: str) -> tuple[str, str] | Non
     if dynamics not in caps.formulations:
         only = " and ".join(caps.dynamics)
         return "walker.kind", f"{kind!r} is available with dynamics: {only} only"
-    if formulation not in caps.formulations[dynamics]:
-        kinds = ", ".join(caps.formulations[dynamics])
-        return "formulation.kind", f"{formulation!r} is not available for the {kind} walker with dynamics: " + (
-            f"{dynamics} (formulation.kind: {kinds})"
-        )
-    return None
+    if formulation in caps.formulations[dynamics]:
+        return None
+    offered = [d for d in DYNAMICS if any(formulation in c.formulations.get(d, ()) for c in WALKERS.values())]
+    if dynamics not in offered:  # no walker has it in this dynamics: the formulation is the mistake
+        return "formulation.kind", f"{formulation!r} is available with dynamics: {' and '.join(offered)} only"
+    kinds = " or ".join(caps.formulations[dynamics])
+    return "walker.kind", f"{kind!r} needs formulation.kind: {kinds} with dynamics: {dynamics}"
 
 
 def supports_study(kind: str, study: str) -> bool:

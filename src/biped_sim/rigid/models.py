@@ -445,11 +445,3 @@ class SimplestWalker(RigidWalker):
         theta, theta_d = z
         c2 = math.cos(2.0 * theta)
         return np.array([theta, -theta, theta_d, c2 * theta_d])
-
-
-def initial_state(config: Config, walker: RigidWalker) -> np.ndarray:
-    """The config's initial state as a rigid state vector (legs as configured)."""
-    initial = config.simulation.initial
-    if isinstance(initial, str):
-        raise ValueError("initial_state: the config asks for the rigid limit cycle, resolve it first")
-    return walker.state_from_legs(initial if isinstance(initial, dict) else initial.model_dump())

@@ -95,7 +95,7 @@ def layout_size(n: int, n_points: int, n_lock: int, n_phase: int) -> tuple[int, 
     size = T_TABLES + 2 * (1 + n_points * (ROW_HEAD + 2 * n)) + 4 * n + LOCK_FIELDS * n_lock
     size += PHASE_FIELDS * n_phase + n
     m = n + n_lock
-    return size, m * m + m + 2 * n_points + n
+    return size, m * m + m + 2 * n_points + 2 * n
 
 
 @kernel
@@ -150,8 +150,10 @@ def _bias(p: np.ndarray, i: int, q: np.ndarray, qd: np.ndarray) -> tuple[float, 
 
 @kernel
 def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
-    """Write M of table t and the active lock rows into the (m x m) matrix at p[w:]; returns the rows used."""
+    """Write M of table t and the active lock rows into the (m x m) matrix at p[w:]; returns the rows used (the
+    workspace's last 2 n floats hold a point's Jacobian meanwhile)."""
     n = _n(p)
+    jw = w + m * m + m + 2 * int(p[T_NPTS])
     for a in range(m * m):
         p[w + a] = 0.0
     for i in range(int(p[T_NPTS])):
@@ -161,10 +163,10 @@ def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
         if mass == 0.0:
             continue
         for k in range(n):
-            jkx, jky = _jacobian(p, t, i, q, k)
+            p[jw + 2 * k], p[jw + 2 * k + 1] = _jacobian(p, t, i, q, k)
+        for k in range(n):
             for col in range(k, n):
-                jcx, jcy = _jacobian(p, t, i, q, col)
-                p[w + k * m + col] += mass * (jkx * jcx + jky * jcy)
+                p[w + k * m + col] += mass * (p[jw + 2 * k] * p[jw + 2 * col] + p[jw + 2 * k + 1] * p[jw + 2 * col + 1])
     for k in range(n):
         for col in range(k + 1, n):
             p[w + col * m + k] = p[w + k * m + col]

@@ -38,6 +38,7 @@ import numpy as np
 
 from biped_sim.config import LEG_KEYS, Config, derive
 from biped_sim.config.schema import MAX_STEPS
+from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
@@ -100,6 +101,7 @@ class BasinSpec:
     tolerance: float = CONVERGED_TOLERANCE
 
     def __post_init__(self) -> None:
+        require_study(self.config.walker.kind, "basin", "a basin walks the walker from a grid of starts")
         if self.x.key == self.y.key:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
         if isinstance(self.config.simulation.initial, str):

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from biped_sim.config import Config, derive
+from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.io.atomic import write_text_atomic
 from biped_sim.rigid.build import rigid_walker
@@ -59,6 +60,7 @@ def check_bifurcation(config: Config, start: float, stop: float, n: int, param: 
     ``start`` or ``stop`` the config cannot take, fewer than 2 or more than ``MAX_RUNS`` slopes ``n``."""
     if param != PARAMETER:
         raise ArgumentError("param", f"only {PARAMETER} is supported")
+    require_study(config.walker.kind, "bifurcation", "bifurcation continues a rigid walker's period-1 cycle")
     if config.dynamics != "rigid":
         raise ConfigError("dynamics", "bifurcation runs the rigid model: set dynamics to rigid")
     for name, value in (("start", start), ("stop", stop)):

@@ -134,9 +134,7 @@ def _total_mass(config: Config) -> float:
 
 def gait_start(config: Config) -> Gait:
     """Start the walker of ``config`` on its gait (rigid limit cycle, or settled) and run the reference."""
-    require_study(
-        config.walker.kind, "robustness", "robustness needs a planar walker (ground profiles are planar only)"
-    )
+    require_study(config.walker.kind, "robustness", "robustness pushes a planar walker and steps its ground")
     simplest = config.walker.kind == "simplest"
     leg, gravity = (1.0, 1.0) if simplest else (config.walker.leg_length, config.gravity)
     time_scale = math.sqrt(leg / gravity)
