@@ -15,7 +15,7 @@ from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.dispatch import formulation_of, make_workspace, measures, system_rhs
 from biped_sim.multibody.minimal import HIP, tree_system
 from biped_sim.multibody.planar import PlanarSystem
-from biped_sim.multibody.tree import tree_state
+from biped_sim.multibody.tree import STAR, TREE, tree_state
 from biped_sim.simulate import simulate
 from biped_sim.studies.convergence import converge, stops_level, touchdown_states
 from biped_sim.testing import default_walker, pendulum
@@ -149,7 +149,9 @@ def test_the_tree_solve_equals_the_star_solve_on_the_compass_to_rounding() -> No
     model = build_model(default_walker("formulation.kind=minimal", t_end=1.0))
     integrator = IntegratorConfig(method="dopri5", rtol=1e-10, atol=1e-12)
     runs = [
-        integrate_model(model.system._replace(star=star), model.y0, model.modes0, integrator, 1.0, 200.0)
+        integrate_model(
+            model.system._replace(topology=STAR if star else TREE), model.y0, model.modes0, integrator, 1.0, 200.0
+        )
         for star in (True, False)
     ]
     assert len(runs[0].strike_t) >= 2 and np.array_equal(runs[0].strike_foot, runs[1].strike_foot)

@@ -16,7 +16,7 @@ from biped_sim.io.trajectory import load_run
 from biped_sim.multibody.dispatch import formulation_of, make_workspace, system_rhs
 from biped_sim.multibody.minimal import HIP, MinimalSystem, tree_system
 from biped_sim.multibody.planar import PlanarSystem
-from biped_sim.multibody.tree import tree_state
+from biped_sim.multibody.tree import STAR, TREE, tree_state
 from biped_sim.plots import plot_run
 from biped_sim.testing import default_walker
 from biped_sim.walkers import build_model
@@ -96,7 +96,7 @@ def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str, solve: s
         planar = _off_axis_star(planar) if star == "off_axis_three_bodies" else _two_feet_per_leg(planar)
     minimal = tree_system(planar)
     assert minimal.star
-    minimal = minimal._replace(star=solve == "arrow")
+    minimal = minimal._replace(topology=STAR if solve == "arrow" else TREE)
     nb, nf = minimal.body_mass.shape[0], minimal.foot_body.shape[0]
     n = HIP + nb
     hip_in_body0 = -minimal.body_com[0]

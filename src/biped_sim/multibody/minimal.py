@@ -9,15 +9,10 @@ angle's column and perp(A(phi_p) s_j) in the column of each ancestor p (s_j: the
 path), and M(q) qdd = Q with M = sum_b m_b J_b^T J_b + J_b e_b e_b^T, Q the gravity, contact and joint-stop
 forces minus the velocity products (the omega^2 terms of each lever), solved by Cholesky (:func:`rhs`).
 
-A star, every body hinged at the root's origin (all s_b = 0) and without joint stops, is the common case
-(the compass, the four-legged walker); the system's ``star`` flag selects for it the arrow-shaped solve below,
-which needs no matrix:
-
-Every body b hangs from one hip point H; its centre of mass sits at c_b from H and its feet's arc
-centres at f_i from H (body frame, any 2-D vectors: off-axis centres of mass and feet need nothing
-more). The generalized coordinates are the floating base and one absolute angle per body,
-q = (x_h, y_h, phi_0, ..., phi_{nb-1}), so the hip joints hold by construction: no constraint rows,
-no Baumgarte, no drift. With a_b = A(phi_b) c_b and e_b = d a_b / d phi_b = (-a_by, a_bx), the centre of
+A star (every body hinged at the root's origin, all s_b = 0, no joint stops: the compass, the four-legged
+walker) has the type ``topology`` STAR, which compiles the arrow-shaped solve below instead. Every body b hangs
+from the hip H, its centre of mass at c_b from H and its feet's arc centres at f_i (body frame, any 2-D
+vectors). With a_b = A(phi_b) c_b and e_b = d a_b / d phi_b = (-a_by, a_bx), the centre of
 mass moves as r_b = r_h + a_b, v_b = v_h + omega_b e_b, and M(q) qdd = Q with the arrow-shaped
 
     M = [ m I2        m_b e_b ... ]        Q_h = sum_b m_b (g + omega_b^2 a_b) + sum_feet F
@@ -61,9 +56,16 @@ from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 from biped_sim.multibody.tree import (
     HIP,
     N_TREE_COLUMNS,
+    STAR,
+    TREE,
+    Star,
+    Tree,
     foot_motion,
     hip_impulse,
+    no_violation,
+    pitch,
     tree_energy,
+    tree_foot,
     tree_origins,
     tree_rhs,
 )
@@ -77,7 +79,7 @@ class MinimalSystem(NamedTuple):
     body_com: np.ndarray  # (nb, 2) centre of mass from the body's origin (its joint to its parent), body frame
     body_parent: np.ndarray  # (nb,) int64: the parent body (-1: the root, body 0); parents before children
     body_joint: np.ndarray  # (nb, 2) the body's origin from its parent's, in the parent's frame (root: 0)
-    star: bool  # every body hinged at the root's origin and no joint stops: the arrow solve (module docstring)
+    topology: Star | Tree  # STAR: every body hinged at the root's origin, no joint stops (the arrow solve); TREE
     foot_body: np.ndarray  # (nf,) int64
     foot_center: np.ndarray  # (nf, 2) arc centre from its body's origin, body frame
     foot_radius: np.ndarray  # (nf,)
@@ -89,6 +91,11 @@ class MinimalSystem(NamedTuple):
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
     stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
+
+    @property
+    def star(self) -> bool:
+        """Whether the system is a star (``topology`` STAR): Python's view; compiled code dispatches on the type."""
+        return isinstance(self.topology, Star)
 
 
 # columns of the workspace table's body rows: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos and
@@ -142,15 +149,22 @@ def arc_centre(y: np.ndarray, c: float, s: float, fx: float, fy: float) -> tuple
 
 
 @kernel
-def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
-    """:func:`foot_arc` of foot i (about the hip for a star, about its body's origin for a tree)."""
+def _star_foot(
+    y: np.ndarray, system: MinimalSystem, i: int, topology: Star
+) -> tuple[float, float, float, float, float, float]:
     centre, b = system.foot_center, system.foot_body[i]
-    if not system.star:
-        ox, oy, vx, vy, om, cx, cy = foot_motion(y, system, i)
-        return arc_contact(ox, oy, vx, vy, om, cx, cy, system.foot_radius[i], system.ground)
     c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
     n = HIP + system.body_mass.shape[0]
     return foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i], system.ground)
+
+
+_foot_of = by_type("foot_kinematics", "topology", {Star: _star_foot, Tree: tree_foot})
+
+
+@kernel
+def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
+    """:func:`foot_arc` of foot i (about the hip for a star, about its body's origin for a tree)."""
+    return _foot_of(y, system, i, system.topology)
 
 
 @kernel
@@ -229,7 +243,7 @@ profile through :func:`~biped_sim.contact.response.arc_forces`, summed over each
 
 @kernel
 def star_rhs(
-    t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray
+    t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray, topology: Star
 ) -> None:
     """Right-hand side of a star (the arrow-shaped solve of the module docstring).
 
@@ -296,24 +310,19 @@ def star_rhs(
         ydot[n + HIP + b] = (table[b, TORQUE] - m * (ax * acc_y - ay * acc_x)) / table[b, HIP_INERTIA]
 
 
-_star_rhs = inlined(star_rhs)  # no call layer on the common path (see star_rhs); the tree's solve outweighs its call
+_rhs_of = by_type("rhs", "topology", {Star: star_rhs, Tree: tree_rhs})  # inlined: the star's is the whole rhs
 
 
 @kernel
 def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free): a star's arrow solve
-    (:func:`star_rhs`) or a tree's (:func:`tree_rhs`)."""
-    if system.star:
-        _star_rhs(t, y, system, modes, work, ydot)
-    else:
-        tree_rhs(t, y, system, modes, work, ydot)
+    (:func:`star_rhs`) or a tree's (:func:`~biped_sim.multibody.tree.tree_rhs`), chosen by the topology's type."""
+    _rhs_of(t, y, system, modes, work, ydot, system.topology)
 
 
 @kernel
-def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
-    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops."""
-    if not system.star:
-        return tree_energy(y, system, modes)
+def star_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, topology: Star) -> tuple[float, float, float]:
+    """:func:`mechanical_energy` of a star: each centre of mass from the hip."""
     nb = system.body_mass.shape[0]
     n = HIP + nb
     kinetic = 0.0
@@ -333,6 +342,15 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
         cx, cy = arc_centre(y, c, s, fx, fy)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
     return kinetic, potential, elastic
+
+
+_energy_of = by_type("mechanical_energy", "topology", {Star: star_energy, Tree: tree_energy})
+
+
+@kernel
+def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops."""
+    return _energy_of(y, system, modes, system.topology)
 
 
 @kernel
@@ -373,7 +391,7 @@ def tree_system(planar: PlanarSystem) -> MinimalSystem:
         body_com=-origin,
         body_parent=parent,
         body_joint=joint,
-        star=bool(np.all(joint == 0.0)) and stops.law.shape[0] == 0,
+        topology=STAR if bool(np.all(joint == 0.0)) and stops.law.shape[0] == 0 else TREE,
         foot_body=planar.foot_body.copy(),
         foot_center=planar.foot_center - origin[planar.foot_body],
         foot_radius=planar.foot_radius.copy(),
@@ -386,12 +404,6 @@ def tree_system(planar: PlanarSystem) -> MinimalSystem:
         ground=planar.ground,
         stops=stops._replace(index=index),
     )
-
-
-def pitch(y: np.ndarray, system: MinimalSystem, body: int) -> tuple[float, float]:
-    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
-    n = HIP + system.body_mass.shape[0]
-    return float(y[HIP + body]), float(y[n + HIP + body])
 
 
 def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
@@ -407,11 +419,6 @@ def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, fo
         y[2 * n + foot],
     )  # fmt: skip
     return arc[0], f_n, f_t, arc[2]
-
-
-def no_violation(y: np.ndarray, system: MinimalSystem) -> tuple[float, float]:
-    """||Phi||, ||Phidot||: structurally zero, the coordinates satisfy the hip joints exactly."""
-    return 0.0, 0.0
 
 
 FORMULATION = Formulation(

@@ -12,6 +12,7 @@ that module imports this one). :func:`tree_origins` reads the tree of a planar a
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -22,6 +23,18 @@ from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
 
 HIP = 2  # the root's origin (x_o, y_o), the hip, comes first in q
+
+
+class Star(NamedTuple):
+    """A system's ``topology``: every body hinged at the root's origin, no joint stops (the arrow solve). No arrays:
+    its type alone selects the compiled code (as the ground's), so a star compiles none of the tree's."""
+
+
+class Tree(NamedTuple):
+    """A system's ``topology``: any other tree of bodies (:func:`tree_rhs`)."""
+
+
+STAR, TREE = Star(), Tree()
 
 # columns of a tree's body rows (tree_kinematics): cos and sin phi_b, the origin o_b, its velocity, the velocity
 # products of its acceleration (-sum omega_k^2 of each lever above it), A(phi_b) c_b and the joint A(phi_p) s_b
@@ -155,7 +168,9 @@ def _tree_foot_forces(y: np.ndarray, system: tuple, modes: np.ndarray, table: np
 
 
 @kernel
-def tree_rhs(t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, ydot: np.ndarray) -> None:
+def tree_rhs(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, ydot: np.ndarray, topology: Tree
+) -> None:
     """Right-hand side of a tree: M(q) qdd = Q by Cholesky, Q the gravity, the velocity products, the feet
     and the joint stops (module docstring)."""
     table = work.table
@@ -184,7 +199,7 @@ def tree_rhs(t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tu
 
 
 @kernel
-def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray) -> tuple[float, float, float]:
+def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree) -> tuple[float, float, float]:
     """:func:`mechanical_energy` of a tree: each body's centre of mass from its origin (:func:`body_origin`)."""
     n = HIP + system.body_mass.shape[0]
     kinetic = potential = 0.0
@@ -258,3 +273,21 @@ def tree_state(y: np.ndarray, planar: PlanarSystem) -> np.ndarray:
     hip = y[0:2] + hip_arm
     hip_velocity = y[3 * nb : 3 * nb + 2] + omega[0] * np.array([-hip_arm[1], hip_arm[0]])
     return np.concatenate([hip, phi, hip_velocity, omega, y[6 * nb :]])
+
+
+@kernel
+def tree_foot(y: np.ndarray, system: tuple, i: int, topology: Tree) -> tuple[float, float, float, float, float, float]:
+    """:func:`~biped_sim.multibody.minimal.foot_kinematics` of foot i of a tree (about its body's origin)."""
+    ox, oy, vx, vy, om, cx, cy = foot_motion(y, system, i)
+    return arc_contact(ox, oy, vx, vy, om, cx, cy, system.foot_radius[i], system.ground)
+
+
+def pitch(y: np.ndarray, system: tuple, body: int) -> tuple[float, float]:
+    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
+    n = HIP + system.body_mass.shape[0]
+    return float(y[HIP + body]), float(y[n + HIP + body])
+
+
+def no_violation(y: np.ndarray, system: tuple) -> tuple[float, float]:
+    """||Phi||, ||Phidot||: structurally zero, the coordinates satisfy the hip joints exactly."""
+    return 0.0, 0.0
