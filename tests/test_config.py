@@ -18,6 +18,7 @@ BUNDLED = {
     "compass_goswami": ("compliant", "compass", "planar"),
     "four_legged_walker": ("compliant", "four_legged", "spatial"),
     "kneed_walker": ("rigid", "description", "planar"),
+    "kneed_walker_compliant": ("compliant", "description", "planar"),
     "rimless_wheel": ("rigid", "rimless_wheel", "planar"),
     "round_foot_walker": ("compliant", "compass", "planar"),
     "simplest_walker": ("rigid", "simplest", "planar"),

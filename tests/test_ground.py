@@ -29,7 +29,7 @@ from biped_sim.contact.profile import FlatProfile, StepsProfile, profile_arrays,
 from biped_sim.contact.response import guard_arms
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import load_run
-from biped_sim.multibody.minimal import star_system
+from biped_sim.multibody.minimal import tree_system
 from biped_sim.multibody.planar import foot_contact
 from biped_sim.studies.limit_cycle import compliant_limit_cycle
 from biped_sim.testing import default_walker
@@ -219,7 +219,7 @@ def test_flat_runs_hold_the_flat_ground_type_and_profile_runs_their_arrays() -> 
     stepped = build_model(default_walker(STEP_DOWN)).system
     assert type(stepped.ground) is ProfileGround
     np.testing.assert_array_equal(stepped.ground.vertices, [[0.45, 0.0], [0.45, -0.005]])
-    assert type(star_system(stepped).ground) is ProfileGround
+    assert type(tree_system(stepped).ground) is ProfileGround
 
 
 def test_minimal_coordinates_walk_down_a_step_as_the_planar_formulation() -> None:

@@ -14,8 +14,9 @@ from biped_sim.animate import WalkerDrawing
 from biped_sim.errors import ConfigError
 from biped_sim.io.trajectory import load_run
 from biped_sim.multibody.dispatch import formulation_of, make_workspace, system_rhs
-from biped_sim.multibody.minimal import HIP, MinimalSystem, star_state, star_system
+from biped_sim.multibody.minimal import HIP, MinimalSystem, tree_system
 from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.multibody.tree import STAR, TREE, tree_state
 from biped_sim.plots import plot_run
 from biped_sim.testing import default_walker
 from biped_sim.walkers import build_model
@@ -84,21 +85,25 @@ def _random_states(minimal: MinimalSystem, seed: int, count: int) -> list[tuple[
     return states
 
 
+@pytest.mark.parametrize("solve", ["arrow", "tree"])
 @pytest.mark.parametrize("friction", ["ambrosio", "lugre"])
 @pytest.mark.parametrize("star", ["compass", "off_axis_three_bodies", "two_feet_per_leg"])
-def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str) -> None:
-    """On random states satisfying the joints, both formulations give the same hip and leg accelerations."""
+def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str, solve: str) -> None:
+    """On random states satisfying the joints, both formulations give the same hip and leg accelerations, by the
+    star's arrow solve and by the tree's (the general mass matrix and Cholesky, run on the same star)."""
     planar = build_model(default_walker(f"friction.model={friction}")).system
     if star != "compass":
         planar = _off_axis_star(planar) if star == "off_axis_three_bodies" else _two_feet_per_leg(planar)
-    minimal = star_system(planar)
+    minimal = tree_system(planar)
+    assert minimal.star
+    minimal = minimal._replace(topology=STAR if solve == "arrow" else TREE)
     nb, nf = minimal.body_mass.shape[0], minimal.foot_body.shape[0]
     n = HIP + nb
     hip_in_body0 = -minimal.body_com[0]
     loaded = 0
     for y, modes in _random_states(minimal, seed=11, count=40):
         y_planar = _planar_state(y, minimal)
-        assert star_state(y_planar, planar) == pytest.approx(y, abs=1e-14)
+        assert tree_state(y_planar, planar) == pytest.approx(y, abs=1e-14)
         fast, full = np.zeros_like(y), np.zeros_like(y_planar)
         system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
         system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
@@ -205,7 +210,7 @@ def test_bundled_config_starts_as_planar() -> None:
     planar = build_model(load_config(CONFIGS / "round_foot_walker.yaml"))
     minimal = build_model(load_config(CONFIGS / "round_foot_walker.yaml", MINIMAL))
     assert isinstance(minimal.system, MinimalSystem)
-    assert np.array_equal(minimal.y0, star_state(planar.y0, planar.system))
+    assert np.array_equal(minimal.y0, tree_state(planar.y0, planar.system))
     assert np.array_equal(minimal.modes0, planar.modes0)
 
 

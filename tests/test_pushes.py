@@ -11,7 +11,8 @@ from biped_sim import config_from_dict, simulate
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of, measures
 from biped_sim.multibody.euler_parameters import point_state
-from biped_sim.multibody.minimal import star_state, star_system
+from biped_sim.multibody.minimal import tree_system
+from biped_sim.multibody.tree import tree_state
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.pushes import hip_push
 from biped_sim.rigid.stepping import rigid_step
@@ -90,14 +91,14 @@ def test_a_spatial_push_keeps_the_joints_and_the_normalisation_and_moves_the_hip
 
 def test_a_minimal_push_gives_the_walker_exactly_the_impulse_and_moves_the_hip_as_the_planar_one() -> None:
     planar, y_planar = mid_stance_state()
-    system = star_system(planar)
-    y = star_state(y_planar, planar)
+    system = tree_system(planar)
+    y = tree_state(y_planar, planar)
     after = formulation_of(system).hip_impulse(y, system, IMPULSE)
     n = 2 + system.body_mass.shape[0]
     assert np.array_equal(after[:n], y[:n]) and np.array_equal(after[2 * n :], y[2 * n :])
     planar_after = formulation_of(planar).hip_impulse(y_planar, planar, IMPULSE)
     # the same state in both coordinates: the jumps agree to round-off (hip velocity, leg rates)
-    np.testing.assert_allclose(after, star_state(planar_after, planar), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(after, tree_state(planar_after, planar), rtol=0, atol=1e-13)
 
 
 def test_a_compliant_run_books_the_push_work_and_its_energy_balance_closes() -> None:

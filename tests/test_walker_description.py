@@ -155,8 +155,8 @@ def test_the_rigid_walkers_describe_their_keys() -> None:
 def test_the_registry_decides_what_a_described_walker_takes() -> None:
     data = _kneed_dict()
     assert describe(config_from_dict(data)) == KNEED.walker.description
-    with pytest.raises(ConfigError, match=r"walker\.kind: 'description' is available with dynamics: rigid only"):
-        config_from_dict({**data, "dynamics": "compliant"})
+    with pytest.raises(ConfigError, match=r"walker\.kind: 'description' needs formulation\.kind: planar or minimal"):
+        config_from_dict({**data, "dynamics": "compliant", "formulation": {"kind": "spatial"}})
     data["simulation"] = {"t_end": 2.0, "pushes": [{"time": 1.0, "impulse": [1.0, 0.0]}]}
     data["ground"]["profile"] = {"kind": "steps", "steps": [{"at": 0.3, "height": -0.01}]}
     assert config_from_dict(data).walker.kind == "description"  # pushes and profiles: declared, accepted
@@ -168,5 +168,4 @@ def test_the_studies_guards_read_the_registry() -> None:
         check_bifurcation(four_legged, 0.01, 0.02, 3)
     with pytest.raises(ConfigError, match=r"^walker\.kind: robustness pushes a planar walker .*\(the four_legged"):
         gait_start(four_legged)
-    with pytest.raises(ConfigError, match=r"^walker\.kind: converge .* \(the description walker does not"):
-        check_converge(KNEED, 3, 0.6, 0.8)
+    check_converge(load_config(CONFIGS / "kneed_walker_compliant.yaml"), 3, 0.6, 0.8)  # the compliant one converges

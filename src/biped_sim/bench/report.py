@@ -157,8 +157,15 @@ def notes(result: dict[str, Any]) -> list[str]:
         f"RHS alone (compiled, on the visited states, best of 3): {result['rhs_alone_us']:.3f} us; loop overhead "
         f"of the {result['headline']} row: {result['loop_overhead']:.0%} of its best wall time"
         + (
-            f"; minimal coordinates: {result['rhs_alone_minimal_us']:.3f} us."
+            f"; minimal coordinates: {result['rhs_alone_minimal_us']:.3f} us"
             if "rhs_alone_minimal_us" in result
+            else ""
+        )
+        + (
+            f"; the kneed walker (a tree of four bodies, two knee stops) in minimal coordinates: "
+            f"{result['rhs_alone_kneed_minimal_us']:.3f} us ({result['kneed_minimal_vs_compass_minimal']:.2f}x the "
+            "compass's)."
+            if "rhs_alone_kneed_minimal_us" in result
             else "."
         ),
         f"Baseline vs {result['headline']} step periods: max difference "

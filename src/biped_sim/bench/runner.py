@@ -58,10 +58,12 @@ class BenchCase:
     rtol: float | None = None  # adaptive rows; None for fixed-step rows (dt searched)
     overrides: tuple[str, ...] = ()  # extra config overrides, e.g. another formulation
     same_walker: bool = True  # False: another walker than the reference's (no period error)
+    config: str | None = None  # another config file than the bench's, beside it (e.g. another walker)
 
 
 MINIMAL = "dopri5 rtol 1e-6, minimal coordinates"  # the headline in the minimal formulation (issue 13 targets)
 FOUR_LEGGED = "walker.kind=four_legged"  # another walker than the reference's: no period error
+KNEED_MINIMAL = "dopri5 1e-6, kneed walker, minimal"  # issue 19: a tree of four bodies with knee stops
 CASES: tuple[BenchCase, ...] = (
     BenchCase("baseline: solve_ivp RK45, Python RHS, rtol 1e-6", BASELINE, 1e-6),
     BenchCase("dopri5 rtol 1e-6", "dopri5", 1e-6),
@@ -70,6 +72,7 @@ CASES: tuple[BenchCase, ...] = (
     BenchCase(MINIMAL, "dopri5", 1e-6, ("formulation.kind=minimal",)),
     BenchCase("dopri5 1e-6, four-legged, spatial", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=spatial"), False),
     BenchCase("dopri5 1e-6, four-legged, minimal", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=minimal"), False),
+    BenchCase(KNEED_MINIMAL, "dopri5", 1e-6, ("formulation.kind=minimal",), False, "kneed_walker_compliant.yaml"),
     BenchCase("rk4", "rk4"),
     BenchCase("rk2", "rk2"),
     BenchCase("euler", "euler"),
@@ -146,7 +149,8 @@ def case_config(settings: BenchSettings, case: BenchCase, dt: float | None = Non
         sets += [f"integrator.rtol={case.rtol}", f"integrator.atol={case.rtol * ATOL_PER_RTOL}"]
     if dt is not None:
         sets.append(f"integrator.dt={dt}")
-    return load_config(settings.config_path, sets)
+    path = settings.config_path if case.config is None else settings.config_path.parent / case.config
+    return load_config(path, sets)
 
 
 def integrate(model: BuiltModel, config: Config, method: str, t_end: float | None = None) -> Integration:
@@ -309,6 +313,7 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
         row.ratio_vs_baseline = baseline.wall_s / row.wall_s
     headline = next(r for r in rows if r.label == HEADLINE)
     rhs_us, rhs_minimal_us = rhs_cost_us(*measured[HEADLINE]), rhs_cost_us(*measured[MINIMAL])
+    rhs_kneed_us = rhs_cost_us(*measured[KNEED_MINIMAL])
     # best-case against best-case: both timings are disturbed by whatever else runs on the machine
     loop_overhead = 1.0 - headline.rhs_evals * rhs_us * 1e-6 / min(headline.walls_s)
     ours, theirs = step_periods(measured[HEADLINE][1]), step_periods(measured[baseline.label][1])
@@ -334,10 +339,13 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
         "minimal": MINIMAL,
         "rhs_alone_us": rhs_us,
         "rhs_alone_minimal_us": rhs_minimal_us,
+        "rhs_alone_kneed_minimal_us": rhs_kneed_us,  # its tree solve against the compass's arrow solve:
+        "kneed_minimal_vs_compass_minimal": rhs_kneed_us / rhs_minimal_us,
         "loop_overhead": loop_overhead,
         "baseline_vs_headline_max_period_difference_s": float(np.max(np.abs(ours[:n] - theirs[:n]))),
     }
     log(f"RHS alone {rhs_us:.3f} us (minimal coordinates {rhs_minimal_us:.3f} us), loop overhead {loop_overhead:.0%}")
+    log(f"kneed walker's RHS in minimal coordinates {rhs_kneed_us:.3f} us ({rhs_kneed_us / rhs_minimal_us:.2f}x)")
     result["startup"] = startup_times(settings.config_path, cold=settings.compile_time)
     log(f"start-up: {json.dumps(result['startup'])}")
     if settings.sweep_runs:

@@ -84,7 +84,7 @@ def converge_command(
     if as_json:
         doc = {
             "rigid": rigid.to_json(),
-            "rigid_strike": {**asdict(check), "violations": violations},
+            "rigid_strike": None if check is None else {**asdict(check), "violations": violations},
             "levels": [asdict(r) for r in rows],
         }
         typer.echo(json.dumps(doc, indent=2))

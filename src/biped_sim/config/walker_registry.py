@@ -41,7 +41,9 @@ WALKERS: dict[str, WalkerCapabilities] = {
     "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
     # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
     "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ("basin",)),
-    "description": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
+    "description": WalkerCapabilities(
+        {"compliant": ("planar", "minimal"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
+    ),
 }
 
 

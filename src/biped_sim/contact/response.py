@@ -63,15 +63,17 @@ class ContactBuffers(NamedTuple):
     """Per-foot buffers of the mode update, part of every formulation's workspace (allocated once)."""
 
     onset: np.ndarray  # (nf,) int64: TOUCHDOWN marks written by update_contact_modes
-    gates: np.ndarray  # (2 nf,) the event functions at the update: penetration, lead over the partner
+    gates: np.ndarray  # (2 nf + ns,) the event functions at the update: penetration, lead over the partner; stops
     approach: np.ndarray  # (nf,) the approach velocities at the update
     bristles: np.ndarray  # (nf, k) int64: indices in y of each foot's k friction (LuGre bristle) states
 
 
-def make_contact_buffers(bristles: np.ndarray) -> ContactBuffers:
-    """Allocate the buffers for the feet whose bristle-state indices are the rows of ``bristles``."""
+def make_contact_buffers(bristles: np.ndarray, n_stops: int = 0) -> ContactBuffers:
+    """Allocate the buffers for the feet whose bristle-state indices are the rows of ``bristles`` and ``n_stops``
+    joint stops (:mod:`.stop`: one event function each)."""
     nf = bristles.shape[0]
-    return ContactBuffers(np.zeros(nf, dtype=np.int64), np.zeros(2 * nf), np.zeros(nf), bristles.astype(np.int64))
+    gates = np.zeros(2 * nf + n_stops)
+    return ContactBuffers(np.zeros(nf, dtype=np.int64), gates, np.zeros(nf), bristles.astype(np.int64))
 
 
 @kernel
@@ -326,9 +328,10 @@ def update_contact_modes(
     ``contact.bristles[i]`` of y to 0); a lift-off records its time (LIFTOFF_TIME).
     ``contact.onset[i]`` = TOUCHDOWN marks a touchdown when no other foot of the same body was
     touching or touched down in this update (the feet of one leg land together and make one heel
-    strike); 0 otherwise. Returns True when any mode changed (the right-hand side then changes too).
+    strike); 0 otherwise. Returns True when any mode changed (the right-hand side then changes too). The
+    feet's modes are the table's first rows (the joint stops' follow: :mod:`biped_sim.contact.stop`).
     """
-    nf = modes.shape[0]
+    nf = system.foot_body.shape[0]
     onset, gates = contact.onset, contact.gates
     changed = False
     guard = system.switches[SCUFFING_GUARD] != 0

@@ -45,7 +45,17 @@ NO_CHECKS = Scales(0.0, 1.0)
 def start_checks(rec: Recorder, system: tuple, y: np.ndarray, modes: np.ndarray) -> None:
     """Set the energy the residual is measured from: E + W of the state the integration starts from."""
     kinetic, potential, elastic = measures(system).mechanical_energy(y, system, modes)
-    rec.state[0].energy_reference = kinetic + potential + elastic + y[-2] + y[-1]
+    rec.state[0].energy_reference = plus_dissipated(kinetic + potential + elastic, y, system)
+
+
+@njit(cache=True, inline="always")
+def plus_dissipated(energy: float, y: np.ndarray, system: tuple) -> float:
+    """E + W: ``energy`` plus the work the feet's normal damping and friction (and, with joint stops, their
+    damping: W_stop) dissipated, the last entries of the state (``StateLayout`` of :mod:`biped_sim.multibody`)."""
+    n = y.shape[0]
+    if system.stops.law.shape[0] == 0:
+        return energy + y[n - 2] + y[n - 1]
+    return energy + y[n - 3] + y[n - 2] + y[n - 1]
 
 
 @njit(cache=True, inline="always")
@@ -70,8 +80,7 @@ def check(
     if scales.energy <= 0.0 or not (force or t >= st.check_time):
         return
     energy, drift = system_audit(y, system, modes, work)
-    n = y.shape[0]
-    residual = (energy + y[n - 2] + y[n - 1] - st.energy_reference) / scales.energy
+    residual = (plus_dissipated(energy, y, system) - st.energy_reference) / scales.energy
     jump = abs(residual - st.check_residual)
     st.check_residual = residual
     st.check_time = t + CHECK_INTERVAL

@@ -175,7 +175,8 @@ def record_sample(rec: Recorder, t: float, y: np.ndarray, modes: np.ndarray) -> 
 def _log_contact_changes(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, rec: Recorder, touching_before: np.ndarray
 ) -> None:
-    """One contact-log row per foot whose TOUCHING mode changed: (t, foot, +1 / -1, approach velocity)."""
+    """One contact-log row per contact (foot, then joint stop) whose TOUCHING mode changed: (t, contact, +1 / -1,
+    approach velocity)."""
     for i in range(modes.shape[0]):
         now = modes[i, TOUCHING]
         if now != touching_before[i]:
@@ -204,16 +205,16 @@ def apply_events(
     A heel strike is the touchdown (``contact.onset`` = TOUCHDOWN) of a foot that is ahead of its
     partner and is not the foot of the previous strike: bounces of the same foot after touchdown
     belong to that strike. Reaching ``max_strikes`` (> 0) strikes completes the run.
-    ``touching_before`` is a scratch buffer of one entry per foot. Returns True when a mode changed.
+    ``touching_before`` is a scratch buffer of one entry per row of ``modes`` (feet, then joint stops). Returns
+    True when a mode changed.
     """
-    nf = modes.shape[0]
-    for i in range(nf):
+    for i in range(modes.shape[0]):
         touching_before[i] = modes[i, TOUCHING]
     if not system_update_modes(t, y, system, modes, contact):
         return False
     _log_contact_changes(t, y, system, modes, rec, touching_before)
     st = rec.state[0]
-    for i in range(nf):
+    for i in range(system.foot_body.shape[0]):
         if contact.onset[i] == TOUCHDOWN and i != st.last_strike_foot and system_is_leading(y, system, i):
             k = st.n_strikes
             rec.strike_t[k] = t

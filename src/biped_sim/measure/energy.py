@@ -1,8 +1,8 @@
 """The energy audit of a compliant run: E(t) - E(0) + W_dissipated(t) - W_push(t), which must stay near zero.
 
-The dissipated work (normal damping, friction) is integrated as ODE states, so the balance is an
-independent check of the integration, not a tautology. W_push(t) is the work of the pushes applied up to
-t (each its kinetic energy jump, booked from the first sample after it).
+The dissipated work (the feet's normal damping and friction, the joint stops' damping) is integrated as ODE
+states, so the balance is an independent check of the integration, not a tautology. W_push(t) is the work of
+the pushes applied up to t (each its kinetic energy jump, booked from the first sample after it).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ class EnergyAudit:
     elastic: np.ndarray
     dissipated_normal: np.ndarray
     dissipated_friction: np.ndarray
+    dissipated_stops: np.ndarray  # W_stop(t): the joint stops' damping (zero without stops)
     push_work: np.ndarray  # W_push(t): work of the pushes so far
     residual: np.ndarray
 
@@ -37,9 +38,12 @@ def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     layout = formulation_of(model.system).layout_of(model.system)
     w_normal = run.y[:, layout.work_normal]
     w_friction = run.y[:, layout.work_friction]
+    w_stop = run.y[:, layout.work_stop] if layout.work_stop is not None else np.zeros(ns)
     push_work = np.zeros(ns)
     for _, first_sample, work in run.pushes:
         push_work[int(first_sample) :] += work
     total = terms.sum(axis=1)
     residual = total - total[0] + (w_normal - w_normal[0]) + (w_friction - w_friction[0]) - push_work
-    return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, push_work, residual)
+    if layout.work_stop is not None:
+        residual = residual + (w_stop - w_stop[0])
+    return EnergyAudit(terms[:, 0], terms[:, 1], terms[:, 2], w_normal, w_friction, w_stop, push_work, residual)

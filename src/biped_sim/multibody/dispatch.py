@@ -90,7 +90,9 @@ def make_workspace(system: tuple) -> tuple:
 
 def contact_buffers(system: tuple) -> ContactBuffers:
     """Allocate the per-foot buffers of ``system``'s contact-mode update (its feet's bristle states from the layout)."""
-    return make_contact_buffers(formulation_of(system).layout_of(system).bristle_index())
+    return make_contact_buffers(
+        formulation_of(system).layout_of(system).bristle_index(), int(system.stops.law.shape[0])
+    )
 
 
 register(planar.FORMULATION)

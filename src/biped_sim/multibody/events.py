@@ -7,37 +7,52 @@ the slope (the scuffing guard arms a foot once it is ahead). At an event the int
 :func:`~biped_sim.contact.response.update_contact_modes`; a touchdown of a foot that
 :func:`system_is_leading` is a heel strike, logged with :func:`system_approach_velocity`. All of
 it reads a formulation only through ``system_foot_contact`` (penetration, approach velocity,
-contact point), so a new formulation gets its events for free.
+contact point), so a new formulation gets its events for free. A joint stop (:mod:`biped_sim.contact.stop`)
+adds one event function, its penetration (the joint angle past its limit), after the feet's; its mode is a
+row of the mode table after the feet's, updated with theirs.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from biped_sim.contact.response import ContactBuffers, update_contact_modes
+from biped_sim.contact.response import RECONTACT_TIME, ContactBuffers, update_contact_modes
+from biped_sim.contact.stop import stop_penetration, update_stop_modes
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_foot_contact
 
 
 def event_count(system: tuple) -> int:
-    """Number of event functions of ``system``: two per foot."""
-    return 2 * int(system.foot_body.shape[0])
+    """Number of event functions of ``system``: two per foot, one per joint stop."""
+    return 2 * int(system.foot_body.shape[0]) + int(system.stops.law.shape[0])
+
+
+def contact_count(system: tuple) -> int:
+    """Rows of ``system``'s contact-mode table: its feet, then its joint stops."""
+    return int(system.foot_body.shape[0]) + int(system.stops.law.shape[0])
 
 
 @kernel
 def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
-    """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner)."""
-    for i in range(system.foot_body.shape[0]):
+    """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner);
+    g[2 nf + s] = penetration of joint stop s."""
+    nf = system.foot_body.shape[0]
+    for i in range(nf):
         delta, _, x_i = system_foot_contact(y, system, i)
         g[2 * i] = delta
         partner = system.foot_partner[i]
         g[2 * i + 1] = x_i - system_foot_contact(y, system, partner)[2] if partner >= 0 else 1.0
+    for s in range(system.stops.law.shape[0]):
+        g[2 * nf + s] = stop_penetration(y, system.stops, s)[0]
 
 
 @kernel
-def system_approach_velocity(y: np.ndarray, system: tuple, foot: int) -> float:
-    """Normal approach velocity deltadot of a foot."""
-    return system_foot_contact(y, system, foot)[1]
+def system_approach_velocity(y: np.ndarray, system: tuple, contact: int) -> float:
+    """Approach velocity deltadot of a contact: a foot's [m/s], or a joint stop's after the feet [rad/s]."""
+    nf = system.foot_body.shape[0]
+    if contact >= nf:
+        return stop_penetration(y, system.stops, contact - nf)[1]
+    return system_foot_contact(y, system, contact)[1]
 
 
 @kernel
@@ -51,8 +66,14 @@ def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
 
 @kernel
 def system_update_modes(t: float, y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
-    """Scuffing guard and contact bookkeeping at an event at time t; sets contact.onset; True when a mode changed."""
+    """Scuffing guard and contact bookkeeping at an event at time t (feet, then joint stops); sets contact.onset
+    (the feet's touchdowns); True when a mode changed."""
     system_event_functions(y, system, contact.gates)
-    for i in range(system.foot_body.shape[0]):
+    nf = system.foot_body.shape[0]
+    for i in range(nf):
         contact.approach[i] = system_approach_velocity(y, system, i)
-    return update_contact_modes(t, y, system, modes, contact)
+    changed = update_contact_modes(t, y, system, modes, contact)
+    if system.stops.law.shape[0] == 0:
+        return changed
+    stops_changed = update_stop_modes(t, y, system.stops, modes, nf, system.limits[RECONTACT_TIME])
+    return changed or stops_changed

@@ -69,6 +69,7 @@ class StateLayout:
     n_feet: int
     base_coordinates: tuple[str, ...] = ()  # the system's own coordinates before the bodies', e.g. ("x_hip", "y_hip")
     base_rates: tuple[str, ...] = ()
+    n_stops: int = 0  # joint stops (contact.stop): with any, y ends with the work W_stop their damping dissipated
 
     def __post_init__(self) -> None:
         if len(self.rates) != len(self.coordinates) or len(self.base_rates) != len(self.base_coordinates):
@@ -136,16 +137,21 @@ class StateLayout:
         return self.work_normal + 1
 
     @property
+    def work_stop(self) -> int | None:
+        """Index in y of the work dissipated by the joint stops' damping (None without stops)."""
+        return self.work_friction + 1 if self.n_stops else None
+
+    @property
     def size(self) -> int:
         """Length of y."""
-        return self.work_friction + 1
+        return self.work_friction + (2 if self.n_stops else 1)
 
     def names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
-        """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``)."""
+        """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``[, ``W_stop``])."""
         coords = [*self.base_coordinates, *(f"{axis}_{body}" for body in body_names for axis in self.coordinates)]
         rates = [*self.base_rates, *(f"{axis}_{body}" for body in body_names for axis in self.rates)]
         bristles = [f"{state}_{foot}" for foot in foot_names for state in self.bristles]
-        return coords + rates + bristles + ["W_normal", "W_friction"]
+        return coords + rates + bristles + ["W_normal", "W_friction"] + (["W_stop"] if self.n_stops else [])
 
 
 @dataclass(frozen=True)
@@ -174,18 +180,22 @@ class Formulation:
     # unchanged, rates jumped consistently with the constraints (simulation.pushes); None: no pushes
     hip_impulse: Callable[..., np.ndarray] | None = None
 
-    def layout(self, n_bodies: int, n_feet: int) -> StateLayout:
-        """The state layout of a system of this formulation with ``n_bodies`` bodies and ``n_feet`` feet."""
+    def layout(self, n_bodies: int, n_feet: int, n_stops: int = 0) -> StateLayout:
+        """The state layout of a system of this formulation with ``n_bodies`` bodies, ``n_feet`` feet and
+        ``n_stops`` joint stops."""
         return StateLayout(
-            self.coordinates, self.rates, self.bristles, n_bodies, n_feet, self.base_coordinates, self.base_rates
-        )
+            self.coordinates, self.rates, self.bristles, n_bodies, n_feet, self.base_coordinates, self.base_rates,
+            n_stops,
+        )  # fmt: skip
 
     def layout_of(self, system: Any) -> StateLayout:
         """The state layout of ``system``."""
-        return self.layout(int(system.body_mass.shape[0]), int(system.foot_body.shape[0]))
+        return self.layout(
+            int(system.body_mass.shape[0]), int(system.foot_body.shape[0]), int(system.stops.law.shape[0])
+        )
 
     def state_names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
-        """Names of the ODE state entries of a walker with these bodies and feet, in order."""
+        """Names of the ODE state entries of a walker with these bodies and feet (and no joint stops), in order."""
         return self.layout(len(body_names), len(foot_names)).names(body_names, foot_names)
 
     def supports(self, capability: str) -> bool:

@@ -1,10 +1,18 @@
-"""Planar walkers in minimal (generalized) coordinates, compiled with numba: a star of bodies hinged at the hip.
+"""Planar walkers in minimal (generalized) coordinates, compiled with numba: any tree of bodies.
 
-Every body b hangs from one hip point H; its centre of mass sits at c_b from H and its feet's arc
-centres at f_i from H (body frame, any 2-D vectors: off-axis centres of mass and feet need nothing
-more). The generalized coordinates are the floating base and one absolute angle per body,
-q = (x_h, y_h, phi_0, ..., phi_{nb-1}), so the hip joints hold by construction: no constraint rows,
-no Baumgarte, no drift. With a_b = A(phi_b) c_b and e_b = d a_b / d phi_b = (-a_by, a_bx), the centre of
+The bodies form a tree (``body_parent``, parents before children): body b's frame has its origin o_b at its
+joint to its parent, o_b = o_p + A(phi_p) s_b (``body_joint``: s_b in the parent's frame), the root's origin
+being the floating base (the hip). The generalized coordinates are that base and every body's absolute
+angle, q = (x_o, y_o, phi_0, ..., phi_{nb-1}), so the joints hold by construction. A body's centre of mass
+moves as r_b = o_b + A(phi_b) c_b; its Jacobian has the identity on the base, perp(A(phi_b) c_b) in its own
+angle's column and perp(A(phi_p) s_j) in the column of each ancestor p (s_j: the joint of p's child on the
+path), and M(q) qdd = Q with M = sum_b m_b J_b^T J_b + J_b e_b e_b^T, Q the gravity, contact and joint-stop
+forces minus the velocity products (the omega^2 terms of each lever), solved by Cholesky (:func:`rhs`).
+
+A star (every body hinged at the root's origin, all s_b = 0, no joint stops: the compass, the four-legged
+walker) has the type ``topology`` STAR, which compiles the arrow-shaped solve below instead. Every body b hangs
+from the hip H, its centre of mass at c_b from H and its feet's arc centres at f_i (body frame, any 2-D
+vectors). With a_b = A(phi_b) c_b and e_b = d a_b / d phi_b = (-a_by, a_bx), the centre of
 mass moves as r_b = r_h + a_b, v_b = v_h + omega_b e_b, and M(q) qdd = Q with the arrow-shaped
 
     M = [ m I2        m_b e_b ... ]        Q_h = sum_b m_b (g + omega_b^2 a_b) + sum_feet F
@@ -14,9 +22,9 @@ mass moves as r_b = r_h + a_b, v_b = v_h + omega_b e_b, and M(q) qdd = Q with th
 contact point P). It is solved by the Schur complement on the diagonal leg block: a 2x2 system for
 the hip acceleration, then each leg's angular acceleration. The feet, contact laws, events and
 energy audit are those of every formulation (:mod:`biped_sim.contact.response`); the state is
-y = [q | qd | z (one bristle per foot) | W_normal | W_friction] (``FORMULATION.layout_of(system)``).
-:func:`star_system` and :func:`star_state` convert a planar absolute-coordinate star (the walker
-builders' output) into this formulation, so both describe the same walker by construction.
+y = [q | qd | z (one bristle per foot) | W_normal | W_friction (| W_stop)] (``FORMULATION.layout_of(system)``).
+:func:`tree_system` and :func:`~biped_sim.multibody.tree.tree_state` convert a planar absolute-coordinate tree
+(the walker builders' output) into this formulation, so both describe the same walker by construction.
 """
 
 from __future__ import annotations
@@ -41,21 +49,39 @@ from biped_sim.contact.response import (
     ground_forces,
     is_loaded,
 )
+from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
-
-HIP = 2  # hip coordinates (x_h, y_h) come first in q
+from biped_sim.multibody.tree import (
+    HIP,
+    N_TREE_COLUMNS,
+    STAR,
+    TREE,
+    Star,
+    Tree,
+    foot_motion,
+    hip_impulse,
+    no_violation,
+    pitch,
+    tree_energy,
+    tree_foot,
+    tree_origins,
+    tree_rhs,
+)
 
 
 class MinimalSystem(NamedTuple):
-    """Numeric description of a star-shaped planar walker in minimal coordinates, as the kernels read it."""
+    """Numeric description of a planar tree of bodies in minimal coordinates, as the kernels read it."""
 
     body_mass: np.ndarray  # (nb,) [kg]
     body_inertia: np.ndarray  # (nb,) about the centre of mass [kg m^2]
-    body_com: np.ndarray  # (nb, 2) centre of mass from the hip, body frame
+    body_com: np.ndarray  # (nb, 2) centre of mass from the body's origin (its joint to its parent), body frame
+    body_parent: np.ndarray  # (nb,) int64: the parent body (-1: the root, body 0); parents before children
+    body_joint: np.ndarray  # (nb, 2) the body's origin from its parent's, in the parent's frame (root: 0)
+    topology: Star | Tree  # STAR: every body hinged at the root's origin, no joint stops (the arrow solve); TREE
     foot_body: np.ndarray  # (nf,) int64
-    foot_center: np.ndarray  # (nf, 2) arc centre from the hip, body frame
+    foot_center: np.ndarray  # (nf, 2) arc centre from its body's origin, body frame
     foot_radius: np.ndarray  # (nf,)
     foot_partner: np.ndarray  # (nf,) int64: the foot this one must be ahead of to arm (-1: none)
     gravity: np.ndarray  # (2,) in the slope frame
@@ -64,6 +90,12 @@ class MinimalSystem(NamedTuple):
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
+    stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
+
+    @property
+    def star(self) -> bool:
+        """Whether the system is a star (``topology`` STAR): Python's view; compiled code dispatches on the type."""
+        return isinstance(self.topology, Star)
 
 
 # columns of the workspace table's body rows: Q_b, a_b = A(phi_b) c_b (centre of mass from the hip), cos and
@@ -78,12 +110,18 @@ N_COLUMNS = 7
 class Workspace(NamedTuple):
     """Preallocated buffers for one right-hand-side evaluation (one array: each array costs reference counts)."""
 
-    table: np.ndarray  # (nb + nf, N_COLUMNS): a row per body, then a row per foot; the hip's Q_h are local variables
+    # a star: (nb + nf, N_COLUMNS), a row per body, then a row per foot; the hip's Q_h are local variables.
+    # a tree: (nb + n, max(N_TREE_COLUMNS, n + 1)), a row per body, then [M | Q] (n = len(q))
+    table: np.ndarray
 
 
 def make_workspace(system: MinimalSystem) -> Workspace:
     """Allocate the buffers of ``system`` (once per simulation, not per step)."""
-    return Workspace(np.zeros((system.body_mass.shape[0] + system.foot_body.shape[0], N_COLUMNS)))
+    nb = system.body_mass.shape[0]
+    if system.star:
+        return Workspace(np.zeros((nb + system.foot_body.shape[0], N_COLUMNS)))
+    n = HIP + nb
+    return Workspace(np.zeros((nb + n, max(N_TREE_COLUMNS, n + 1))))
 
 
 # the contact response is written once for every formulation as ordinary kernels; inlined here, the call and the
@@ -111,12 +149,22 @@ def arc_centre(y: np.ndarray, c: float, s: float, fx: float, fy: float) -> tuple
 
 
 @kernel
-def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
-    """:func:`foot_arc` of foot i."""
+def _star_foot(
+    y: np.ndarray, system: MinimalSystem, i: int, topology: Star
+) -> tuple[float, float, float, float, float, float]:
     centre, b = system.foot_center, system.foot_body[i]
     c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
     n = HIP + system.body_mass.shape[0]
     return foot_arc(y, n, b, c, s, centre[i, 0], centre[i, 1], system.foot_radius[i], system.ground)
+
+
+_foot_of = by_type("foot_kinematics", "topology", {Star: _star_foot, Tree: tree_foot})
+
+
+@kernel
+def foot_kinematics(y: np.ndarray, system: MinimalSystem, i: int) -> tuple[float, float, float, float, float, float]:
+    """:func:`foot_arc` of foot i (about the hip for a star, about its body's origin for a tree)."""
+    return _foot_of(y, system, i, system.topology)
 
 
 @kernel
@@ -194,8 +242,10 @@ profile through :func:`~biped_sim.contact.response.arc_forces`, summed over each
 
 
 @kernel
-def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
-    """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free).
+def star_rhs(
+    t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray, topology: Star
+) -> None:
+    """Right-hand side of a star (the arrow-shaped solve of the module docstring).
 
     numba counts references to every array the kernel reads, at entry and exit, and cannot elide the
     counts of an array that is live across the contact forces' code: these were most of this kernel's
@@ -260,9 +310,19 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
         ydot[n + HIP + b] = (table[b, TORQUE] - m * (ax * acc_y - ay * acc_x)) / table[b, HIP_INERTIA]
 
 
+_rhs_of = by_type("rhs", "topology", {Star: star_rhs, Tree: tree_rhs})  # inlined: the star's is the whole rhs
+
+
 @kernel
-def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
-    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
+def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
+    """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free): a star's arrow solve
+    (:func:`star_rhs`) or a tree's (:func:`~biped_sim.multibody.tree.tree_rhs`), chosen by the topology's type."""
+    _rhs_of(t, y, system, modes, work, ydot, system.topology)
+
+
+@kernel
+def star_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, topology: Star) -> tuple[float, float, float]:
+    """:func:`mechanical_energy` of a star: each centre of mass from the hip."""
     nb = system.body_mass.shape[0]
     n = HIP + nb
     kinetic = 0.0
@@ -282,6 +342,15 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
         cx, cy = arc_centre(y, c, s, fx, fy)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
     return kinetic, potential, elastic
+
+
+_energy_of = by_type("mechanical_energy", "topology", {Star: star_energy, Tree: tree_energy})
+
+
+@kernel
+def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops."""
+    return _energy_of(y, system, modes, system.topology)
 
 
 @kernel
@@ -306,35 +375,25 @@ def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspa
 # ---------------------------------------------------------------- conversion and post-processing (Python side)
 
 
-def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
-    c, s = math.cos(phi), math.sin(phi)
-    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
-
-
-def star_hips(planar: PlanarSystem) -> np.ndarray:
-    """(nb, 2): each body's hip point in its frame, for a planar system whose joints all hinge body 0's hip
-    point to another body (joint j: bodies (0, b), one joint per body b > 0). ValueError for any other topology."""
-    nb = planar.body_mass.shape[0]
-    joints, points = planar.joint_bodies, planar.joint_points
-    star = sorted(joints[:, 1].tolist()) == list(range(1, nb)) and bool(np.all(joints[:, 0] == 0))
-    if not star or np.any(points[:, :2] != points[:1, :2]):
-        raise ValueError("minimal coordinates need a star of bodies hinged at one hip point of body 0")
-    hips = np.zeros((nb, 2))
-    hips[0] = points[0, :2] if nb > 1 else 0.0
-    for j, b in enumerate(joints[:, 1]):
-        hips[b] = points[j, 2:]
-    return hips
-
-
-def star_system(planar: PlanarSystem) -> MinimalSystem:
-    """The same walker as the planar star ``planar`` (:func:`star_hips`) in minimal coordinates."""
-    hips = star_hips(planar)
+def tree_system(planar: PlanarSystem) -> MinimalSystem:
+    """The same walker as the planar tree ``planar`` (:func:`tree_origins`) in minimal coordinates; a star
+    without joint stops is flagged for the arrow solve. The stops' indices move to the minimal state's angles."""
+    parent, origin, joint = tree_origins(planar)
+    n, nb = HIP + planar.body_mass.shape[0], planar.body_mass.shape[0]
+    stops = planar.stops
+    body = (
+        stops.index % (3 * nb) - 2
+    ) // 3  # planar: angle 3 b + 2, rate 3 nb + 3 b + 2; minimal: HIP + b, n + HIP + b
+    index = np.where(stops.index >= 0, HIP + body + np.array([0, 0, n, n]), -1)
     return MinimalSystem(
         body_mass=planar.body_mass.copy(),
         body_inertia=planar.body_inertia.copy(),
-        body_com=-hips,
+        body_com=-origin,
+        body_parent=parent,
+        body_joint=joint,
+        topology=STAR if bool(np.all(joint == 0.0)) and stops.law.shape[0] == 0 else TREE,
         foot_body=planar.foot_body.copy(),
-        foot_center=planar.foot_center - hips[planar.foot_body],
+        foot_center=planar.foot_center - origin[planar.foot_body],
         foot_radius=planar.foot_radius.copy(),
         foot_partner=planar.foot_partner.copy(),
         gravity=planar.gravity.copy(),
@@ -343,66 +402,23 @@ def star_system(planar: PlanarSystem) -> MinimalSystem:
         switches=planar.switches.copy(),
         limits=planar.limits.copy(),
         ground=planar.ground,
+        stops=stops._replace(index=index),
     )
-
-
-def star_state(y: np.ndarray, planar: PlanarSystem) -> np.ndarray:
-    """The minimal-coordinate state of the planar star state ``y``: the hip of body 0, the angles and rates,
-    the bristles and the dissipated work (the joints are taken as satisfied)."""
-    nb = planar.body_mass.shape[0]
-    hip_arm = _rotate(y[2], star_hips(planar)[0])
-    phi, omega = y[2 : 3 * nb : 3], y[3 * nb + 2 : 6 * nb : 3]
-    hip = y[0:2] + hip_arm
-    hip_velocity = y[3 * nb : 3 * nb + 2] + omega[0] * np.array([-hip_arm[1], hip_arm[0]])
-    return np.concatenate([hip, phi, hip_velocity, omega, y[6 * nb :]])
-
-
-def pitch(y: np.ndarray, system: MinimalSystem, body: int) -> tuple[float, float]:
-    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
-    n = HIP + system.body_mass.shape[0]
-    return float(y[HIP + body]), float(y[n + HIP + body])
 
 
 def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
     """(penetration, normal force, friction force, slip velocity) of a foot (the right-hand side's equations)."""
-    n, b = HIP + system.body_mass.shape[0], system.foot_body[foot]
-    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
-    cx, cy = arc_centre(y, c, s, system.foot_center[foot, 0], system.foot_center[foot, 1])
+    n = HIP + system.body_mass.shape[0]
+    ox, oy, vx, vy, om, cx, cy = foot_motion(y, system, foot)
+    if system.star:  # about the hip, as the star's right-hand side (foot_motion's origin is the hip plus zeros)
+        ox, oy, vx, vy = y[0], y[1], y[n], y[n + 1]
     arc = foot_kinematics(y, system, foot)
     _, _, _, _, _, _, f_n, f_t = arc_forces(
-        (y[0], y[1], y[n], y[n + 1], y[n + HIP + b]), cx, cy, system.foot_radius[foot], system.ground, arc,
+        (ox, oy, vx, vy, om), cx, cy, system.foot_radius[foot], system.ground, arc,
         system.switches, system.normal_params, system.friction_params, system.limits[IMPACT_FLOOR], modes, foot,
         y[2 * n + foot],
     )  # fmt: skip
     return arc[0], f_n, f_t, arc[2]
-
-
-def no_violation(y: np.ndarray, system: MinimalSystem) -> tuple[float, float]:
-    """||Phi||, ||Phidot||: structurally zero, the coordinates satisfy the hip joints exactly."""
-    return 0.0, 0.0
-
-
-def hip_impulse(y: np.ndarray, system: MinimalSystem, impulse: np.ndarray) -> np.ndarray:
-    """The state just after the impulse p = [px, py] [N s] (slope frame) on the hip: M(q) dqd = (px, py, 0, ...).
-
-    The hip is the floating base, so the generalized impulse is p on the base coordinates alone and there are
-    no constraints to project through; M is the arrow matrix of the module docstring.
-    """
-    nb = system.body_mass.shape[0]
-    n = HIP + nb
-    mass = np.zeros((n, n))
-    mass[0, 0] = mass[1, 1] = float(np.sum(system.body_mass))
-    for b in range(nb):
-        m = system.body_mass[b]
-        arm = _rotate(y[HIP + b], system.body_com[b])
-        mass[0, HIP + b] = mass[HIP + b, 0] = -m * arm[1]
-        mass[1, HIP + b] = mass[HIP + b, 1] = m * arm[0]
-        mass[HIP + b, HIP + b] = system.body_inertia[b] + m * float(arm @ arm)
-    generalized = np.zeros(n)
-    generalized[:HIP] = impulse[:HIP]
-    out = np.array(y, dtype=np.float64)
-    out[n : 2 * n] += np.linalg.solve(mass, generalized)
-    return out
 
 
 FORMULATION = Formulation(

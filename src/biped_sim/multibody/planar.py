@@ -10,12 +10,13 @@ ground, index -1, with s_b a fixed point). Forward dynamics solves the augmented
 by its Schur complement (M is diagonal): (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs,
 solved with an in-place Cholesky factorisation, then qdd = M^-1 (Q - Phi_q^T lambda).
 
-The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction]
+The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction (| W_stop)]
 (named offsets: ``FORMULATION.layout_of(system)``): the dissipated work is integrated with the
 motion, so that the energy balance E(t) - E(0) + W(t) = 0 is an independent check of the
 integration. The feet are arcs against the system's ``ground`` (the slope line, or a profile:
 :mod:`biped_sim.contact.ground`); what the ground does with them (normal force, dissipation, scuffing
-guard) is :mod:`biped_sim.contact.response`.
+guard) is :mod:`biped_sim.contact.response`; a joint stop's torque (:mod:`biped_sim.contact.stop`) acts on
+the angles of its joint's two bodies.
 
 Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
 with the Python-side measurements and the formulation record :data:`FORMULATION`.
@@ -40,6 +41,7 @@ from biped_sim.contact.response import (
     arc_energy,
     arc_forces,
 )
+from biped_sim.contact.stop import NO_STOPS, Stops, stop_torques, stops_energy
 from biped_sim.kernel import kernel
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
@@ -63,6 +65,7 @@ class PlanarSystem(NamedTuple):
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
+    stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
 
 
 class Workspace(NamedTuple):
@@ -242,6 +245,9 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
         w_friction += p_f
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
+    stops = system.stops
+    if stops.law.shape[0] > 0:
+        ydot[2 * n + nf + 2] = stop_torques(y, stops, modes, nf, force)
     constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
@@ -261,7 +267,7 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = _foot_arc(y, system, i)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic
+    return kinetic, potential, elastic + stops_energy(y, system.stops)
 
 
 @kernel

@@ -44,6 +44,13 @@ ENERGY_TERMS = (
 VIOLATION_UNITS = {"position": "m", "velocity": "m/s", "normalization": "1"}
 
 
+def _stops_dissipated(result: CompliantRunResult) -> dict[str, float]:
+    """{"stops": the joint stops' dissipated work [J]} for a walker with joint stops, else nothing."""
+    if result.model.system.stops.law.shape[0] == 0:
+        return {}
+    return {"stops": float(result.energy.dissipated_stops[-1] - result.energy.dissipated_stops[0])}
+
+
 @dataclass
 class CompliantRunResult(RunResult):
     """A compliant simulation and what it measured."""
@@ -120,6 +127,7 @@ def summarize(result: CompliantRunResult) -> dict[str, Any]:
         "energy_dissipated": {
             "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
             "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),
+            **_stops_dissipated(result),
         },
         **push_summary(config, [{"work": work} for work in result.run.pushes[:, 2]]),
         "energy_residual_max": float(np.max(np.abs(result.energy.residual))),

@@ -8,17 +8,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from biped_sim.config import STATE_KEYS, Config, derive
 from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError
+from biped_sim.multibody.dispatch import measures
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.strike_check import StrikeCheck, strike_check
-from biped_sim.simulate import simulate
+from biped_sim.simulate import CompliantRunResult, simulate
 from biped_sim.walkers.model import contact_stiffness
 
 CONVERGE_LEVELS = 5
@@ -60,8 +62,11 @@ def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float | No
 
 def strike_violations(
     config: Config, rigid: LimitCycle, mu_kinetic: float | None = None, mu_static: float | None = None
-) -> tuple[StrikeCheck, list[str]]:
-    """:func:`rigid_strike_check` and its violations at the study's friction (None: ``MU_KINETIC``, ``MU_STATIC``)."""
+) -> tuple[StrikeCheck | None, list[str]]:
+    """:func:`rigid_strike_check` and its violations at the study's friction (None: ``MU_KINETIC``, ``MU_STATIC``);
+    (None, []) for a walker other than the compass, which the check does not cover."""
+    if config.walker.kind != "compass":
+        return None, []
     check = rigid_strike_check(config, rigid, mu_kinetic)
     return check, check.violations(MU_STATIC if mu_static is None else mu_static)
 
@@ -77,6 +82,38 @@ def check_converge(config: Config, levels: int, mu_kinetic: float, mu_static: fl
             raise ArgumentError(name, f"must be a finite number >= 0, got {value}")
     if mu_static < mu_kinetic:
         raise ArgumentError("mu_static", f"must be >= the kinetic coefficient ({mu_kinetic})")
+
+
+def stops_level(config: Config, k: int) -> dict[str, Any]:
+    """A described walker's joint stops at level k of :func:`converge`: stiffness 10^k times its own, restitution
+    its own over sqrt(10)^k (as the feet's contact); nothing for a walker without a description."""
+    if config.walker.description is None:
+        return {}
+    description = config.walker.description.model_dump(mode="json")
+    for joint in description["joints"]:
+        for stop in joint["stops"]:
+            stop["stiffness"] *= 10.0**k
+            stop["restitution"] /= math.sqrt(10.0) ** k
+    return {"walker.description": description}
+
+
+def touchdown_states(result: CompliantRunResult) -> list[dict[str, float]]:
+    """Each heel strike's state by the walker's initial-state keys; 'stance' is the leg that just touched down
+    (the compass: :attr:`heel_strike_states`; a described walker: every body of both legs, hip down)."""
+    described = result.config.walker.description
+    if described is None:
+        return result.heel_strike_states
+    model, run = result.model, result.run
+    pitch = measures(model.system).pitch
+    legs = [[model.body_names.index(body) for body in leg] for leg in described.legs]
+    states = []
+    for k in range(len(run.strike_t)):
+        struck = int(model.system.foot_body[run.strike_foot[k]])
+        stance = next(i for i, leg in enumerate(legs) if struck in leg)
+        bodies = [b for leg in (legs[stance], legs[1 - stance]) for b in leg]
+        values = [v for b in bodies for v in pitch(run.strike_y[k], model.system, b)]
+        states.append(dict(zip(described.state_keys(), values, strict=True)))
+    return states
 
 
 def converge(
@@ -101,14 +138,17 @@ def converge(
     limit is the rigid strike only where :func:`rigid_strike_check` finds no violation (a leading foot that
     lands slipping backwards pushes the trailing one into the ground through friction when mu_k is large).
     ``mu_kinetic``, ``mu_static`` None: ``MU_KINETIC``, ``MU_STATIC``. Bad arguments are refused first
-    (:func:`check_converge`).
+    (:func:`check_converge`). A described walker's joint stops stiffen with the feet (:func:`stops_level`), and
+    its touchdown state is every body of both legs (:func:`touchdown_states`) against the rigid walker's.
     """
     mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
     mu_static = MU_STATIC if mu_static is None else mu_static
     check_converge(config, levels, mu_kinetic, mu_static)
     rigid = rigid_limit_cycle(config)
-    rigid_touchdown = np.array([rigid.touchdown[k] for k in STATE_KEYS])
-    base_stiffness = contact_stiffness(config)
+    keys = STATE_KEYS if config.walker.description is None else list(rigid.touchdown)
+    rigid_touchdown = np.array([rigid.touchdown[k] for k in keys])
+    described = config.walker.description
+    base_stiffness = contact_stiffness(config, None if described is None else max(f.radius for f in described.feet))
     rows = []
     for k in range(levels):
         stiffness = base_stiffness * 10.0**k
@@ -120,14 +160,14 @@ def converge(
             "friction.sigma0": sigma0, "friction.sigma1": BRISTLE_DAMPING, "simulation.initial": rigid.fixed_point,
             "simulation.max_steps": steps, "simulation.t_end": max(200.0, config.simulation.t_end),
         }  # fmt: skip
-        result = simulate(derive(config, level))
-        states = result.heel_strike_states
+        result = simulate(derive(config, {**level, **stops_level(config, k)}))
+        states = touchdown_states(result)
         if result.status != "walking" or len(states) < 3:
             rows.append(
                 ConvergenceRow(stiffness, restitution, sigma0, result.status, math.nan, math.nan, math.nan, math.nan)
             )
             continue
-        touchdowns = np.array([[s[key] for key in STATE_KEYS] for s in states])
+        touchdowns = np.array([[s[key] for key in keys] for s in states])
         rows.append(
             ConvergenceRow(
                 stiffness=stiffness,

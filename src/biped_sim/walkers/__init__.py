@@ -11,6 +11,7 @@ from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.describe import describe
+from biped_sim.walkers.described import build_described
 from biped_sim.walkers.four_legged import build_four_legged, build_four_legged_sagittal
 from biped_sim.walkers.model import BuiltModel, minimal_model
 from biped_sim.walkers.spatial_compass import build_spatial_compass
@@ -18,6 +19,7 @@ from biped_sim.walkers.spatial_compass import build_spatial_compass
 BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {  # planar; minimal converts them
     "compass": build_compass,
     "four_legged": build_four_legged_sagittal,  # the config allows it in minimal coordinates only
+    "description": build_described,
 }
 SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
     "compass": build_spatial_compass,
@@ -25,14 +27,14 @@ SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
 }
 
 
-def build_model(config: Config, initial: InitialState | None = None) -> BuiltModel:
+def build_model(config: Config, initial: InitialState | dict[str, float] | None = None) -> BuiltModel:
     """Build the compliant multibody model of ``config.walker`` in ``config.formulation.kind``.
 
     ``initial`` is the start (leg angles and rates); by default the config's own. A config that starts on
     the rigid limit cycle is resolved by :func:`biped_sim.simulate.prepare_model`, not here.
     """
     if initial is None:
-        if not isinstance(config.simulation.initial, InitialState):
+        if config.simulation.initial == "rigid_limit_cycle":
             raise ValueError("build_model: simulation.initial is rigid_limit_cycle; use simulate.prepare_model")
         initial = config.simulation.initial
     spatial = config.formulation.kind == "spatial"

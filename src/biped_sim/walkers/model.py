@@ -13,10 +13,11 @@ from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parame
 from biped_sim.contact.response import ARMED, IMPACT_SPEED, N_MODE_COLUMNS, TOUCHING
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import contact_buffers, formulation_of
-from biped_sim.multibody.events import system_update_modes
-from biped_sim.multibody.minimal import MinimalSystem, star_state, star_system
+from biped_sim.multibody.events import contact_count, system_update_modes
+from biped_sim.multibody.minimal import MinimalSystem, tree_system
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
+from biped_sim.multibody.tree import tree_state
 
 
 @dataclass
@@ -43,11 +44,12 @@ class BuiltModel:
 
     def state_names(self) -> list[str]:
         """Names of the ODE state entries, in order (the formulation's state layout)."""
-        return formulation_of(self.system).state_names(self.body_names, self.foot_names)
+        return formulation_of(self.system).layout_of(self.system).names(self.body_names, self.foot_names)
 
 
-def contact_stiffness(config: Config) -> float:
-    """K from ``contact.stiffness`` or from Hertz theory with the materials and the foot radius."""
+def contact_stiffness(config: Config, foot_radius: float | None = None) -> float:
+    """K from ``contact.stiffness`` or from Hertz theory with the materials and the foot radius (by default
+    ``walker.foot_radius``)."""
     if config.contact.stiffness is not None:
         return config.contact.stiffness
     materials = config.contact.materials or MaterialsConfig()
@@ -56,7 +58,7 @@ def contact_stiffness(config: Config) -> float:
         materials.foot.poisson_ratio,
         materials.ground.youngs_modulus,
         materials.ground.poisson_ratio,
-        config.walker.foot_radius,
+        config.walker.foot_radius if foot_radius is None else foot_radius,
     )
 
 
@@ -75,14 +77,15 @@ def contact_arrays(
     return normal, friction, switches
 
 
-def contact_limits(config: Config) -> np.ndarray:
+def contact_limits(config: Config, leg_length: float | None = None) -> np.ndarray:
     """The kernels' ``limits`` array: impact velocity floor, fall hip height [m], fall leg angle [rad], re-contact
-    time [s] (0 for ``contact.impact_memory: touchdown``: every touchdown a new impact)."""
+    time [s] (0 for ``contact.impact_memory: touchdown``: every touchdown a new impact). ``leg_length``: the
+    walker's, by default ``walker.leg_length``."""
     contact = config.contact
     return np.array(
         [
             contact.impact_velocity_floor,
-            config.simulation.fall_hip_height * config.walker.leg_length,
+            config.simulation.fall_hip_height * (config.walker.leg_length if leg_length is None else leg_length),
             config.simulation.fall_leg_angle,
             contact.recontact_time if contact.impact_memory == "impact" else 0.0,
         ]
@@ -92,16 +95,20 @@ def contact_limits(config: Config) -> np.ndarray:
 MAX_STATIC_SINKAGE = 0.05  # of the leg length: a contact softer than this does not carry the walker
 
 
-def static_contact_penetration(config: Config, load_mass: float, stiffness: float) -> float:
+def static_contact_penetration(
+    config: Config, load_mass: float, stiffness: float, leg_length: float | None = None
+) -> float:
     """Penetration [m] at which one foot carries ``load_mass`` on the slope: K delta^n = m g cos(gamma).
 
     ConfigError when the contact cannot carry the walker (the foot would sink over ``MAX_STATIC_SINKAGE``
-    of the leg length): the stiffness, the masses or gravity are not those of a walker.
+    of the leg length, by default ``walker.leg_length``): the stiffness, the masses or gravity are not those
+    of a walker.
     """
+    length = config.walker.leg_length if leg_length is None else leg_length
     exponent = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
     weight = load_mass * config.gravity * math.cos(config.ground.slope)
     penetration = (weight / stiffness) ** (1.0 / exponent)
-    if not penetration < MAX_STATIC_SINKAGE * config.walker.leg_length:
+    if not penetration < MAX_STATIC_SINKAGE * length:
         raise ConfigError(
             "contact.stiffness",
             f"too soft for the walker's weight ({weight:.3g} N with walker masses and gravity): the stance foot "
@@ -127,7 +134,7 @@ def standing_start(
     y0 = np.zeros(layout.size)
     y0[layout.positions] = np.ravel(q)
     y0[layout.velocities] = np.ravel(qd)
-    modes0 = np.zeros((layout.n_feet, N_MODE_COLUMNS))
+    modes0 = np.zeros((contact_count(system), N_MODE_COLUMNS))  # the feet, then the joint stops
     for foot in stance_feet:
         modes0[foot, ARMED] = 1.0
         modes0[foot, TOUCHING] = 1.0
@@ -137,6 +144,6 @@ def standing_start(
 
 
 def minimal_model(planar: BuiltModel) -> BuiltModel:
-    """The planar walker ``planar`` (a star of bodies hinged at the hip) in minimal coordinates: its system and
+    """The planar walker ``planar`` (a tree of bodies rooted at the hip) in minimal coordinates: its system and
     start converted, so that both formulations describe the same walker by construction."""
-    return replace(planar, system=star_system(planar.system), y0=star_state(planar.y0, planar.system))
+    return replace(planar, system=tree_system(planar.system), y0=tree_state(planar.y0, planar.system))

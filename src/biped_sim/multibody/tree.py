@@ -1,0 +1,293 @@
+"""The minimal-coordinate formulation's equations over a tree of bodies (:mod:`.minimal` has the system, the
+star's arrow solve and the formulation record; its module docstring the equations).
+
+The kinematics go down the tree, parents first (:func:`tree_kinematics`: each body's origin, its velocity
+and the velocity products of its acceleration, into the workspace table's body rows); a force on a body
+enters the generalized forces through the body's Jacobian, J^T F (:func:`add_generalized_force`); the mass
+matrix is sum_b m_b J_b^T J_b + J_b e_b e_b^T (:func:`tree_mass_matrix`), solved by Cholesky in
+:func:`tree_rhs`. ``system`` is a :class:`~biped_sim.multibody.minimal.MinimalSystem` (not imported here:
+that module imports this one). :func:`tree_origins` reads the tree of a planar absolute-coordinate system.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
+from biped_sim.contact.stop import stop_torques, stops_energy
+from biped_sim.kernel import kernel
+from biped_sim.multibody.linalg import cholesky_solve
+from biped_sim.multibody.planar import PlanarSystem
+
+HIP = 2  # the root's origin (x_o, y_o), the hip, comes first in q
+
+
+class Star(NamedTuple):
+    """A system's ``topology``: every body hinged at the root's origin, no joint stops (the arrow solve). No arrays:
+    its type alone selects the compiled code (as the ground's), so a star compiles none of the tree's."""
+
+
+class Tree(NamedTuple):
+    """A system's ``topology``: any other tree of bodies (:func:`tree_rhs`)."""
+
+
+STAR, TREE = Star(), Tree()
+
+# columns of a tree's body rows (tree_kinematics): cos and sin phi_b, the origin o_b, its velocity, the velocity
+# products of its acceleration (-sum omega_k^2 of each lever above it), A(phi_b) c_b and the joint A(phi_p) s_b
+T_COS, T_SIN, OX, OY, VX, VY, UX, UY, T_ARM_X, T_ARM_Y, JX, JY = range(12)
+N_TREE_COLUMNS = 12
+
+
+@kernel
+def body_origin(y: np.ndarray, system: tuple, b: int) -> tuple[float, float, float, float]:
+    """(o_x, o_y, v_x, v_y): body b's origin and its velocity, up the tree from b to the root."""
+    parent, joint, n = system.body_parent, system.body_joint, HIP + system.body_mass.shape[0]
+    ox = oy = vx = vy = 0.0
+    j = b
+    while parent[j] >= 0:
+        p = parent[j]
+        c, s = math.cos(y[HIP + p]), math.sin(y[HIP + p])
+        jx, jy = c * joint[j, 0] - s * joint[j, 1], s * joint[j, 0] + c * joint[j, 1]
+        om = y[n + HIP + p]
+        ox += jx
+        oy += jy
+        vx -= om * jy
+        vy += om * jx
+        j = p
+    return y[0] + ox, y[1] + oy, y[n] + vx, y[n + 1] + vy
+
+
+@kernel
+def foot_motion(y: np.ndarray, system: tuple, i: int) -> tuple[float, float, float, float, float, float, float]:
+    """(o_x, o_y, v_x, v_y, omega) of foot i's body (its origin and rates) and its arc's centre (C_x, C_y)."""
+    b = system.foot_body[i]
+    n = HIP + system.body_mass.shape[0]
+    c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+    ox, oy, vx, vy = body_origin(y, system, b)
+    fx, fy = system.foot_center[i, 0], system.foot_center[i, 1]
+    return ox, oy, vx, vy, y[n + HIP + b], ox + c * fx - s * fy, oy + s * fx + c * fy
+
+
+@kernel
+def tree_kinematics(y: np.ndarray, system: tuple, table: np.ndarray) -> None:
+    """Fill the tree's body rows of ``table`` (the T_* columns), parents before children."""
+    parent, joint, com = system.body_parent, system.body_joint, system.body_com
+    n = HIP + system.body_mass.shape[0]
+    for b in range(system.body_mass.shape[0]):
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        p = parent[b]
+        if p < 0:
+            jx = jy = ux = uy = 0.0
+            ox, oy, vx, vy = y[0], y[1], y[n], y[n + 1]
+        else:
+            cp, sp, om = table[p, T_COS], table[p, T_SIN], y[n + HIP + p]
+            jx, jy = cp * joint[b, 0] - sp * joint[b, 1], sp * joint[b, 0] + cp * joint[b, 1]
+            ox, oy = table[p, OX] + jx, table[p, OY] + jy
+            vx, vy = table[p, VX] - om * jy, table[p, VY] + om * jx
+            ux, uy = table[p, UX] - om * om * jx, table[p, UY] - om * om * jy
+        table[b, T_COS], table[b, T_SIN], table[b, OX], table[b, OY], table[b, VX], table[b, VY] = c, s, ox, oy, vx, vy
+        table[b, UX], table[b, UY], table[b, JX], table[b, JY] = ux, uy, jx, jy
+        table[b, T_ARM_X] = c * com[b, 0] - s * com[b, 1]
+        table[b, T_ARM_Y] = s * com[b, 0] + c * com[b, 1]
+
+
+@kernel
+def add_generalized_force(
+    table: np.ndarray, parent: np.ndarray, q: np.ndarray, b: int, fx: float, fy: float, torque: float
+) -> None:
+    """Add to ``q`` the generalized force of a force (fx, fy) on body b whose moment about b's origin is
+    ``torque``: J^T F, the force on the base, its moment in b's column, and in each ancestor p's the moment
+    of F about p's origin through the joint below p on the path (table's JX, JY)."""
+    q[0] += fx
+    q[1] += fy
+    q[HIP + b] += torque
+    j = b
+    while parent[j] >= 0:
+        q[HIP + parent[j]] += table[j, JX] * fy - table[j, JY] * fx
+        j = parent[j]
+
+
+@kernel
+def tree_mass_matrix(system: tuple, table: np.ndarray, mass: np.ndarray) -> None:
+    """M(q) = sum_b m_b J_b^T J_b + J_b e_b e_b^T into ``mass`` (n x n), from the body rows of ``table``."""
+    parent = system.body_parent
+    nb = system.body_mass.shape[0]
+    n = HIP + nb
+    for i in range(n):
+        for k in range(n):
+            mass[i, k] = 0.0
+    for b in range(nb):
+        m = system.body_mass[b]
+        mass[0, 0] += m
+        mass[1, 1] += m
+        mass[HIP + b, HIP + b] += system.body_inertia[b]
+        k, kx, ky = b, table[b, T_ARM_X], table[b, T_ARM_Y]  # the levers of b's Jacobian, from b up to the root
+        while k >= 0:
+            mass[0, HIP + k] -= m * ky
+            mass[1, HIP + k] += m * kx
+            l, lx, ly = b, table[b, T_ARM_X], table[b, T_ARM_Y]
+            while l >= 0:
+                mass[HIP + k, HIP + l] += m * (kx * lx + ky * ly)
+                lx, ly, l = table[l, JX], table[l, JY], parent[l]
+            kx, ky, k = table[k, JX], table[k, JY], parent[k]
+    for k in range(HIP, n):
+        mass[k, 0] = mass[0, k]
+        mass[k, 1] = mass[1, k]
+
+
+@kernel
+def _tree_foot_forces(y: np.ndarray, system: tuple, modes: np.ndarray, table: np.ndarray, q: np.ndarray,
+                      ydot: np.ndarray) -> tuple[float, float]:  # fmt: skip
+    """The feet's generalized forces into ``q`` and their bristle rates into ``ydot``; (W_normal, W_friction) rates."""
+    nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
+    n = HIP + nb
+    w_normal = w_friction = 0.0
+    for i in range(nf):
+        b = system.foot_body[i]
+        c, s, ox, oy = table[b, T_COS], table[b, T_SIN], table[b, OX], table[b, OY]
+        fx, fy, radius = system.foot_center[i, 0], system.foot_center[i, 1], system.foot_radius[i]
+        cx, cy = ox + c * fx - s * fy, oy + s * fx + c * fy
+        motion = (ox, oy, table[b, VX], table[b, VY], y[n + HIP + b])
+        arc = arc_contact(motion[0], motion[1], motion[2], motion[3], motion[4], cx, cy, radius, system.ground)
+        ydot[2 * n + i] = 0.0
+        if not is_loaded(modes, i, arc[0]):
+            continue
+        f_x, f_y, torque, z_dot, p_n, p_f, _, _ = arc_forces(
+            motion, cx, cy, radius, system.ground, arc, system.switches, system.normal_params, system.friction_params,
+            system.limits[IMPACT_FLOOR], modes, i, y[2 * n + i],
+        )  # fmt: skip
+        add_generalized_force(table, system.body_parent, q, b, f_x, f_y, torque)
+        ydot[2 * n + i] = z_dot
+        w_normal += p_n
+        w_friction += p_f
+    return w_normal, w_friction
+
+
+@kernel
+def tree_rhs(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, ydot: np.ndarray, topology: Tree
+) -> None:
+    """Right-hand side of a tree: M(q) qdd = Q by Cholesky, Q the gravity, the velocity products, the feet
+    and the joint stops (module docstring)."""
+    table = work.table
+    nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
+    n = HIP + nb
+    tree_kinematics(y, system, table)
+    mass, q = table[nb : nb + n, :n], table[nb : nb + n, n]
+    tree_mass_matrix(system, table, mass)
+    for k in range(n):
+        q[k] = 0.0
+        ydot[k] = y[n + k]
+    gx, gy = system.gravity[0], system.gravity[1]
+    for b in range(nb):  # gravity and velocity products at the centre of mass: m (g - u_b + omega_b^2 a_b)
+        m, om, ax, ay = system.body_mass[b], y[n + HIP + b], table[b, T_ARM_X], table[b, T_ARM_Y]
+        fx = m * (gx - table[b, UX] + om * om * ax)
+        fy = m * (gy - table[b, UY] + om * om * ay)
+        add_generalized_force(table, system.body_parent, q, b, fx, fy, ax * fy - ay * fx)
+    w_normal, w_friction = _tree_foot_forces(y, system, modes, table, q, ydot)
+    ydot[2 * n + nf] = w_normal
+    ydot[2 * n + nf + 1] = w_friction
+    if system.stops.law.shape[0] > 0:
+        ydot[2 * n + nf + 2] = stop_torques(y, system.stops, modes, nf, q)
+    cholesky_solve(mass, q, n)
+    for k in range(n):
+        ydot[n + k] = q[k]
+
+
+@kernel
+def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree) -> tuple[float, float, float]:
+    """:func:`mechanical_energy` of a tree: each body's centre of mass from its origin (:func:`body_origin`)."""
+    n = HIP + system.body_mass.shape[0]
+    kinetic = potential = 0.0
+    for b in range(system.body_mass.shape[0]):
+        m, om = system.body_mass[b], y[n + HIP + b]
+        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
+        ax = c * system.body_com[b, 0] - s * system.body_com[b, 1]
+        ay = s * system.body_com[b, 0] + c * system.body_com[b, 1]
+        ox, oy, vx, vy = body_origin(y, system, b)
+        vx, vy = vx - om * ay, vy + om * ax
+        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * system.body_inertia[b] * om * om
+        potential -= m * (system.gravity[0] * (ox + ax) + system.gravity[1] * (oy + ay))
+    elastic = 0.0
+    for i in range(system.foot_body.shape[0]):
+        _, _, _, _, _, cx, cy = foot_motion(y, system, i)
+        elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
+    return kinetic, potential, elastic + stops_energy(y, system.stops)
+
+
+def tree_origins(planar: PlanarSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(parent, origin, joint) of a planar system whose joints form a tree rooted at body 0 (joint j hinges
+    parent a = joint_bodies[j, 0] to child b = joint_bodies[j, 1], a < b, one joint per body b > 0): each body's
+    parent, its origin in its own centre-of-mass frame (its joint to its parent; the root's: the point of its
+    first joint, the hip) and that origin from the parent's, in the parent's frame. ValueError for any other
+    topology (a joint to the ground, a loop, a child before its parent)."""
+    nb = planar.body_mass.shape[0]
+    joints, points = planar.joint_bodies, planar.joint_points
+    if sorted(joints[:, 1].tolist()) != list(range(1, nb)) or np.any(joints[:, 0] >= joints[:, 1]):
+        raise ValueError("minimal coordinates need a tree of bodies rooted at body 0, parents before children")
+    parent = np.full(nb, -1, dtype=np.int64)
+    origin, joint = np.zeros((nb, 2)), np.zeros((nb, 2))
+    first = np.flatnonzero(joints[:, 0] == 0)
+    if first.size:
+        origin[0] = points[first[0], :2]
+    for j in np.argsort(joints[:, 1], kind="stable"):
+        a, b = joints[j]
+        parent[b], origin[b] = a, points[j, 2:]
+        joint[b] = points[j, :2] - origin[a]
+    return parent, origin, joint
+
+
+def hip_impulse(y: np.ndarray, system: tuple, impulse: np.ndarray) -> np.ndarray:
+    """The state just after the impulse p = [px, py] [N s] (slope frame) on the hip: M(q) dqd = (px, py, 0, ...).
+
+    The hip (the root's origin) is the floating base, so the generalized impulse is p on the base coordinates
+    alone and there are no constraints to project through; M is the right-hand side's (:func:`tree_mass_matrix`).
+    """
+    nb = system.body_mass.shape[0]
+    n = HIP + nb
+    table, mass = np.zeros((nb, N_TREE_COLUMNS)), np.zeros((n, n))
+    tree_kinematics(y, system, table)
+    tree_mass_matrix(system, table, mass)
+    generalized = np.zeros(n)
+    generalized[:HIP] = impulse[:HIP]
+    out = np.array(y, dtype=np.float64)
+    out[n : 2 * n] += np.linalg.solve(mass, generalized)
+    return out
+
+
+def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def tree_state(y: np.ndarray, planar: PlanarSystem) -> np.ndarray:
+    """The minimal-coordinate state of the planar tree state ``y``: the root's origin (the hip), the angles and
+    rates, the bristles and the dissipated work (the joints are taken as satisfied)."""
+    nb = planar.body_mass.shape[0]
+    hip_arm = _rotate(y[2], tree_origins(planar)[1][0])
+    phi, omega = y[2 : 3 * nb : 3], y[3 * nb + 2 : 6 * nb : 3]
+    hip = y[0:2] + hip_arm
+    hip_velocity = y[3 * nb : 3 * nb + 2] + omega[0] * np.array([-hip_arm[1], hip_arm[0]])
+    return np.concatenate([hip, phi, hip_velocity, omega, y[6 * nb :]])
+
+
+@kernel
+def tree_foot(y: np.ndarray, system: tuple, i: int, topology: Tree) -> tuple[float, float, float, float, float, float]:
+    """:func:`~biped_sim.multibody.minimal.foot_kinematics` of foot i of a tree (about its body's origin)."""
+    ox, oy, vx, vy, om, cx, cy = foot_motion(y, system, i)
+    return arc_contact(ox, oy, vx, vy, om, cx, cy, system.foot_radius[i], system.ground)
+
+
+def pitch(y: np.ndarray, system: tuple, body: int) -> tuple[float, float]:
+    """A body's angle phi from the slope normal [rad] and its rate [rad/s]."""
+    n = HIP + system.body_mass.shape[0]
+    return float(y[HIP + body]), float(y[n + HIP + body])
+
+
+def no_violation(y: np.ndarray, system: tuple) -> tuple[float, float]:
+    """||Phi||, ||Phidot||: structurally zero, the coordinates satisfy the hip joints exactly."""
+    return 0.0, 0.0

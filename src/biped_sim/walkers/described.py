@@ -1,0 +1,283 @@
+"""The compliant walker built from its description (``walker.kind: description``): any planar tree of bodies.
+
+The description (:class:`~biped_sim.config.description.WalkerDescription`) gives bodies in frames whose
+origin is the joint to the parent (the root's: the hip), joints placing a child's origin in its parent's
+frame, one-sided joint stops, feet on bodies and the legs. :func:`resolve_tree` folds the point masses into
+their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first;
+:func:`build_described` makes the planar absolute-coordinate system of it (each body at its centre of mass,
+a revolute joint per child, the hip joint first, each stop a compliant contact of
+:mod:`biped_sim.contact.stop` with the law, stiffness and restitution it names and ``contact.exponent``)
+and starts it rolling on its stance leg's foot (:func:`tree_start`). ``formulation.kind: minimal`` converts
+that system (:func:`~biped_sim.walkers.model.minimal_model`), so both formulations describe one walker.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.config import Config, InitialState
+from biped_sim.config.description import WalkerDescription
+from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
+from biped_sim.contact.profile import profile_ground
+from biped_sim.contact.stop import Stops, make_stops
+from biped_sim.errors import ConfigError
+from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.walkers.model import (
+    BuiltModel,
+    contact_arrays,
+    contact_limits,
+    contact_stiffness,
+    standing_start,
+    static_contact_penetration,
+)
+
+
+@dataclass(frozen=True)
+class Tree:
+    """A walker description resolved to arrays, bodies parents first (the root, body 0, first)."""
+
+    names: list[str]
+    parent: np.ndarray  # (nb,) int: -1 for the root
+    joint_at: np.ndarray  # (nb, 2) the body's origin in its parent's frame (root: 0)
+    mass: np.ndarray  # (nb,) with its point masses
+    com: np.ndarray  # (nb, 2) centre of mass in the body frame (from the origin)
+    inertia: np.ndarray  # (nb,) about the centre of mass
+    stops: list[tuple[int, int, str, float, str, float, float]]  # parent, child, side, angle, law, K, e
+    foot_body: np.ndarray  # (nf,) int
+    foot_centre: np.ndarray  # (nf, 2) in the body frame
+    foot_radius: np.ndarray  # (nf,)
+    foot_names: list[str]
+    legs: list[list[int]]  # body indices, hip down
+
+
+def _tree_order(description: WalkerDescription) -> list[str]:
+    """The body names, parents before children, otherwise in the description's order."""
+    parent = {j.child: j.parent for j in description.joints}
+    order = [description.bodies[0].name]
+    while len(order) < len(description.bodies):
+        order += [b.name for b in description.bodies if b.name not in order and parent.get(b.name) in order]
+    return order
+
+
+def _fold(description: WalkerDescription, name: str) -> tuple[float, np.ndarray, float]:
+    """(mass, centre of mass, inertia about it) of body ``name`` with its point masses."""
+    body = next(b for b in description.bodies if b.name == name)
+    parts = [(body.mass, np.array(body.com))] + [
+        (p.mass, np.array(p.at)) for p in description.point_masses if p.body == name
+    ]
+    mass = sum(m for m, _ in parts)
+    if mass <= 0.0:
+        raise ConfigError(f"walker.description.bodies.{name}.mass", "a body needs mass (its own or a point mass)")
+    com = sum(m * r for m, r in parts) / mass
+    inertia = body.inertia + sum(m * float((r[0] - com[0]) ** 2 + (r[1] - com[1]) ** 2) for m, r in parts)
+    return mass, com, inertia
+
+
+def resolve_tree(description: WalkerDescription) -> Tree:
+    """The description as arrays (:class:`Tree`)."""
+    names = _tree_order(description)
+    index = {name: k for k, name in enumerate(names)}
+    nb = len(names)
+    parent, joint_at = np.full(nb, -1, dtype=np.int64), np.zeros((nb, 2))
+    stops = []
+    for joint in description.joints:
+        c = index[joint.child]
+        parent[c], joint_at[c] = index[joint.parent], joint.at
+        stops += [(parent[c], c, s.side, s.angle, s.model, s.stiffness, s.restitution) for s in joint.stops]
+    folded = [_fold(description, name) for name in names]
+    feet = description.feet
+    return Tree(
+        names=names,
+        parent=parent,
+        joint_at=joint_at,
+        mass=np.array([f[0] for f in folded]),
+        com=np.array([f[1] for f in folded]),
+        inertia=np.array([f[2] for f in folded]),
+        stops=sorted(stops, key=lambda s: s[1]),
+        foot_body=np.array([index[f.body] for f in feet], dtype=np.int64),
+        foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
+        foot_radius=np.array([f.radius for f in feet]),
+        foot_names=[f.name for f in feet],
+        legs=[[index[b] for b in leg] for leg in description.legs],
+    )
+
+
+def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def standing_origins(tree: Tree) -> np.ndarray:
+    """(nb, 2): each body's origin from the hip with every angle zero (the legs along the slope normal)."""
+    origin = np.zeros((len(tree.names), 2))
+    for b in range(1, len(tree.names)):
+        origin[b] = origin[tree.parent[b]] + tree.joint_at[b]
+    return origin
+
+
+def leg_length(tree: Tree) -> float:
+    """Hip to the lowest foot bottom with every angle zero [m]: the walker's length scale."""
+    bottoms = standing_origins(tree)[tree.foot_body, 1] + tree.foot_centre[:, 1] - tree.foot_radius
+    return float(-np.min(bottoms))
+
+
+def _leg_feet(tree: Tree) -> list[list[int]]:
+    """The feet of each leg."""
+    return [[i for i, b in enumerate(tree.foot_body) if b in leg] for leg in tree.legs]
+
+
+def foot_partners(tree: Tree) -> np.ndarray:
+    """Each foot's partner (the first foot of the other leg; -1 without two legs or for a foot off the legs)."""
+    partner = np.full(len(tree.foot_names), -1, dtype=np.int64)
+    feet = _leg_feet(tree)
+    if len(tree.legs) == 2 and all(feet):
+        for leg, other in ((0, 1), (1, 0)):
+            partner[feet[leg]] = feet[other][0]
+    return partner
+
+
+def planar_stops(tree: Tree, config: Config, length: float) -> Stops:
+    """The joint stops as compliant contacts: indices of the bodies' angles and rates in the planar state, side,
+    limit and rate floor (``contact.impact_velocity_floor`` over the leg length), law and parameters
+    (``contact.exponent``; Kelvin-Voigt's damping from the child's inertia about the joint)."""
+    nb = len(tree.names)
+    rows = [[3 * c + 2, 3 * p + 2, 3 * nb + 3 * c + 2, 3 * nb + 3 * p + 2] for p, c, *_ in tree.stops]
+    floor = config.contact.impact_velocity_floor / length
+    limits = [[1.0 if side == "upper" else -1.0, angle, floor] for _, _, side, angle, *_ in tree.stops]
+    params = [
+        normal_parameters(
+            law, k, config.contact.exponent, e, None, tree.inertia[c] + tree.mass[c] * tree.com[c] @ tree.com[c]
+        )
+        for _, c, _, _, law, k, e in tree.stops
+    ]
+    laws = [NORMAL_LAWS[law].index for *_, law, _, _ in tree.stops]
+    return make_stops(np.array(rows), np.array(limits), np.array(laws), np.array(params))
+
+
+def planar_tree_system(tree: Tree, config: Config, stiffness: float, length: float) -> PlanarSystem:
+    """The planar absolute-coordinate system of ``tree``: bodies at their centres of mass, a revolute joint per
+    child (parent, child; the joints at the hip first, so that joint 0 is the hip), the feet, the stops."""
+    if np.any(tree.inertia <= 0.0):
+        name = tree.names[int(np.argmax(tree.inertia <= 0.0))]
+        raise ConfigError(
+            f"walker.description.bodies.{name}.inertia",
+            "absolute coordinates need each body's inertia about its centre of mass > 0 (use formulation.kind: "
+            "minimal, or give it its inertia)",
+        )
+    children = sorted(range(1, len(tree.names)), key=lambda b: (tree.parent[b] != 0 or np.any(tree.joint_at[b]), b))
+    joints = np.array([[tree.parent[b], b] for b in children], dtype=np.int64).reshape(-1, 2)
+    points = np.array(
+        [[*(tree.joint_at[b] - tree.com[tree.parent[b]]), *(0.0 - tree.com[b])] for b in children]
+    ).reshape(-1, 4)
+    g, gamma = config.gravity, config.ground.slope
+    normal, friction, switches = contact_arrays(config, stiffness, float(np.sum(tree.mass)))
+    return PlanarSystem(
+        body_mass=tree.mass.copy(),
+        body_inertia=tree.inertia.copy(),
+        joint_bodies=joints,
+        joint_points=points,
+        foot_body=tree.foot_body.copy(),
+        foot_center=tree.foot_centre - tree.com[tree.foot_body],
+        foot_radius=tree.foot_radius.copy(),
+        foot_partner=foot_partners(tree),
+        gravity=np.array([g * math.sin(gamma), -g * math.cos(gamma)]),
+        baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),
+        normal_params=normal,
+        friction_params=friction,
+        switches=switches,
+        limits=contact_limits(config, length),
+        ground=profile_ground(config.ground.profile, gamma),
+        stops=planar_stops(tree, config, length),
+    )
+
+
+def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: list[str]) -> np.ndarray:
+    """(nb, 2): each body's angle and rate from the initial-state ``keys`` (stance leg, then swing leg, hip down;
+    a body on no leg starts at 0, at rest)."""
+    values = initial.model_dump() if isinstance(initial, InitialState) else dict(initial)
+    state = np.zeros((len(tree.names), 2))
+    per_leg = 2 * len(tree.legs[0])
+    for leg, bodies in enumerate(tree.legs[:2]):
+        for k, b in enumerate(bodies):
+            offset = leg * per_leg + 2 * k
+            state[b] = values[keys[offset]], values[keys[offset + 1]]
+    return state
+
+
+def tree_start(
+    tree: Tree, angles: np.ndarray, static_penetration: float, config: Config, length: float
+) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """(coords (nb, 3), rates (nb, 3), hip speed, stance foot) of the walker rolling on its stance foot.
+
+    The stance foot (the first foot of the stance leg's last body) touches the ground at x = 0, sunk by
+    ``static_penetration``; its body rolls about the contact point, and each body's origin follows up the
+    stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError when
+    the walker would start fallen.
+    """
+    for b in range(len(tree.names)):
+        if abs(angles[b, 0]) >= config.simulation.fall_leg_angle:
+            raise ConfigError("simulation.initial", "a body beyond simulation.fall_leg_angle: the walker starts fallen")
+    foot = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
+    contact = np.array([0.0, -static_penetration])
+    nb = len(tree.names)
+    origin, velocity = np.zeros((nb, 2)), np.zeros((nb, 2))
+    b = int(tree.foot_body[foot])
+    origin[b] = contact + np.array([0.0, tree.foot_radius[foot]]) - _rotate(angles[b, 0], tree.foot_centre[foot])
+    velocity[b] = angles[b, 1] * _perp(origin[b] - contact)
+    chain = [b]
+    while tree.parent[chain[-1]] >= 0:  # up the stance leg: the child's origin is the parent's joint point
+        child, p = chain[-1], int(tree.parent[chain[-1]])
+        origin[p] = origin[child] - _rotate(angles[p, 0], tree.joint_at[child])
+        velocity[p] = velocity[child] - angles[p, 1] * _perp(origin[child] - origin[p])
+        chain.append(p)
+    for c in range(nb):  # down the other bodies (parents first)
+        if c not in chain:
+            p = int(tree.parent[c])
+            arm = _rotate(angles[p, 0], tree.joint_at[c])
+            origin[c], velocity[c] = origin[p] + arm, velocity[p] + angles[p, 1] * _perp(arm)
+    if origin[0, 1] <= config.simulation.fall_hip_height * length:
+        raise ConfigError("simulation.initial", "the hip starts below simulation.fall_hip_height")
+    arms = np.array([_rotate(angles[c, 0], tree.com[c]) for c in range(nb)])
+    coms = origin + arms
+    com_velocity = velocity + angles[:, 1:2] * np.array([_perp(a) for a in arms])
+    coords = np.column_stack([coms, angles[:, 0]])
+    rates = np.column_stack([com_velocity, angles[:, 1]])
+    return coords, rates, float(np.hypot(*velocity[0])), foot
+
+
+def _perp(v: np.ndarray) -> np.ndarray:
+    """The vector v turned by +90 degrees: omega x v is omega perp(v)."""
+    return np.array([-v[1], v[0]])
+
+
+def build_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
+    """Bodies, joints, stops and feet of ``walker.description``, started rolling on its stance foot."""
+    description = config.walker.description
+    if description is None:
+        raise ConfigError("walker.description", "walker.kind: description needs walker.description")
+    tree = resolve_tree(description)
+    length = leg_length(tree)
+    radius = float(np.max(tree.foot_radius))
+    stiffness = contact_stiffness(config, radius)
+    total_mass = float(np.sum(tree.mass))
+    system = planar_tree_system(tree, config, stiffness, length)
+    static_penetration = static_contact_penetration(config, total_mass, stiffness, length)
+    angles = body_angles(tree, initial, description.state_keys())
+    coords, rates, hip_speed, foot = tree_start(tree, angles, static_penetration, config, length)
+    impact = max(hip_speed, config.contact.impact_velocity_floor)
+    y0, modes0 = standing_start(system, coords, rates, (foot,), impact)
+    return BuiltModel(
+        system=system,
+        y0=y0,
+        modes0=modes0,
+        body_names=tree.names,
+        foot_names=tree.foot_names,
+        leg_length=length,
+        total_mass=total_mass,
+        stiffness=stiffness,
+        meta={"static_penetration": static_penetration},
+    )

@@ -1,0 +1,265 @@
+"""Walkers built from their description (walkers.described), joint stops as compliant contacts (contact.stop),
+and the minimal formulation over a tree of bodies (multibody.minimal's tree solve)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from biped_sim.config import Config, IntegratorConfig, config_from_dict, derive, load_config
+from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
+from biped_sim.contact.stop import make_stops
+from biped_sim.integrate.driver import integrate_model
+from biped_sim.multibody.dispatch import formulation_of, make_workspace, measures, system_rhs
+from biped_sim.multibody.minimal import HIP, tree_system
+from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.multibody.tree import STAR, TREE, tree_state
+from biped_sim.simulate import simulate
+from biped_sim.studies.convergence import converge, stops_level, touchdown_states
+from biped_sim.testing import default_walker, pendulum
+from biped_sim.walkers import build_model
+from biped_sim.walkers.compass import build_compass
+
+from .conftest import ROOT
+
+KNEED = ROOT / "configs" / "kneed_walker_compliant.yaml"
+
+
+def _kneed(*overrides: str, foot_centre: tuple[float, float] | None = None) -> Config:
+    """The bundled compliant kneed walker, with ``--set`` overrides and, if given, both feet's arc centre."""
+    config = load_config(KNEED, list(overrides))
+    if foot_centre is None:
+        return config
+    data = config.model_dump(mode="json")
+    for foot in data["walker"]["description"]["feet"]:
+        foot["centre"] = list(foot_centre)
+    return config_from_dict(data)
+
+
+# ---------------------------------------------------------------- a joint stop: the drop test
+
+
+def stop_pendulum(law: str, restitution: float, stiffness: float = 1.0e3) -> PlanarSystem:
+    """The uniform 1 m rod (1 kg) hinged to the ground at its top end of :func:`biped_sim.testing.pendulum`,
+    with a lower stop at 0 rad against the ground (it may not swing past the slope normal): no feet."""
+    params = normal_parameters(law, stiffness, 1.5, restitution, None, 1.0 / 3.0)
+    stops = make_stops(
+        np.array([[2, -1, 5, -1]]), np.array([[-1.0, 0.0, 1e-3]]), np.array([NORMAL_LAWS[law].index]), params
+    )
+    return pendulum()[0]._replace(stops=stops)
+
+
+def _drop(law: str, restitution: float) -> tuple[float, float, float]:
+    """(effective restitution, largest |E + W_stop - E(0)| over the run, W_stop) of the rod released at 0.4 rad."""
+    system = stop_pendulum(law, restitution)
+    phi0 = 0.4
+    y0 = np.array([0.5 * math.sin(phi0), -0.5 * math.cos(phi0), phi0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert formulation_of(system).layout_of(system).size == y0.size
+    integrator = IntegratorConfig(method="dopri5", rtol=1e-11, atol=1e-13, max_step=1e-3)
+    run = integrate_model(system, y0, np.zeros((1, 4)), integrator, t_end=0.6, sample_rate=2000.0)
+    log = run.contact_log
+    onsets, releases = log[log[:, 2] > 0], log[log[:, 2] < 0]
+    assert len(onsets) >= 1 and len(releases) >= 1 and np.all(log[:, 1] == 0)  # contact 0: the stop (no feet)
+    energy = measures(system).mechanical_energy
+    total = np.array([sum(energy(run.y[k], system, run.modes[k])) + run.y[k, -1] for k in range(len(run.t))])
+    return -releases[0, 3] / onsets[0, 3], float(np.max(np.abs(total - total[0]))), float(run.y[-1, -1])
+
+
+@pytest.mark.parametrize(("law", "restitution", "tolerance"), [("flores", 0.5, 0.05), ("hunt_crossley", 0.9, 0.02)])
+def test_a_pendulum_falling_onto_a_stop_rebounds_with_its_restitution_and_closes_its_energy(
+    law: str, restitution: float, tolerance: float
+) -> None:
+    effective, residual, dissipated = _drop(law, restitution)
+    assert effective == pytest.approx(restitution, abs=tolerance)
+    # the rod falls from 0.4 rad: m g (l/2)(1 - cos 0.4) = 0.388 J; the impact loses (1 - e^2) of it
+    drop_energy = 9.81 * 0.5 * (1.0 - math.cos(0.4))
+    assert dissipated == pytest.approx((1.0 - effective**2) * drop_energy, rel=0.02)
+    assert residual < 1e-8 * drop_energy
+
+
+# ---------------------------------------------------------------- the tree formulation
+
+
+def _random_tree_states(planar: PlanarSystem, count: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Planar states that satisfy the joints (angles, rates and the root's motion drawn at random) with a
+    random contact mode table; built through the minimal coordinates, so both describe one state."""
+    rng = np.random.default_rng(seed)
+    minimal = tree_system(planar)
+    layout = formulation_of(planar).layout_of(planar)
+    nb, nf, ns = planar.body_mass.shape[0], planar.foot_body.shape[0], planar.stops.law.shape[0]
+    states = []
+    for _ in range(count):
+        phi, omega = rng.uniform(-0.3, 0.3, nb), rng.normal(0.0, 2.0, nb)
+        hip, hip_velocity = np.array([0.0, rng.uniform(0.95, 1.01)]), rng.normal(0.0, 1.0, 2)
+        y = np.zeros(layout.size)
+        for b in range(nb):  # the centre of mass of b from the root's origin down the tree (tree_system's origins)
+            origin, velocity, j = hip.copy(), hip_velocity.copy(), b
+            chain = []
+            while minimal.body_parent[j] >= 0:
+                chain.append(j)
+                j = minimal.body_parent[j]
+            for k in reversed(chain):
+                p = minimal.body_parent[k]
+                arm = _rotate(phi[p], minimal.body_joint[k])
+                origin, velocity = origin + arm, velocity + omega[p] * np.array([-arm[1], arm[0]])
+            arm = _rotate(phi[b], minimal.body_com[b])
+            y[layout.position(b)] = [*(origin + arm), phi[b]]
+            y[layout.velocity(b)] = [*(velocity + omega[b] * np.array([-arm[1], arm[0]])), omega[b]]
+        y[layout.first_bristle : layout.first_bristle + nf] = rng.normal(0.0, 1e-6, nf)
+        modes = np.column_stack([np.ones(nf + ns), rng.integers(0, 2, nf + ns), rng.uniform(0.01, 1.0, nf + ns)])
+        states.append((y, np.column_stack([modes, np.zeros(nf + ns)])))
+    return states
+
+
+def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def test_the_tree_formulation_agrees_with_absolute_coordinates_on_the_kneed_walker() -> None:
+    """On random states, the kneed walker's angular accelerations, stop work rates and feet agree in both."""
+    planar = build_model(_kneed()).system
+    minimal = tree_system(planar)
+    assert not minimal.star and minimal.stops.law.shape[0] == 2
+    nb = planar.body_mass.shape[0]
+    n = HIP + nb
+    pressed = 0
+    for y_planar, modes in _random_tree_states(planar, count=30, seed=3):
+        y = tree_state(y_planar, planar)
+        fast, full = np.zeros_like(y), np.zeros_like(y_planar)
+        system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
+        system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
+        alpha = full[3 * nb + 2 : 6 * nb : 3]
+        scale = np.max(np.abs(alpha))
+        np.testing.assert_allclose(fast[n + HIP : 2 * n], alpha, rtol=1e-9, atol=1e-9 * scale)
+        np.testing.assert_allclose(fast[2 * n :], full[6 * nb :], rtol=1e-9, atol=1e-12)
+        e_planar, e_minimal = (
+            sum(measures(s).mechanical_energy(v, s, modes)) for s, v in ((planar, y_planar), (minimal, y))
+        )
+        assert e_minimal == pytest.approx(e_planar, rel=1e-12, abs=1e-12)
+        pressed += int(full[-1] != 0.0)
+    assert pressed > 3  # the stops took part
+
+
+def test_the_tree_solve_equals_the_star_solve_on_the_compass_to_rounding() -> None:
+    """The compass, a star, run by the arrow solve and by the tree's mass matrix and Cholesky: the same gait to
+    rounding (not bit for bit: the two solves order their arithmetic differently)."""
+    model = build_model(default_walker("formulation.kind=minimal", t_end=1.0))
+    integrator = IntegratorConfig(method="dopri5", rtol=1e-10, atol=1e-12)
+    runs = [
+        integrate_model(
+            model.system._replace(topology=STAR if star else TREE), model.y0, model.modes0, integrator, 1.0, 200.0
+        )
+        for star in (True, False)
+    ]
+    assert len(runs[0].strike_t) >= 2 and np.array_equal(runs[0].strike_foot, runs[1].strike_foot)
+    np.testing.assert_allclose(runs[1].strike_t, runs[0].strike_t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(runs[1].y, runs[0].y, rtol=0, atol=1e-7)
+    assert not np.array_equal(runs[1].y, runs[0].y)  # the tree's solve did run
+
+
+# ---------------------------------------------------------------- the builder
+
+
+def compass_description(config: Config) -> dict:
+    """The compass walker of ``config`` written as a description: each leg a body with half the hip mass."""
+    w = config.walker
+    leg = {"mass": w.leg_mass, "inertia": w.leg_inertia, "com": [w.leg_com_offset, -w.leg_com_from_hip]}
+    foot = {"centre": [w.foot_offset, -(w.leg_length - w.foot_radius)], "radius": w.foot_radius}
+    return {
+        "bodies": [{"name": "leg0", **leg}, {"name": "leg1", **leg}],
+        "point_masses": [{"name": f"hip{b}", "body": f"leg{b}", "mass": 0.5 * w.hip_mass} for b in (0, 1)],
+        "joints": [{"name": "hip", "parent": "leg0", "child": "leg1"}],
+        "feet": [{"name": "foot0", "body": "leg0", **foot}, {"name": "foot1", "body": "leg1", **foot}],
+        "legs": [["leg0"], ["leg1"]],
+    }
+
+
+@pytest.mark.parametrize("offsets", [(), ("walker.foot_offset=0.01", "walker.leg_com_offset=0.004")])
+def test_the_compass_described_builds_the_compass_system(offsets: tuple[str, ...]) -> None:
+    config = default_walker(*offsets)
+    described = config_from_dict(
+        {
+            **config.model_dump(mode="json"),
+            "walker": {"kind": "description", "description": compass_description(config)},
+        }
+    )
+    compass, built = build_compass(config, config.simulation.initial), build_model(described)
+    for name in PlanarSystem._fields:
+        if name not in ("ground", "stops"):
+            assert np.array_equal(getattr(built.system, name), getattr(compass.system, name)), name
+    np.testing.assert_allclose(built.y0, compass.y0, rtol=0, atol=1e-15)
+    assert np.array_equal(built.modes0, compass.modes0)
+
+
+def test_without_a_foot_offset_the_stance_knee_of_chens_walker_flexes_and_it_falls() -> None:
+    """The reason for the bundled config's foot offset: with its feet under the shanks' axes the stance knee
+    leaves its stop within milliseconds of the start (contact 2: knee_1's stop) and the walker falls."""
+    result = simulate(_kneed("simulation.t_end=1", foot_centre=(0.0, -0.48)))
+    assert result.status == "fell"
+    log = result.run.contact_log
+    stance_knee = log[log[:, 1] == 2]
+    assert stance_knee[0, 2] == 1.0 and stance_knee[1, 2] == -1.0 and stance_knee[1, 0] < 0.01
+
+
+def test_the_compliant_kneed_walker_closes_its_energy_balance_with_the_knee_stops() -> None:
+    result = simulate(_kneed("simulation.t_end=1.5"))
+    assert result.status == "walking" and result.summary["n_steps"] >= 2
+    audit = result.energy
+    stops = audit.dissipated_stops - audit.dissipated_stops[0]
+    scale = float(np.max(np.abs(audit.kinetic)))
+    assert stops[-1] > 0.05 * scale  # the knee strikes and the stance knee's stop lose energy
+    assert np.max(np.abs(audit.residual)) < 1e-7 * scale
+    assert np.max(np.abs(audit.residual - stops)) > 1e5 * np.max(np.abs(audit.residual))  # without W_stop: open
+    assert result.summary["energy_dissipated"]["stops"] == pytest.approx(float(stops[-1]))
+
+
+@pytest.mark.slow
+def test_planar_and_minimal_coordinates_walk_the_same_kneed_gait() -> None:
+    tight = ("integrator.rtol=1e-10", "integrator.atol=1e-12")
+    planar, minimal = (simulate(_kneed(f"formulation.kind={kind}", *tight)) for kind in ("planar", "minimal"))
+    assert planar.status == minimal.status == "walking" and planar.summary["n_steps"] >= 6
+    assert planar.summary["step_feet"] == minimal.summary["step_feet"]
+    np.testing.assert_allclose(minimal.summary["step_times"], planar.summary["step_times"], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(minimal.summary["step_lengths"], planar.summary["step_lengths"], rtol=0, atol=1e-7)
+
+
+@pytest.mark.slow
+def test_a_push_and_a_step_down_on_the_compliant_kneed_walker_in_both_formulations() -> None:
+    works = []
+    for kind in ("planar", "minimal"):
+        config = _kneed(f"formulation.kind={kind}", "simulation.t_end=2.0")
+        pushed = simulate(derive(config, {"simulation.pushes": [{"time": 1.0, "impulse": [0.05, 0.0]}]}))
+        assert pushed.status == "walking"
+        works.append(pushed.summary["pushes"][0]["work"])
+        step_down = {"kind": "steps", "steps": [{"at": 0.3, "height": -0.005}]}
+        stepped = simulate(derive(config, {"ground.profile": step_down}))
+        assert stepped.status == "walking" and stepped.summary["n_steps"] >= 2
+    assert works[0] > 0 and works[1] == pytest.approx(works[0], rel=1e-8)  # the same push, the same work
+
+
+@pytest.mark.slow
+def test_converge_the_compliant_kneed_gait_settles_as_feet_and_knee_stops_stiffen() -> None:
+    """``converge`` on the kneed walker: the compliant gait converges as the feet and the knee stops stiffen
+    (each level moves the period several times less than the one before) and, one step from the rigid fixed
+    point, lands where the rigid walker lands; its own cycle keeps a period about 9 ms shorter than the rigid
+    one, whose heel strike holds the trailing knee locked through the impulse, while a one-sided compliant stop
+    lets it flex (the trailing knee's stop releases at the strike with a flexion rate of about 2 rad/s)."""
+    rigid, rows = converge(_kneed(), levels=3, steps=8)
+    assert all(row.status == "walking" for row in rows)
+    periods = [row.period_difference for row in rows]
+    assert abs(periods[2] - periods[1]) < 0.25 * abs(periods[1] - periods[0])
+    assert -0.012 < periods[-1] < -0.006  # the trailing knee's strike: see the docstring
+    level = {**stops_level(_kneed(), 2), "contact.stiffness": 1e8, "contact.restitution": 0.03,
+             "friction.model": "lugre", "friction.mu_kinetic": 1.0, "friction.mu_static": 1.2,
+             "friction.sigma0": 1e6, "friction.sigma1": 20.0,
+             "simulation.initial": rigid.fixed_point, "simulation.max_steps": 2, "simulation.t_end": 5.0}  # fmt: skip
+    result = simulate(derive(_kneed(), level))
+    first = touchdown_states(result)[0]
+    for key, value in rigid.touchdown.items():
+        assert first[key] == pytest.approx(value, abs=2e-3 * max(1.0, abs(value))), key
+    log = result.run.contact_log
+    trailing_knee = log[(log[:, 0] > result.run.strike_t[0]) & (log[:, 1] >= 2) & (log[:, 2] < 0)][0]
+    assert trailing_knee[0] - result.run.strike_t[0] < 1e-3 and trailing_knee[3] < -1.0
