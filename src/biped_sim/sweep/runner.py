@@ -375,8 +375,7 @@ class _Ledger:
             if self.rows[run.index]["status"] == "pending":
                 summary = finished_summary(self.sweep_dir / "runs" / run.name, run.config_hash)
                 if summary is not None:
-                    self.rows[run.index] = _row(run, metrics_from_summary(summary))
-                    self.progress.add(self.rows[run.index]["status"])
+                    self.record(run, metrics_from_summary(summary), announce=False)
         write_table(self.rows, self.sweep_dir)
 
 
