@@ -188,6 +188,19 @@ def test_sobol_indices_of_a_posterior_are_refused_naming_from_fit(tmp_path: Path
     assert not (tmp_path / "u").exists()
 
 
+def test_the_polynomial_chaos_surrogate_is_exact_on_a_polynomial() -> None:
+    from biped_sim.studies.uncertainty.distributions import Distribution
+    from biped_sim.studies.uncertainty.surrogate import surrogate_indices
+
+    # f = x1 + x2 x3 on [-1, 1]^3: V = 1/3 + 1/9, so S1 = (3/4, 0, 0) and ST = (3/4, 1/4, 1/4), degree 2 exact
+    dists = [Distribution(f"x{i}", "uniform", (-1.0, 1.0)) for i in range(3)]
+    x = -1.0 + 2.0 * unit_design(64, 3, "sobol", 0)
+    found = surrogate_indices("f", dists, x, x[:, 0] + x[:, 1] * x[:, 2], order=2)
+    assert found.s1 == pytest.approx([0.75, 0.0, 0.0], abs=1e-10) and found.st == pytest.approx([0.75, 0.25, 0.25])
+    assert found.holdout_error is not None and found.holdout_error < 1e-10
+
+
+@pytest.mark.slow  # a degree-8 expansion in chaospy: about 50 s
 def test_the_polynomial_chaos_surrogate_recovers_ishigami_s_indices() -> None:
     from biped_sim.studies.uncertainty.checks import ISHIGAMI, ishigami
     from biped_sim.studies.uncertainty.distributions import Distribution
