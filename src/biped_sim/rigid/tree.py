@@ -28,9 +28,9 @@ from biped_sim.rigid.tree_kernels import (
     layout_size,
     phase_offset,
     point,
-    point_velocity,
     row_offset,
     skip_phase,
+    tree_energy,
     tree_guard,
     tree_impact,
     tree_push,
@@ -253,16 +253,7 @@ class TreeWalker(RigidWalker):
         return origin + fx, level + fy - float(self.params[T_RSW])
 
     def energy(self, x: np.ndarray) -> tuple[float, float]:
-        n = self.n_q
-        q, qd = np.asarray(x[:n], dtype=float), np.asarray(x[n:], dtype=float)
-        gravity = self.gravity * np.array([math.sin(self.slope), -math.cos(self.slope)])
-        kinetic = potential = 0.0
-        for i in range(self.n_points):
-            o = self._row(0, i)
-            mass, inertia, own = self.params[o], self.params[o + 1], int(self.params[o + 2])
-            v = np.array(point_velocity(self.params, 0, i, q, qd))
-            kinetic += 0.5 * mass * v @ v + 0.5 * inertia * qd[own] ** 2
-            potential -= mass * gravity @ np.array(point(self.params, i, q))
+        kinetic, potential = tree_energy(self.params, np.asarray(x, dtype=float))
         return float(kinetic), float(potential)
 
     def to_section(self, x_plus: np.ndarray) -> np.ndarray:

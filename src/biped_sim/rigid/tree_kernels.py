@@ -233,6 +233,23 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
 
 
 @kernel
+def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+    """(kinetic, potential) energy of the rows of table 0 (potential zero with every point on the ground line)."""
+    n = _n(p)
+    q, qd = x[:n], x[n:]
+    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
+    kinetic = potential = 0.0
+    for i in range(int(p[T_NPTS])):
+        o = row_offset(p, 0, i)
+        mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
+        vx, vy = point_velocity(p, 0, i, q, qd)
+        px, py = point(p, i, q)
+        kinetic += 0.5 * mass * (vx * vx + vy * vy) + 0.5 * inertia * qd[own] * qd[own]
+        potential -= mass * (gx * px + gy * py)
+    return kinetic, potential
+
+
+@kernel
 def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> None:
     """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
     (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being
