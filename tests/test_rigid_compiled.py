@@ -11,7 +11,8 @@ import pytest
 from biped_sim import load_config
 from biped_sim.config import Config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, compiled_step, walk_starts
+from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, walk_starts
+from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import map_jacobian, rigid_limit_cycle, rigid_map
 from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.stepping import rigid_step
@@ -143,7 +144,7 @@ def test_compass_with_offsets_conserves_energy_between_strikes() -> None:
     cw = compile_walker(walker)
     assert cw.params[3] == 0.02
     x0 = np.array(CASES["compass"][2])
-    step = compiled_step(walker, x0, cw)
+    step = compiled_step(walker, x0, cw=cw)
     plain = compiled_step(CompassChain(_config("compass")), x0)
     assert step.status == "strike" and abs(step.period - plain.period) > 1e-3  # the offsets change the gait
     assert _offset_compass_energy(walker, step.x_minus) == pytest.approx(_offset_compass_energy(walker, x0), abs=1e-8)

@@ -2,7 +2,7 @@
 
 * Per step: the median wall time of one step from each rigid walker's fixed point, scipy's ``solve_ivp``
   (the reference, :func:`~biped_sim.rigid.stepping.rigid_step`) against the compiled map
-  (:func:`~biped_sim.rigid.compiled.compiled_step`, its buffers reused), after a warm-up.
+  (:func:`~biped_sim.rigid.compiled.rigid_step`, its buffers reused), after a warm-up.
 * Basins (full benchmark only): the wall time of ``biped-sim basin``'s computation, the worker pool's start
   included, with 2 workers: the simplest walker's 41 x 41 grid at 30 steps (target < 60 s) and the default
   compliant walker's 21 x 21 grid at 10 steps (target < 10 min).
@@ -19,7 +19,8 @@ from typing import Any
 
 from biped_sim.config import load_config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import compile_walker, compiled_step
+from biped_sim.rigid.compiled import compile_walker
+from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
@@ -62,9 +63,9 @@ def per_step_times(repeats: int = 20) -> dict[str, dict[str, float]]:
         walker = rigid_walker(config)
         x0 = walker.from_section(rigid_limit_cycle(config).section_point)
         cw = compile_walker(walker)
-        compiled_step(walker, x0, cw)  # warm-up: loads the compiled code
+        compiled_step(walker, x0, cw=cw)  # warm-up: loads the compiled code
         scipy_s = _median_time(lambda w=walker, x=x0: rigid_step(w, x), max(3, repeats // 4))
-        compiled_s = _median_time(lambda w=walker, x=x0, c=cw: compiled_step(w, x, c), repeats)
+        compiled_s = _median_time(lambda w=walker, x=x0, c=cw: compiled_step(w, x, cw=c), repeats)
         out[name] = {"scipy_us": scipy_s * 1e6, "compiled_us": compiled_s * 1e6, "speedup": scipy_s / compiled_s}
     return out
 
