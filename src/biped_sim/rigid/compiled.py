@@ -247,26 +247,40 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
 
 
 @kernel
+def _finite(x: np.ndarray) -> bool:
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return False
+    return True
+
+
+@kernel(reference_counts=False)
 def walk_kernel(
-    cw: CompiledWalker, starts: np.ndarray, max_steps: int, status: np.ndarray, steps: np.ndarray, last: np.ndarray
+    cw: CompiledWalker,
+    starts: np.ndarray,
+    max_steps: int,
+    status: np.ndarray,
+    steps: np.ndarray,
+    last: np.ndarray,
+    ends: np.ndarray,
+    counters: np.ndarray,
 ) -> None:
     """Walk each start (a row of ``starts``) up to ``max_steps`` strikes; per start: the final status (STRIKE:
     walked them all), the strikes taken and the last post-impact state (the start if none). A strike that takes
-    no time (the legs together at the start: the guard is already zero) ends the walk as a stall."""
-    ny = starts.shape[1]
-    x_minus, x_plus = np.zeros(ny), np.zeros(ny)
-    counters = np.zeros(2, dtype=np.int64)
+    no time (the legs together at the start: the guard is already zero) ends the walk as a stall. ``ends``
+    (2, ny) holds each step's pre- and post-impact states, ``counters`` (2,) its solver counts."""
+    x_minus, x_plus = ends[0], ends[1]
     for n in range(starts.shape[0]):
-        last[n, :] = starts[n]
+        copy_into(starts[n], last[n])
         status[n], steps[n] = STRIKE, 0
         for k in range(max_steps):
             code, duration = step_kernel(cw, last[n], x_minus, x_plus, counters)
             if code == STRIKE and duration < DEGENERATE_STEP * cw.t_limit:
                 code = STALLED  # a strike in no time: the start sits on the guard (legs together), no step
-            if code != STRIKE or not np.all(np.isfinite(x_plus)):
+            if code != STRIKE or not _finite(x_plus):
                 status[n] = code if code != STRIKE else STALLED
                 break
-            last[n, :] = x_plus
+            copy_into(x_plus, last[n])
             steps[n] = k + 1
 
 
@@ -347,5 +361,6 @@ def walk_starts(walker: RigidWalker, starts: np.ndarray, max_steps: int) -> Walk
     starts = np.ascontiguousarray(starts, dtype=float)
     n = starts.shape[0]
     out = WalkOutcome(np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros_like(starts))
-    walk_kernel(compile_walker(walker), starts, max_steps, out.status, out.steps, out.last)
+    ends, counters = np.zeros((2, starts.shape[1])), np.zeros(2, dtype=np.int64)
+    walk_kernel(compile_walker(walker), starts, max_steps, out.status, out.steps, out.last, ends, counters)
     return out
