@@ -44,11 +44,8 @@ from biped_sim.integrate.stepper import (
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.kernels import (
-    COMPASS,
     P_SLOPE,
-    SIMPLEST,
     TREE,
-    WHEEL,
     end_phase,
     fall_check,
     first_phase,
@@ -61,9 +58,8 @@ from biped_sim.rigid.kernels import (
     rigid_rhs,
     start_step,
 )
-from biped_sim.rigid.models import LegChain, RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.stepping import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
-from biped_sim.rigid.tree import TreeWalker
+from biped_sim.rigid.tree import RigidWalker
 
 STRIKE, FELL, STALLED = 0, 1, 2
 STATUS_NAMES = ("strike", "fell", "stalled")
@@ -85,34 +81,8 @@ class CompiledWalker(NamedTuple):
 
 
 def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
-    """(kind, parameter vector) of a rigid walker, in the layout of :mod:`biped_sim.rigid.kernels`.
-
-    The compass's leg centre-of-mass offset (``offset`` of a body) and foot-arc offset (``foot_offset`` of
-    the walker) default to 0 for models that do not define them.
-    """
-    if isinstance(walker, TreeWalker):  # its own layout, a copy: the kernels keep their workspace in it
-        return TREE, walker.params.copy()
-    if isinstance(walker, SimplestWalker):
-        kind, bodies, n_q, half = SIMPLEST, [], 2, 0.0
-    elif isinstance(walker, RimlessWheel):
-        kind, bodies, n_q, half = WHEEL, walker.bodies, 1, walker.half_angle
-    elif isinstance(walker, LegChain):
-        kind, bodies, n_q, half = COMPASS, walker.bodies, 2, 0.0
-    else:
-        raise ValueError(f"no compiled model of the rigid walker {walker.name!r}")
-    header = [
-        n_q,
-        walker.leg_length,
-        walker.foot_radius,
-        float(getattr(walker, "foot_offset", 0.0)),
-        walker.gravity,
-        walker.slope,
-        walker.fall_leg_angle,
-        half,
-        len(bodies),
-    ]
-    rows = [[b.mass, b.inertia, b.leg, b.distance, float(getattr(b, "offset", 0.0))] for b in bodies]
-    return kind, np.array(header + [v for row in rows for v in row], dtype=float)
+    """(kind, parameter vector) of a rigid walker: a copy (the kernels keep their workspace in it)."""
+    return TREE, walker.params.copy()
 
 
 def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
@@ -126,7 +96,7 @@ def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work)."""
     kind, params = walker_params(walker)
-    ny = 2 * walker.n_q if kind == TREE else (2 if kind == WHEEL else 4)
+    ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     return CompiledWalker(kind, params, tableau("dop853"), make_scratch(ny, 1, N_EVENTS), np.zeros(4), t_limit)
 

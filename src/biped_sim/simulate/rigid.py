@@ -1,7 +1,7 @@
 """A rigid run: the classical impulsive model of a walker config, walked step after step and measured.
 
 ``dynamics: rigid`` simulates the config's walker (``compass`` with round or point feet, Garcia's
-``simplest`` walker, the ``rimless_wheel``) with the models of :mod:`biped_sim.rigid.models`: the stance
+``simplest`` walker, the ``rimless_wheel``) with the models of :mod:`biped_sim.rigid.tree`: the stance
 foot rolls without slip, the swing leg swings freely (mid-stance scuffing ignored) and each heel strike is
 an instantaneous, perfectly plastic impact located to about 1e-12 by :func:`~biped_sim.rigid.stepping.rigid_step`.
 
@@ -59,10 +59,10 @@ from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
-from biped_sim.rigid.kernels import FALL_HIP_FRACTION
-from biped_sim.rigid.models import RigidWalker
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.stepping import MAX_STEP_TIME, RigidStep, rigid_step
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
