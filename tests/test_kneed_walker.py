@@ -21,16 +21,18 @@ from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.stepping import rigid_step
-from biped_sim.rigid.tree import TreeWalker
+from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import (
     PAST,
     STOP,
+    tree_impact,
+    tree_rhs,
+)
+from biped_sim.rigid.tree_layout import (
     T_NPTS,
     point,
     point_velocity,
     row_offset,
-    tree_impact,
-    tree_rhs,
 )
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.continuation import continue_cycle, flip_margin
@@ -44,23 +46,23 @@ CHEN_FIXED_POINT = np.array([0.1877, -0.2884, -1.1014, -0.0399])  # q1, q2 = q3,
 EULER_STEP = 1e-3
 
 
-def chen_walker() -> TreeWalker:
+def chen_walker() -> RigidWalker:
     walker = rigid_walker(derive(load_config(KNEED), {"gravity": 9.8, "ground.slope": CHEN_SLOPE}))
-    assert isinstance(walker, TreeWalker)
+    assert isinstance(walker, RigidWalker)
     return walker
 
 
-def chen_state(walker: TreeWalker, q: np.ndarray) -> np.ndarray:
+def chen_state(walker: RigidWalker, q: np.ndarray) -> np.ndarray:
     """Chen's (q1, q2, q1dot, q2dot), angles from the vertical, as a post-impact state (slope-normal angles)."""
     return walker.from_section(np.array([q[0] + CHEN_SLOPE, q[2], q[3]]))
 
 
-def chen_coordinates(walker: TreeWalker, x: np.ndarray) -> np.ndarray:
+def chen_coordinates(walker: RigidWalker, x: np.ndarray) -> np.ndarray:
     n = walker.n_q
     return np.array([x[0] - CHEN_SLOPE, x[2] - CHEN_SLOPE, x[n], x[n + 2]])
 
 
-def euler_step(walker: TreeWalker, x: np.ndarray, dt: float) -> np.ndarray:
+def euler_step(walker: RigidWalker, x: np.ndarray, dt: float) -> np.ndarray:
     """One step by explicit Euler at a fixed dt, each phase ending at the first step past its guard, where the
     strike is applied (the same flow, guards and strike maps as the compiled step)."""
     x = np.array(x, dtype=float)
@@ -104,7 +106,7 @@ def test_the_compiled_step_is_the_scipy_integration_of_the_same_equations() -> N
     assert compiled.period == pytest.approx(reference.period, abs=1e-10)
 
 
-def _phase_flow(walker: TreeWalker, x: np.ndarray, phase: int, span: float) -> np.ndarray:
+def _phase_flow(walker: RigidWalker, x: np.ndarray, phase: int, span: float) -> np.ndarray:
     """The flow of one phase to its guard (rtol 1e-12), the energy along it."""
     guard = walker.guard_phases()[phase][1]
     event = lambda _t, y: guard(y)  # noqa: E731
@@ -127,7 +129,7 @@ def test_energy_is_conserved_in_both_swing_phases() -> None:
         x = walker.after_phase(phase, states[-1])
 
 
-def _momentum(walker: TreeWalker, x: np.ndarray, about: tuple[float, float], coordinates: set[int] | None) -> float:
+def _momentum(walker: RigidWalker, x: np.ndarray, about: tuple[float, float], coordinates: set[int] | None) -> float:
     """Angular momentum of the points whose inertia turns with ``coordinates`` (None: all) about a point."""
     n, p = walker.n_q, walker.params
     total = 0.0

@@ -14,10 +14,10 @@ from biped_sim import load_config
 from biped_sim.cli import app
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.planar import constraint_violation, foot_kinematics
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
-from biped_sim.rigid.models import SimplestWalker
 from biped_sim.simulate import RunResult
-from biped_sim.studies.continuation import simplest_variational_jacobian
+from biped_sim.studies.garcia import simplest_variational_jacobian
 from biped_sim.studies.limit_cycle import TouchdownSection, compliant_limit_cycle
 from biped_sim.walkers import build_model
 
@@ -38,7 +38,7 @@ def test_garcia_fixed_point_to_1e_8_and_stable() -> None:
 def test_finite_difference_multipliers_match_the_variational_equations() -> None:
     config = load_config(SIMPLEST)
     cycle = rigid_limit_cycle(config)
-    variational = np.linalg.eigvals(simplest_variational_jacobian(SimplestWalker(config), cycle.section_point))
+    variational = np.linalg.eigvals(simplest_variational_jacobian(rigid_walker(config), cycle.section_point))
     assert np.max(np.abs(np.sort_complex(variational) - np.sort_complex(cycle.multipliers))) < 1e-6
     assert abs(cycle.multipliers[0].imag) > 0.1  # a complex pair at 0.009: the comparison is not trivial
 

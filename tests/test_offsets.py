@@ -11,8 +11,8 @@ import pytest
 from biped_sim import config_from_dict, load_config, simulate
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle, rigid_limit_cycle_initial
-from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.tree import RigidWalker
 
 from .conftest import CONFIGS, DEFAULT_CONFIG, invoke, one_line_error
 
@@ -40,13 +40,13 @@ def _across(theta: float) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def offset_walker() -> CompassChain:
+def offset_walker() -> RigidWalker:
     walker = rigid_walker(load_config(DEFAULT_CONFIG, ["dynamics=rigid", *OFFSETS]))
-    assert isinstance(walker, CompassChain)
+    assert isinstance(walker, RigidWalker)
     return walker
 
 
-def test_rigid_flow_conserves_energy_with_offsets(offset_walker: CompassChain) -> None:
+def test_rigid_flow_conserves_energy_with_offsets(offset_walker: RigidWalker) -> None:
     step = rigid_step(offset_walker, offset_walker.from_section(np.array([0.25, -1.6, -0.5])), sample_rate=1000.0)
     assert step.status == "strike"
     energy = np.array([sum(offset_walker.energy(x)) for x in step.samples_x])
@@ -55,26 +55,26 @@ def test_rigid_flow_conserves_energy_with_offsets(offset_walker: CompassChain) -
     assert np.ptp(energy) < 1e-10 * energy.max()
 
 
-def test_offset_strike_impact_and_step_length(offset_walker: CompassChain) -> None:
+def test_offset_strike_impact_and_step_length(offset_walker: RigidWalker) -> None:
     """The strike is where the swing arc touches the ground; the impact conserves the walker's angular momentum
     about the new contact point and the trailing leg's about the hip; the step is the contact point's advance."""
     walker = offset_walker
-    l, R, d = walker.leg_length, walker.foot_radius, walker.foot_offset
+    l, R, d = walker.leg_length, walker.foot_radius, walker.config.walker.foot_offset
     x_start = walker.from_section(np.array([0.25, -1.6, -0.5]))
     step = rigid_step(walker, x_start)
     x_minus, x_plus = step.x_minus, walker.impact(step.x_minus)
-    hip = walker.body_kinematics(x_minus[:2], x_minus[2:])[2][0]
+    hip = walker.hip(x_minus[:2])
     new_centre = hip + (l - R) * _axis(x_minus[1]) + d * _across(x_minus[1])
     assert abs(new_centre[1] - R) < 1e-12  # the swing arc touches the slope
     assert x_minus[1] > x_minus[0] + 0.3  # the real strike, swing foot ahead (not the mid-stance crossing)
     new_contact = new_centre - [0.0, R]
     shift = new_contact - walker.contact_point(x_plus[:2])
-    after_hip = walker.body_kinematics(x_plus[:2], x_plus[2:])[2][0]
+    after_hip = walker.hip(x_plus[:2])
     assert after_hip + shift == pytest.approx(hip, abs=1e-14)  # the new stance foot carries the same hip
     before = walker.angular_momentum(x_minus, new_contact)
     assert walker.angular_momentum(x_plus, new_contact - shift) == pytest.approx(before, rel=1e-12)
-    trailing = walker.angular_momentum(x_minus, hip, bodies=[0])
-    assert walker.angular_momentum(x_plus, hip - shift, bodies=[1]) == pytest.approx(trailing, rel=1e-12)
+    trailing = walker.angular_momentum(x_minus, hip, coordinates={0})
+    assert walker.angular_momentum(x_plus, hip - shift, coordinates={1}) == pytest.approx(trailing, rel=1e-12)
     old_contact = walker.contact_point(x_minus[:2])
     assert (
         abs(walker.angular_momentum(x_plus, old_contact - shift) - walker.angular_momentum(x_minus, old_contact)) > 1e-3

@@ -10,20 +10,20 @@ import pytest
 from biped_sim import config_from_dict, load_config
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.tree import RigidWalker
 
 from .conftest import CONFIGS
 
 
 @pytest.fixture(scope="module")
-def round_foot() -> CompassChain:
+def round_foot() -> RigidWalker:
     walker = rigid_walker(load_config(CONFIGS / "round_foot_walker.yaml", ["dynamics=rigid"]))
-    assert isinstance(walker, CompassChain)
+    assert isinstance(walker, RigidWalker)
     return walker
 
 
-def test_energy_is_conserved_during_the_swing(round_foot: CompassChain) -> None:
+def test_energy_is_conserved_during_the_swing(round_foot: RigidWalker) -> None:
     step = rigid_step(round_foot, np.array([0.25, -0.25, -1.6, -0.5]), sample_rate=1000.0)
     assert step.status == "strike"
     energy = np.array([sum(round_foot.energy(x)) for x in step.samples_x])
@@ -32,17 +32,17 @@ def test_energy_is_conserved_during_the_swing(round_foot: CompassChain) -> None:
     assert np.ptp(energy) < 1e-10 * energy.max()
 
 
-def test_heel_strike_is_located_on_the_guard(round_foot: CompassChain) -> None:
+def test_heel_strike_is_located_on_the_guard(round_foot: RigidWalker) -> None:
     step = rigid_step(round_foot, np.array([0.25, -0.25, -1.6, -0.5]))
     assert abs(step.x_minus[0] + step.x_minus[1]) < 1e-12
     assert step.x_minus[1] > 0 > step.x_minus[0]  # swing foot ahead, mid-stance scuffing skipped
 
 
-def test_impact_conserves_angular_momentum_about_the_new_contact(round_foot: CompassChain) -> None:
+def test_impact_conserves_angular_momentum_about_the_new_contact(round_foot: RigidWalker) -> None:
     step = rigid_step(round_foot, np.array([0.25, -0.25, -1.6, -0.5]))
     x_minus, x_plus = step.x_minus, round_foot.impact(step.x_minus)
     l, R = round_foot.leg_length, round_foot.foot_radius
-    hip = round_foot.body_kinematics(x_minus[:2], x_minus[2:])[2][0]
+    hip = round_foot.hip(x_minus[:2])
     new_contact = hip + (l - R) * np.array([math.sin(x_minus[1]), -math.cos(x_minus[1])]) - [0.0, R]
     shift = new_contact - round_foot.contact_point(x_plus[:2])  # the new state lives in its own contact frame
     before = round_foot.angular_momentum(x_minus, new_contact)
@@ -50,8 +50,8 @@ def test_impact_conserves_angular_momentum_about_the_new_contact(round_foot: Com
     assert after == pytest.approx(before, rel=1e-12)
     # the trailing leg keeps its angular momentum about the hip: body 0 (on coordinate 0, the stance leg)
     # before, body 1 (on coordinate 1, now the swing leg; the legs are identical) after
-    trailing_before = round_foot.angular_momentum(x_minus, hip, bodies=[0])
-    trailing_after = round_foot.angular_momentum(x_plus, hip - shift, bodies=[1])
+    trailing_before = round_foot.angular_momentum(x_minus, hip, coordinates={0})
+    trailing_after = round_foot.angular_momentum(x_plus, hip - shift, coordinates={1})
     assert trailing_after == pytest.approx(trailing_before, rel=1e-12)
     # about the old contact point the impulse has a moment: not conserved (the check can fail)
     old_contact = round_foot.contact_point(x_minus[:2])

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,15 +13,13 @@ from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, walk_starts
 from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import map_jacobian, rigid_limit_cycle, rigid_map
-from biped_sim.rigid.models import CompassChain
 from biped_sim.rigid.stepping import rigid_step
 
 from .conftest import CONFIGS
 
 AGREEMENT = 1e-10
 
-# (config, overrides, a post-impact start near its gait); the compass's leg-COM and foot offsets enter the
-# compiled model through ChainBody.offset and CompassChain.foot_offset
+# (config, overrides, a post-impact start near its gait)
 CASES = {
     "simplest": (CONFIGS / "simplest_walker.yaml", [], [0.2, -0.2, -0.2, -0.2 * math.cos(0.4)]),
     "compass": (CONFIGS / "compass_goswami.yaml", ["dynamics=rigid"], [0.2, -0.2, -1.0, -0.4]),
@@ -102,49 +99,37 @@ def test_a_walk_from_legs_together_stalls_instead_of_striking_in_no_time() -> No
     assert outcome.status[0] == STALLED and outcome.steps[0] == 0
 
 
-def _offset_compass_energy(walker: CompassChain, x: np.ndarray) -> float:
-    """Kinetic + potential energy of the compass with offsets, from the positions of the spec (rates by differences)."""
-    l, r, d = walker.leg_length, walker.foot_radius, walker.foot_offset  # type: ignore[attr-defined]
-    gravity = walker.gravity * np.array([math.sin(walker.slope), -math.cos(walker.slope)])
+def _offset_compass_energy(config: Config, x: np.ndarray) -> float:
+    """Kinetic + potential energy of the compass with offsets, from the positions of the config's spec (the rates
+    by central differences): legs' mass at c along and w across, the hip mass, feet arcs rolling, centred d across."""
+    w = config.walker
+    l, r, d, c, off = w.leg_length, w.foot_radius, w.foot_offset, w.leg_com_from_hip, w.leg_com_offset
+    gravity = config.gravity * np.array([math.sin(config.ground.slope), -math.cos(config.ground.slope)])
 
     def positions(q: np.ndarray) -> list[np.ndarray]:
         th = q[0]
         hip = np.array(
             [-r * th - (l - r) * math.sin(th) - d * math.cos(th), r + (l - r) * math.cos(th) - d * math.sin(th)]
         )
-        out = []
-        for b in walker.bodies:
-            t = q[b.leg]
-            out.append(
-                hip
-                + b.distance * np.array([math.sin(t), -math.cos(t)])
-                + b.offset * np.array([math.cos(t), math.sin(t)])
-            )
-        return out
+        legs = [hip + c * np.array([math.sin(t), -math.cos(t)]) + off * np.array([math.cos(t), math.sin(t)]) for t in q]
+        return [hip, *legs]
 
     q, qd, h = x[:2], x[2:], 1e-6
+    masses = [w.hip_mass, w.leg_mass, w.leg_mass]
     ahead, behind = positions(q + h * qd), positions(q - h * qd)
-    energy = 0.0
-    for b, p, pa, pb in zip(walker.bodies, positions(q), ahead, behind, strict=True):
+    energy = 0.5 * w.leg_inertia * float(qd @ qd)
+    for m, p, pa, pb in zip(masses, positions(q), ahead, behind, strict=True):
         v = (pa - pb) / (2 * h)
-        energy += 0.5 * b.mass * v @ v + 0.5 * b.inertia * qd[b.leg] ** 2 - b.mass * gravity @ p
+        energy += 0.5 * m * v @ v - m * gravity @ p
     return energy
 
 
 def test_compass_with_offsets_conserves_energy_between_strikes() -> None:
-    """The offsets' flow (Kane's equations with w, d != 0) conserves energy: checks the compiled kernels on their own
-    until the Python model has the offsets (then add offset cases to CASES)."""
-    walker = CompassChain(_config("compass"))
-    w = 0.03
-    walker.bodies = [  # type: ignore[assignment]
-        SimpleNamespace(mass=b.mass, inertia=b.inertia, leg=b.leg, distance=b.distance, offset=w if b.distance else 0.0)
-        for b in walker.bodies
-    ]
-    walker.foot_offset = 0.02  # type: ignore[attr-defined]
-    cw = compile_walker(walker)
-    assert cw.params[3] == 0.02
+    """The offsets' flow (Kane's equations with w, d != 0) conserves the energy of the spec's own positions."""
+    config = load_config(CONFIGS / "compass_goswami.yaml", ["walker.leg_com_offset=0.03", "walker.foot_offset=0.02"])
+    walker = rigid_walker(config)
     x0 = np.array(CASES["compass"][2])
-    step = compiled_step(walker, x0, cw=cw)
-    plain = compiled_step(CompassChain(_config("compass")), x0)
+    step = compiled_step(walker, x0)
+    plain = compiled_step(rigid_walker(_config("compass")), x0)
     assert step.status == "strike" and abs(step.period - plain.period) > 1e-3  # the offsets change the gait
-    assert _offset_compass_energy(walker, step.x_minus) == pytest.approx(_offset_compass_energy(walker, x0), abs=1e-8)
+    assert _offset_compass_energy(config, step.x_minus) == pytest.approx(_offset_compass_energy(config, x0), abs=1e-8)

@@ -9,7 +9,7 @@ import pytest
 
 from biped_sim import load_config, simulate
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.ground import Footing, ProfileStrike, RigidGround, simplest_impact
+from biped_sim.rigid.ground import Footing, ProfileStrike, RigidGround
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate.rigid import RigidRunResult
@@ -101,19 +101,23 @@ def test_a_riser_in_the_swing_foots_way_trips_the_walker() -> None:
     np.testing.assert_allclose(step.x_plus, flat.x_plus, atol=1e-12)
 
 
-def test_simplest_impact_is_garcias_map_when_the_legs_are_symmetric() -> None:
+def test_the_simplest_walkers_strike_is_garcias_map_when_the_legs_are_symmetric() -> None:
     walker = rigid_walker(load_config(SIMPLEST))
-    x_minus = np.array([-0.21, 0.21, -0.23, -0.05])
-    np.testing.assert_allclose(simplest_impact(x_minus), walker.impact(x_minus), rtol=0, atol=1e-15)
+    theta, theta_d = -0.21, -0.23
+    c2 = math.cos(2.0 * theta)  # MODEL.md 8: theta+ = -theta, thetadot+ = c2 thetadot, thetadot_sw+ = c2^2 thetadot
+    garcia = np.array([-theta, theta, c2 * theta_d, c2 * c2 * theta_d])
+    np.testing.assert_allclose(walker.impact(np.array([theta, -theta, theta_d, -0.05])), garcia, rtol=0, atol=1e-15)
     # asymmetric legs (a step down): the hip mass keeps its angular momentum about the new contact point,
     # |r x v| with r the new stance leg (unit length) and v = thetadot * (cos theta, sin theta)
     theta, theta_sw, theta_d = -0.22, 0.25, -0.2
-    after = simplest_impact(np.array([theta, theta_sw, theta_d, 0.0]))
+    after = walker.impact(np.array([theta, theta_sw, theta_d, 0.0]))
     leg_new = np.array([-math.sin(theta_sw), math.cos(theta_sw)])
     v_before = -theta_d * np.array([math.cos(theta), math.sin(theta)])
     v_after = -after[2] * np.array([math.cos(after[0]), math.sin(after[0])])
     cross = leg_new[0] * v_before[1] - leg_new[1] * v_before[0]
     assert leg_new[0] * v_after[1] - leg_new[1] * v_after[0] == pytest.approx(cross, rel=1e-14)
+    # the new swing leg's infinitesimal foot, at rest before, gets only an impulse along its massless leg
+    assert after[3] == pytest.approx(math.cos(theta_sw - theta) * after[2], rel=1e-14)
 
 
 def test_a_flat_polyline_walks_as_the_plane(round_foot_start: list[str]) -> None:

@@ -1,9 +1,9 @@
 """The compiled rigid step with pushes, ground profiles, samples and stop strikes, against scipy's reference.
 
-Walkers: Chen's kneed walker (a knee stop strikes mid-swing) and the compass written as a description (point-ish and
-round feet), all tree walkers; each starts near its gait (section points of their rigid limit cycles). The compiled
-step (:func:`biped_sim.rigid.compiled.rigid_step`) and scipy's (:func:`biped_sim.rigid.stepping.rigid_step`)
-integrate the same equations at rtol = atol = 1e-12 with different step sequences: they agree to ~1e-12.
+Walkers: Chen's kneed walker (a knee stop strikes mid-swing) and the compass (Goswami's near-point feet and the
+round-foot walker), each started near its gait (section points of their rigid limit cycles). The compiled step
+(:func:`biped_sim.rigid.compiled.rigid_step`) and scipy's (:func:`biped_sim.rigid.stepping.rigid_step`) integrate
+the same equations at rtol = atol = 1e-12 with different step sequences: they agree to ~1e-12.
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,45 +22,39 @@ from biped_sim.rigid import compiled, stepping
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.step import RigidStep
-from biped_sim.rigid.tree import TreeWalker
+from biped_sim.rigid.tree import RigidWalker
 from biped_sim.simulate import rigid as rigid_run
-from biped_sim.walkers.describe import describe
 
 from .conftest import CONFIGS
 
 AGREEMENT = 1e-9
 
-# config, whether it is turned into a description, a section point near its gait (stance angle, both rates)
+# config, a section point near its gait (stance angle, both rates)
 WALKERS = {
-    "kneed": (CONFIGS / "kneed_walker.yaml", False, [0.23858546, -1.10958733, -0.05714811]),
-    "compass": (CONFIGS / "compass_goswami.yaml", True, [0.27130009, -1.09317942, -0.37759863]),
-    "round_foot": (CONFIGS / "round_foot_walker.yaml", True, [0.27136095, -1.61448028, -0.84377804]),
+    "kneed": (CONFIGS / "kneed_walker.yaml", [0.23858546, -1.10958733, -0.05714811]),
+    "compass": (CONFIGS / "compass_goswami.yaml", [0.27130009, -1.09317942, -0.37759863]),
+    "round_foot": (CONFIGS / "round_foot_walker.yaml", [0.27136095, -1.61448028, -0.84377804]),
 }
 
 
 def _config(name: str) -> Config:
-    path, as_description, _ = WALKERS[name]
-    config = load_config(path, [] if not as_description else ["dynamics=rigid"])
-    if as_description:  # the bundled compass as data: a tree walker on the tree kernels
-        config = derive(config, {"walker.kind": "description", "walker.description": describe(config).model_dump()})
-    return config
+    return load_config(WALKERS[name][0], ["dynamics=rigid"])
 
 
 @pytest.fixture(scope="module", params=list(WALKERS))
-def case(request: pytest.FixtureRequest) -> tuple[Config, TreeWalker, np.ndarray]:
+def case(request: pytest.FixtureRequest) -> tuple[Config, RigidWalker, np.ndarray]:
     config = _config(request.param)
     walker = rigid_walker(config)
-    assert isinstance(walker, TreeWalker)
-    return config, walker, walker.from_section(np.array(WALKERS[request.param][2]))
+    return config, walker, walker.from_section(np.array(WALKERS[request.param][1]))
 
 
-def _pushes(walker: TreeWalker) -> list[tuple[float, np.ndarray]]:
+def _pushes(walker: RigidWalker) -> list[tuple[float, np.ndarray]]:
     """Two pushes on the hip, forward then back, of a few percent of the walker's momentum scale."""
     scale = walker.reference_mass * np.sqrt(walker.gravity * walker.leg_length)
     return [(0.15, scale * np.array([0.02, 0.005])), (0.3, scale * np.array([-0.01, 0.0]))]
 
 
-def _profile(config: Config, walker: TreeWalker, x0: np.ndarray, at: float, height: float) -> ProfileStrike:
+def _profile(config: Config, walker: RigidWalker, x0: np.ndarray, at: float, height: float) -> ProfileStrike:
     """One step of ``height`` leg lengths at ``at`` of the plane's step length ahead of the stance contact (x = 0)."""
     step = {"at": at * compiled.rigid_step(walker, x0).length, "height": height * walker.leg_length}
     ground = rigid_ground(derive(config, {"ground.profile": {"kind": "steps", "steps": [step]}}))
@@ -149,12 +142,6 @@ def test_a_riser_trips_both_at_the_same_point(case, at: float) -> None:  # type:
     assert_same_step(mine, reference)
 
 
-def test_pushes_and_profiles_need_a_tree_walker() -> None:
-    walker = rigid_walker(load_config(CONFIGS / "compass_goswami.yaml", ["dynamics=rigid"]))
-    with pytest.raises(ValueError, match="tree walkers only"):
-        compiled.rigid_step(walker, np.array([0.2, -0.2, -1.0, -0.4]), pushes=[(0.1, np.array([1.0, 0.0]))])
-
-
 @contextmanager
 def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """The rigid step map and every kernel it calls as plain Python: each compiled function is its ``.py_func``."""
@@ -170,7 +157,7 @@ def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
 def test_the_compiled_step_is_its_plain_python_run_bit_for_bit(monkeypatch: pytest.MonkeyPatch) -> None:
     config = _config("round_foot")
     walker = rigid_walker(config)
-    x0 = walker.from_section(np.array(WALKERS["round_foot"][2]))
+    x0 = walker.from_section(np.array(WALKERS["round_foot"][1]))
     profile = _profile(config, walker, x0, 0.6, -0.01)
     args = (walker, x0, 100.0, _pushes(walker), profile)
     fast = compiled.rigid_step(*args)
@@ -187,16 +174,15 @@ def test_the_compiled_step_is_its_plain_python_run_bit_for_bit(monkeypatch: pyte
     assert fast.pushes == plain.pushes and fast.stop_strikes == plain.stop_strikes
 
 
-def test_a_run_of_a_tree_walker_takes_the_compiled_step(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_run_takes_the_compiled_step(monkeypatch: pytest.MonkeyPatch) -> None:
     overrides = [
         "simulation.t_end=2.5",
         "simulation.pushes=[{time: 0.9, impulse: [0.03, 0.0]}]",
         "ground.profile={kind: steps, steps: [{at: 0.7, height: -0.004}, {at: 1.6, height: 0.003}]}",
     ]
-    config = load_config(Path(CONFIGS / "kneed_walker.yaml"), overrides)
+    config = load_config(CONFIGS / "kneed_walker.yaml", overrides)
     run = simulate(config)
-    assert rigid_run.step_map(run.walker) is not stepping.rigid_step  # type: ignore[attr-defined]
-    monkeypatch.setattr(rigid_run, "step_map", lambda walker: stepping.rigid_step)
+    monkeypatch.setattr(rigid_run, "rigid_step", lambda *args, cw: stepping.rigid_step(*args))
     reference = simulate(config)
     assert run.status == reference.status == "walking" and len(run.strike_time) >= 4  # type: ignore[attr-defined]
     for field in ("strike_time", "strike_post", "time", "state", "hip"):  # each step's samples on its own clock

@@ -13,8 +13,8 @@ import numpy as np
 
 from biped_sim.config import LEG_KEYS
 from biped_sim.measure.steps import StepTable
-from biped_sim.rigid.models import RigidWalker, RimlessWheel
 from biped_sim.rigid.start import RigidStart, touchdown_legs
+from biped_sim.rigid.tree import RigidWalker
 
 
 @dataclass
@@ -53,8 +53,7 @@ class RigidTrace:
 
 def strike_feet(walker: RigidWalker, n: int) -> np.ndarray:
     """Foot (spoke) of strikes 1..n, the initial stance foot being 0."""
-    feet = walker.spokes if isinstance(walker, RimlessWheel) else 2
-    return np.arange(1, n + 1) % feet
+    return np.arange(1, n + 1) % walker.n_feet
 
 
 def rigid_step_table(walker: RigidWalker, trace: RigidTrace) -> StepTable:

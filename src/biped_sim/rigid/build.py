@@ -1,21 +1,21 @@
-"""The rigid model of a config's walker: a bundled kind's own, or a described walker's tree."""
+"""The rigid model of a config's walker: its description's tree (a bundled kind's, or the config's own)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from biped_sim.config import Config
-from biped_sim.rigid.models import CompassChain, RigidWalker, RimlessWheel, SimplestWalker
-from biped_sim.rigid.tree import TreeWalker
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.walkers.describe import describe
 
-RIGID_MODELS = {"compass": CompassChain, "simplest": SimplestWalker, "rimless_wheel": RimlessWheel}
+NONDIMENSIONAL_KINDS = ("simplest",)  # Garcia's walker is written in units of g = l = hip mass = 1
 
 
 def rigid_walker(config: Config) -> RigidWalker:
     """The rigid model of ``config.walker``."""
-    if config.walker.description is not None:
-        return TreeWalker(config, config.walker.description)
-    return RIGID_MODELS[config.walker.kind](config)
+    kind = config.walker.kind
+    gravity = 1.0 if kind in NONDIMENSIONAL_KINDS else config.gravity
+    return RigidWalker(config, describe(config), kind, gravity)
 
 
 def initial_state(config: Config, walker: RigidWalker) -> np.ndarray:

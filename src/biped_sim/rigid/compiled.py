@@ -1,7 +1,7 @@
 """The rigid step map compiled: DOP853 with dense output, guards located on it, polish, impact (numba).
 
 One step map for every use of the rigid walkers: a run's steps with pushes, ground profiles and samples
-(:func:`rigid_step`, which :mod:`biped_sim.simulate.rigid` takes for tree walkers) and the plain map of limit
+(:func:`rigid_step`, which :mod:`biped_sim.simulate.rigid` takes) and the plain map of limit
 cycles, basins, bifurcation and robustness (:func:`rigid_step` without them, :func:`walk_starts`). It computes
 what :func:`biped_sim.rigid.stepping.rigid_step` (scipy's ``solve_ivp``) computes, to the integration's ~1e-12
 (the tests also check that fixed points and multipliers agree to 1e-10); run as plain Python (``.py_func`` of
@@ -21,7 +21,7 @@ each kernel) it gives the same bits. A phase's integration is :mod:`biped_sim.ri
 * a fall (a leg past the fall angle, the hip below 0.05 l) or a stall (no strike within ``MAX_STEP_TIME``
   natural periods, or a step below ``MIN_STEP``) ends the step with a status.
 
-A step's plan (:class:`StepPlan`, tree walkers; empty for the plain map) and what it did (:class:`StepRecord`,
+A step's plan (:class:`StepPlan`, empty for the plain map) and what it did (:class:`StepRecord`,
 preallocated buffers and counts) travel in the :class:`CompiledWalker`:
 
 * pushes: the flow stops at each push time before the step ends, :func:`~biped_sim.rigid.tree_kernels.tree_push`
@@ -72,12 +72,8 @@ from biped_sim.rigid.integration import (
 )
 from biped_sim.rigid.integration import FELL as FELL  # re-exported with the other statuses of a step
 from biped_sim.rigid.kernels import (
-    COMPASS,
-    P_L,
     P_SLOPE,
-    SIMPLEST,
     TREE,
-    WHEEL,
     end_phase,
     first_phase,
     n_phases,
@@ -85,45 +81,19 @@ from biped_sim.rigid.kernels import (
     rigid_impact,
     start_step,
 )
-from biped_sim.rigid.models import LegChain, RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
-from biped_sim.rigid.tree import TreeWalker
+from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
-from biped_sim.rigid.tree_kernels import phase_offset, tree_energy, tree_push
+from biped_sim.rigid.tree_kernels import tree_energy, tree_push
+from biped_sim.rigid.tree_layout import P_L, phase_offset
 
 STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
 
 def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
-    """(kind, parameter vector) of a rigid walker, in the layout of :mod:`biped_sim.rigid.kernels`.
-
-    The compass's leg centre-of-mass offset (``offset`` of a body) and foot-arc offset (``foot_offset`` of
-    the walker) default to 0 for models that do not define them.
-    """
-    if isinstance(walker, TreeWalker):  # its own layout, a copy: the kernels keep their workspace in it
-        return TREE, walker.params.copy()
-    if isinstance(walker, SimplestWalker):
-        kind, bodies, n_q, half = SIMPLEST, [], 2, 0.0
-    elif isinstance(walker, RimlessWheel):
-        kind, bodies, n_q, half = WHEEL, walker.bodies, 1, walker.half_angle
-    elif isinstance(walker, LegChain):
-        kind, bodies, n_q, half = COMPASS, walker.bodies, 2, 0.0
-    else:
-        raise ValueError(f"no compiled model of the rigid walker {walker.name!r}")
-    header = [
-        n_q,
-        walker.leg_length,
-        walker.foot_radius,
-        float(getattr(walker, "foot_offset", 0.0)),
-        walker.gravity,
-        walker.slope,
-        walker.fall_leg_angle,
-        half,
-        len(bodies),
-    ]
-    rows = [[b.mass, b.inertia, b.leg, b.distance, float(getattr(b, "offset", 0.0))] for b in bodies]
-    return kind, np.array(header + [v for row in rows for v in row], dtype=float)
+    """(kind, parameter vector) of a rigid walker: a copy (the kernels keep their workspace in it)."""
+    return TREE, walker.params.copy()
 
 
 def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
@@ -149,7 +119,7 @@ def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work), with the plain step's plan."""
     kind, params = walker_params(walker)
-    ny = 2 * walker.n_q if kind == TREE else (2 if kind == WHEEL else 4)
+    ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     scratch = make_scratch(ny, 1, N_EVENTS)
     record = _record(ny, 0, 0, int(n_phases(kind, params)))
@@ -188,9 +158,9 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
 
 @kernel(reference_counts=False)
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
-    """After a phase's guard: a tree walker's stop strike (x in place), booked with its loss when there is room."""
+    """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
     kind, p, rec = cw.kind, cw.params, cw.record
-    struck = kind == TREE and int(p[phase_offset(p, phase)]) == STOP_PHASE
+    struck = int(p[phase_offset(p, phase)]) == STOP_PHASE
     n = rec.counts[STOPS]
     if not struck or n >= rec.stops.shape[0]:
         end_phase(kind, p, phase, x, scratch)
@@ -294,8 +264,6 @@ def with_plan(
 
     The sample buffer holds a whole step's grid, t in [0, t_limit], and one more point per phase (a polish that
     moves a strike back repeats a grid point, as the reference's restart does)."""
-    if (pushes or profile is not None) and cw.kind != TREE:
-        raise ValueError("the compiled step map takes pushes and ground profiles for tree walkers only")
     n = len(pushes)
     times = np.array([float(at) for at, _ in pushes])
     impulses = np.array([np.asarray(impulse, dtype=float)[:2] for _, impulse in pushes]).reshape(n, 2)
@@ -325,7 +293,7 @@ def rigid_step(
 
     The samples fall on the grid k / sample_rate of the step's clock and are kept whatever the step's outcome;
     ``pushes`` (time on the step's clock, impulse on the hip) in time order; ``profile``: the strike on a ground
-    profile (tree walkers). A strike in no time (the start on the guard: legs together) is a stall, as in walks.
+    profile. A strike in no time (the start on the guard: legs together) is a stall, as in walks.
     """
     cw = cw or compile_walker(walker)
     if sample_rate is not None or pushes or profile is not None:

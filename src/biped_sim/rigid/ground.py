@@ -21,17 +21,16 @@ is first sought (it crossed a riser during the mid-stance swing, whose scuffing 
 the lowest point is checked: the front of a round foot's arc may graze a riser unnoticed.
 
 The compiled step map (:mod:`biped_sim.rigid.compiled`) reads the same quantities from the kernels below: the
-tree walker's swing foot (:func:`tree_swing_foot`), its clearance (:func:`clearance`) and the riser test
+walker's swing foot (:func:`tree_swing_foot`), its clearance (:func:`clearance`) and the riser test
 (:func:`riser_hit`, which :meth:`ProfileStrike.tripped` calls too).
 
 The impact is the walker's own map (angular momentum about the new contact point and of the trailing leg
-about the hip), which holds for any leg angles; Garcia's published map for the simplest walker assumes the
-symmetric strike of flat ground, so on a profile it uses its general form (:func:`simplest_impact`).
+about the hip), which holds for any leg angles (Garcia's published map for the simplest walker assumes the
+symmetric strike of flat ground; the tree's limit of infinitesimal foot masses is its general form).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,15 +39,15 @@ from biped_sim.config import Config
 from biped_sim.contact.ground import ground_height
 from biped_sim.contact.profile import FlatProfile, profile_arrays
 from biped_sim.kernel import kernel
-from biped_sim.rigid.models import RigidWalker, SimplestWalker
-from biped_sim.rigid.tree_kernels import T_NPTS, T_RSW, point
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_layout import T_NPTS, T_RSW, point
 
 RISER_TOLERANCE = 1e-9  # a strike this close to a riser's x and below its top is a trip [leg lengths]
 
 
 @kernel
 def tree_swing_foot(p: np.ndarray, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
-    """(x, height) of a tree walker's swing foot's lowest point, the stance contact at (origin - R theta, level)."""
+    """(x, height) of the swing foot's lowest point, the stance contact at (origin - R theta, level)."""
     foot_x, foot_y = point(p, int(p[T_NPTS]) + 1, x)
     return origin + foot_x, level + foot_y - p[T_RSW]
 
@@ -119,8 +118,6 @@ class ProfileStrike:
 
     def impact(self, x_minus: np.ndarray) -> np.ndarray:
         """The post-impact state (general leg angles)."""
-        if isinstance(self.walker, SimplestWalker):
-            return simplest_impact(x_minus)
         return self.walker.impact(x_minus)
 
     def after(self, x_minus: np.ndarray, x_plus: np.ndarray) -> ProfileStrike:
@@ -128,16 +125,3 @@ class ProfileStrike:
         foot_x, foot_y = self.swing_foot(x_minus)
         footing = Footing(foot_x + self.walker.foot_radius * float(x_plus[0]), foot_y)
         return ProfileStrike(self.walker, self.ground, footing)
-
-
-def simplest_impact(x_minus: np.ndarray) -> np.ndarray:
-    """Garcia's heel strike for any leg angles (his map when theta_sw = -theta_st).
-
-    The hip mass keeps its angular momentum about the new contact point: its velocity across the new stance
-    leg stays, thetadot+ = cos(theta_sw - theta_st) thetadot-. The new swing leg's infinitesimal foot, at rest,
-    gets only an axial impulse through its massless leg, so its velocity across that leg stays zero:
-    thetadot_sw+ = cos(theta_sw - theta_st) thetadot+.
-    """
-    theta, theta_sw, theta_d, _ = x_minus
-    c = math.cos(theta_sw - theta)
-    return np.array([theta_sw, theta, c * theta_d, c * c * theta_d])

@@ -9,10 +9,10 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.build import NONDIMENSIONAL_KINDS, rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.models import RigidWalker, RimlessWheel, SimplestWalker
 from biped_sim.rigid.stepping import RTOL
+from biped_sim.rigid.tree import RigidWalker
 
 NONDIMENSIONAL = "1 (g = l = 1)"
 INTEGRATOR = f"DOP853 rtol {RTOL:g} (rigid)"
@@ -30,9 +30,9 @@ class RigidStart:
 def rigid_units(walker: RigidWalker) -> dict[str, str]:
     """This walker's units for each SI unit the outputs use ('s', 'm', 'm/s', 'rad', 'rad/s', 'J', '1')."""
     units = {unit: unit for unit in ("s", "m", "m/s", "rad", "rad/s", "J", "1")}
-    if isinstance(walker, SimplestWalker):
+    if walker.name in NONDIMENSIONAL_KINDS:
         units.update(dict.fromkeys(("s", "m", "m/s", "rad/s", "J"), NONDIMENSIONAL))
-    elif isinstance(walker, RimlessWheel):
+    elif walker.name == "rimless_wheel":
         units["J"] = "J/kg"  # the hub's mass is not a parameter: energies per kg of it
     return units
 
@@ -50,14 +50,14 @@ def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None
             )
     if walker.hip_height(state) <= config.simulation.fall_hip_height * walker.leg_length:
         raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
-    if isinstance(walker, RimlessWheel):
-        if abs(legs["stance_angle"]) > walker.half_angle + ANGLE_TOLERANCE:
+    if walker.shift:
+        if abs(legs["stance_angle"]) > 0.5 * walker.shift + ANGLE_TOLERANCE:
             raise ConfigError(
                 "simulation.initial.stance_angle",
-                f"the rimless wheel's stance spoke must be within pi/N = {walker.half_angle:.6g} rad of the slope "
+                f"the rimless wheel's stance spoke must be within pi/N = {0.5 * walker.shift:.6g} rad of the slope "
                 "normal (else another spoke starts below the ground)",
             )
-    elif legs[walker.state_names[0]] + walker.strike_angle_offset < 0.0:
+    elif walker.hip_past_stance_foot(state):
         raise ConfigError(
             f"simulation.initial.{walker.state_names[0]}",
             "the rigid model starts just after a heel strike: the stance leg must not be past the slope normal "

@@ -21,10 +21,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike
-from biped_sim.rigid.kernels import FALL_HIP_FRACTION
-from biped_sim.rigid.models import RigidWalker
-from biped_sim.rigid.pushes import hip_push
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 
 
 def _guard_event(guard, direction: float):  # type: ignore[no-untyped-def]
@@ -66,8 +65,8 @@ def rigid_step(
 
     The samples fall on the grid k / sample_rate of the step's own clock (t = 0 at its start) and are kept
     whatever the step's outcome (strike, fall or stall). ``pushes``: (time on the step's clock, impulse) in
-    time order; the flow stops at each that comes before the step ends, :func:`~biped_sim.rigid.pushes.hip_push`
-    makes the jump, and the same guard phase goes on (``RigidStep.pushes`` lists those applied; a sample at a
+    time order; the flow stops at each that comes before the step ends, the walker's ``hip_push`` makes the
+    jump, and the same guard phase goes on (``RigidStep.pushes`` lists those applied; a sample at a
     push's time holds the state after it). ``profile``: the strike on a ground profile (None: the walker's own
     guard, on the plane); a swing foot below the profile when the strike is first sought, or one that meets a
     riser, ends the step ``tripped``.
@@ -153,6 +152,6 @@ def _sample(sol, t: float, sample_rate: float, samples_t: list, samples_x: list)
 
 def _push(walker: RigidWalker, t: float, x: np.ndarray, impulse: np.ndarray, applied: list) -> np.ndarray:
     """The state after the push at t; appends its record (t, work = kinetic energy jump, ground normal impulse)."""
-    x_after, ground_normal = hip_push(walker, x, impulse)
+    x_after, ground_normal = walker.hip_push(x, impulse)
     applied.append((t, walker.energy(x_after)[0] - walker.energy(x)[0], ground_normal))
     return x_after

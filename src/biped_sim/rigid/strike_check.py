@@ -1,6 +1,6 @@
 """Whether the compass's plastic heel strike (leading foot stuck, trailing foot released) is the limit of stiff contact.
 
-The rigid impact map (:meth:`LegChain.impact`) kills the leading foot's velocity with whatever impulse that takes
+The rigid impact map (:meth:`RigidWalker.impact`) kills the leading foot's velocity with whatever impulse that takes
 and releases the trailing foot unconditionally. A compliant strike with Coulomb-bounded friction tends to it as
 the contact stiffens only if
 
@@ -8,11 +8,11 @@ the contact stiffens only if
 * the leading foot can stick: the impact's tangential-to-normal impulse ratio is within mu_s;
 * while the leading foot slides at touchdown its friction, -mu_k sgn(v_t) per unit of normal impulse, does not
   push the trailing foot into the ground. The feet couple through the walker's inverse inertia W = J_T M^-1 J_L^T
-  (M of the free walker: hip position and both leg angles); a slipping leading foot changes the trailing foot's
-  normal velocity at the rate W_nn - mu_k sgn(v_t) W_nt per unit of leading normal impulse. When that is negative
-  the trailing foot is compressed during the strike (a double-support impact the rigid map does not model):
-  measured on the default walker with d = 5 mm, landing at v_t = -0.25 m/s, its load rises from 33 to 51 N
-  and the compliant gait's touchdown difference levels off near 6e-4 rad instead of converging.
+  (M of the free walker: hip position and its angles, every stop locked); a slipping leading foot changes the
+  trailing foot's normal velocity at the rate W_nn - mu_k sgn(v_t) W_nt per unit of leading normal impulse. When
+  that is negative the trailing foot is compressed during the strike (a double-support impact the rigid map does
+  not model): measured on the default walker with d = 5 mm, landing at v_t = -0.25 m/s, its load rises from 33 to
+  51 N and the compliant gait's touchdown difference levels off near 6e-4 rad instead of converging.
 """
 
 from __future__ import annotations
@@ -22,7 +22,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.rigid.models import CompassChain, LegChain
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_layout import (
+    T_NLOCK,
+    T_NPTS,
+    T_RSW,
+    T_TABLES,
+    lock_offset,
+    point_velocity,
+    row_offset,
+    w_offset,
+)
 
 
 @dataclass(frozen=True)
@@ -49,44 +59,65 @@ class StrikeCheck:
         return out
 
 
-def _free_mass_matrix(walker: LegChain, q: np.ndarray) -> np.ndarray:
-    """Mass matrix of the walker lifted off the ground: coordinates (hip x, hip y, leg angles)."""
-    n = 2 + walker.n_q
-    mass = np.zeros((n, n))
-    for body in walker.bodies:
-        theta = q[body.leg]
-        jac = np.zeros((2, n))
-        jac[:, :2] = np.eye(2)
-        jac[:, 2 + body.leg] = body.distance * np.array([math.cos(theta), math.sin(theta)]) - body.offset * np.array(
-            [math.sin(theta), -math.cos(theta)]
-        )
-        mass += body.mass * jac.T @ jac
-        mass[2 + body.leg, 2 + body.leg] += body.inertia
-    return mass
-
-
-def _foot_jacobian(walker: LegChain, q: np.ndarray, leg: int) -> np.ndarray:
-    """Velocity of the material point of a leg's foot arc at its bottom (the contact point), free coordinates."""
-    arm, d, theta = walker.leg_length - walker.foot_radius, walker.foot_offset, q[leg]
-    jac = np.zeros((2, 2 + walker.n_q))
+def _free_jacobian(p: np.ndarray, base: int | None, q: np.ndarray) -> np.ndarray:
+    """Velocity Jacobian of a point of the walker lifted off the ground, coordinates (hip x, hip y, angles): the
+    point's w vectors at p[base] (None: the stance foot's centre, w = 0) taken from the hip's."""
+    n = len(q)
+    hip = w_offset(p, 0, int(p[T_NPTS]))
+    jac = np.zeros((2, 2 + n))
     jac[:, :2] = np.eye(2)
-    jac[:, 2 + leg] = arm * np.array([math.cos(theta), math.sin(theta)]) - d * np.array(
-        [math.sin(theta), -math.cos(theta)]
-    )
-    jac[0, 2 + leg] += walker.foot_radius  # the arc turning about its centre R above the point
+    for k in range(n):
+        wx = (p[base + 2 * k] if base is not None else 0.0) - p[hip + 2 * k]
+        wy = (p[base + 2 * k + 1] if base is not None else 0.0) - p[hip + 2 * k + 1]
+        s, c = math.sin(q[k]), math.cos(q[k])
+        jac[:, 2 + k] = (-s * wx - c * wy, c * wx - s * wy)
     return jac
 
 
-def strike_check(walker: CompassChain, x_minus: np.ndarray, mu_kinetic: float) -> StrikeCheck:
-    """The release quantities of the compass's strike from its pre-impact state (stance leg 0, leading leg 1)."""
-    q, qd = x_minus[:2], x_minus[2:]
-    hip_velocity = walker.body_kinematics(q, qd)[-1][1] @ qd  # the last body is the hip mass, at the hip
+def _free_inverse_inertia(walker: RigidWalker, q: np.ndarray) -> np.ndarray:
+    """M^-1 of the lifted walker with every stop locked (the legs rigid through the strike): the constrained
+    inverse M^-1 - M^-1 A^T (A M^-1 A^T)^-1 A M^-1, A the locks' rows."""
+    p, n = walker.params, walker.n_q
+    mass = np.zeros((2 + n, 2 + n))
+    for i in range(walker.n_points):
+        o = row_offset(p, 0, i)
+        jac = _free_jacobian(p, o + 3, q)
+        mass += p[o] * jac.T @ jac
+        mass[2 + int(p[o + 2]), 2 + int(p[o + 2])] += p[o + 1]
+    inverse = np.linalg.inv(mass)
+    locks = np.zeros((int(p[T_NLOCK]), 2 + n))
+    for j in range(len(locks)):
+        o = lock_offset(p, j)
+        locks[j, 2 + int(p[o])], locks[j, 2 + int(p[o + 1])] = -1.0, 1.0
+    if len(locks):
+        projected = inverse @ locks.T
+        inverse -= projected @ np.linalg.solve(locks @ projected, projected.T)
+    return inverse
+
+
+def _contact_jacobian(walker: RigidWalker, q: np.ndarray, landing: bool) -> np.ndarray:
+    """Velocity of the material point at the bottom of the stance (or landing) foot's arc, free coordinates."""
+    p = walker.params
+    base = w_offset(p, 0, walker.n_points + 1) if landing else None
+    jac = _free_jacobian(p, base, q)
+    foot_body = walker.landing_foot_body if landing else int(p[T_TABLES])
+    radius = float(p[T_RSW]) if landing else walker.foot_radius
+    jac[0, 2 + foot_body] += radius  # the arc turning about its centre R above the point
+    return jac
+
+
+def strike_check(walker: RigidWalker, x_minus: np.ndarray, mu_kinetic: float) -> StrikeCheck:
+    """The release quantities of a two-legged walker's heel strike from its pre-impact state (its stance foot
+    trailing, its swing foot leading)."""
+    n = walker.n_q
+    q, qd = x_minus[:n], x_minus[n:]
+    hip_velocity = point_velocity(walker.params, 0, walker.n_points, q, qd)
     u = np.concatenate([hip_velocity, qd])
-    mass = _free_mass_matrix(walker, q)
-    trailing, leading = _foot_jacobian(walker, q, 0), _foot_jacobian(walker, q, 1)
-    coupling = trailing @ np.linalg.solve(mass, leading.T)  # W_TL: trailing velocity per leading impulse
+    inverse = _free_inverse_inertia(walker, q)
+    trailing, leading = _contact_jacobian(walker, q, False), _contact_jacobian(walker, q, True)
+    coupling = trailing @ inverse @ leading.T  # W_TL: trailing velocity per leading impulse
     leading_velocity = leading @ u
-    impulse = -np.linalg.solve(leading @ np.linalg.solve(mass, leading.T), leading_velocity)  # leading foot stuck
+    impulse = -np.linalg.solve(leading @ inverse @ leading.T, leading_velocity)  # leading foot stuck
     slip = float(leading_velocity[0])
     return StrikeCheck(
         trailing_release_speed=float((trailing @ u + coupling @ impulse)[1]),

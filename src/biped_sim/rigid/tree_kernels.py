@@ -17,13 +17,15 @@ the tree (:mod:`biped_sim.rigid.tree`). So its Jacobian column k is ``Rot(theta_
 
 The points are the bodies' centres of mass and the point masses (rows of mass, inertia, the coordinate its
 inertia turns with, and w). Two tables hold them: table 0 with the stance foot pinned (the flow), table 1 with
-the swing foot pinned, in the same coordinates (the heel strike's Jacobians; its constants do not matter). The
-legs being alike, the next step runs on table 0 again after the roles are swapped (checked when built).
+the landing foot pinned, in the same coordinates (the heel strike's Jacobians; its constants do not matter). The
+legs being alike (or the wheel's spokes evenly spaced), the next step runs on table 0 again after the heel strike
+relabels the coordinates: coordinate k after it is coordinate perm[k] before plus shift[k] (the legs swap; the
+wheel's one angle moves on by the spoke spacing).
 
-Layout of ``p`` after the shared header of :mod:`biped_sim.rigid.kernels` (``P_BODIES`` on): T_NLOCK, T_NPHASE,
-T_NPTS, T_RSW (the swing foot's radius); per table: the rolling coordinate, then per row (mass, inertia,
-coordinate, w (2 n)); the hip's and the swing foot's w (2 n each, table 0); per lock (parent, child, limit, sign:
-+1 upper / -1 lower, active); per phase (kind, lock); the swap permutation (n); a workspace (the solves).
+A coordinate that no mass, inertia or lock turns with (Garcia's massless swing leg, whose foot mass is
+infinitesimal) is light: the heavy equations leave it out, and the feet's infinitesimal masses (light rows of unit
+weight) give its equations in the limit, their momentum balance across it with the heavy accelerations (or rate
+jumps) known (:func:`_light_tier`). The energy and every heavy equation see only the heavy rows.
 """
 
 from __future__ import annotations
@@ -33,126 +35,44 @@ import math
 import numpy as np
 
 from biped_sim.kernel import kernel
+from biped_sim.rigid.tree_layout import (
+    P_FALL,
+    P_G,
+    P_L,
+    P_LEAN,
+    P_R,
+    P_SLOPE,
+    ROW_HEAD,
+    T_NLIGHT,
+    T_NLOCK,
+    T_NPHASE,
+    T_NPTS,
+    bias,
+    coords,
+    jacobian,
+    jacobian_column,
+    light_flag,
+    lock_offset,
+    perm_offset,
+    phase_offset,
+    point,
+    point_velocity,
+    row_offset,
+    table_offset,
+    w_offset,
+    work_offset,
+)
 
-P_NQ, P_L, P_R, P_G, P_SLOPE, P_FALL, T0 = 0, 1, 2, 4, 5, 6, 9
-T_NLOCK, T_NPHASE, T_NPTS, T_RSW, T_TABLES = T0, T0 + 1, T0 + 2, T0 + 3, T0 + 4
-LOCK_FIELDS, PHASE_FIELDS, ROW_HEAD = 5, 2, 3
 STOP, PAST, STRIKE = 0, 1, 2  # phase kinds: a swing stop strikes; the hip passes over the stance foot; heel strike
+FLOW, IMPACT, AT_REST = 0, 1, 2  # the light rows' right side: gravity and bias; their velocity just before; none
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
-
-
-@kernel
-def _n(p: np.ndarray) -> int:
-    return int(p[P_NQ])
-
-
-@kernel
-def _table(p: np.ndarray, t: int) -> int:
-    """Offset of table t (its rolling coordinate; its rows follow)."""
-    n, npts = _n(p), int(p[T_NPTS])
-    return T_TABLES + t * (1 + npts * (ROW_HEAD + 2 * n))
-
-
-@kernel
-def row_offset(p: np.ndarray, t: int, i: int) -> int:
-    """Offset of row i of table t (mass, inertia, coordinate, w)."""
-    return _table(p, t) + 1 + i * (ROW_HEAD + 2 * _n(p))
-
-
-@kernel
-def _w(p: np.ndarray, t: int, i: int) -> int:
-    """Offset of the w vectors of row i of table t; in table 0, i = T_NPTS is the hip, T_NPTS + 1 the swing foot."""
-    npts = int(p[T_NPTS])
-    if i < npts:
-        return row_offset(p, t, i) + ROW_HEAD
-    return _table(p, 2) + (i - npts) * 2 * _n(p)
-
-
-@kernel
-def lock_offset(p: np.ndarray, j: int) -> int:
-    """Offset of lock j's fields."""
-    return _table(p, 2) + 4 * _n(p) + LOCK_FIELDS * j
-
-
-@kernel
-def phase_offset(p: np.ndarray, k: int) -> int:
-    """Offset of phase k's fields (kind, lock)."""
-    return lock_offset(p, int(p[T_NLOCK])) + PHASE_FIELDS * k
-
-
-@kernel
-def perm_offset(p: np.ndarray) -> int:
-    return phase_offset(p, int(p[T_NPHASE]))
-
-
-@kernel
-def work_offset(p: np.ndarray) -> int:
-    return perm_offset(p) + _n(p)
-
-
-def layout_size(n: int, n_points: int, n_lock: int, n_phase: int) -> tuple[int, int]:
-    """(parameter length without workspace, workspace length) of a tree of n coordinates."""
-    size = T_TABLES + 2 * (1 + n_points * (ROW_HEAD + 2 * n)) + 4 * n + LOCK_FIELDS * n_lock
-    size += PHASE_FIELDS * n_phase + n
-    m = n + n_lock
-    return size, m * m + m + 2 * n_points + 2 * n
-
-
-@kernel
-def point(p: np.ndarray, i: int, q: np.ndarray) -> tuple[float, float]:
-    """Position of row i of table 0 (slope frame, the stance contact point at x = 0 when its angle is 0)."""
-    base = _w(p, 0, i)
-    x, y = -p[P_R] * q[int(p[_table(p, 0)])], p[P_R]
-    for k in range(_n(p)):
-        wx, wy = p[base + 2 * k], p[base + 2 * k + 1]
-        s, c = math.sin(q[k]), math.cos(q[k])
-        x += c * wx - s * wy
-        y += s * wx + c * wy
-    return x, y
-
-
-@kernel
-def _jacobian(p: np.ndarray, t: int, i: int, q: np.ndarray, k: int) -> tuple[float, float]:
-    """Column k of the Jacobian of row i of table t."""
-    base = _w(p, t, i)
-    wx, wy = p[base + 2 * k], p[base + 2 * k + 1]
-    s, c = math.sin(q[k]), math.cos(q[k])
-    jx, jy = -s * wx - c * wy, c * wx - s * wy
-    if k == int(p[_table(p, t)]):
-        jx -= p[P_R]
-    return jx, jy
-
-
-@kernel
-def point_velocity(p: np.ndarray, t: int, i: int, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
-    """Velocity of row i of table t."""
-    vx = vy = 0.0
-    for k in range(_n(p)):
-        jx, jy = _jacobian(p, t, i, q, k)
-        vx += jx * qd[k]
-        vy += jy * qd[k]
-    return vx, vy
-
-
-@kernel
-def _bias(p: np.ndarray, i: int, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
-    """Jdot qd of row i of table 0: -sum_k Rot(theta_k) w_k thetadot_k^2."""
-    base = _w(p, 0, i)
-    bx = by = 0.0
-    for k in range(_n(p)):
-        wx, wy = p[base + 2 * k], p[base + 2 * k + 1]
-        s, c = math.sin(q[k]), math.cos(q[k])
-        r2 = qd[k] * qd[k]
-        bx -= (c * wx - s * wy) * r2
-        by -= (s * wx + c * wy) * r2
-    return bx, by
 
 
 @kernel
 def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
     """Write M of table t and the active lock rows into the (m x m) matrix at p[w:]; returns the rows used (the
     workspace's last 2 n floats hold a point's Jacobian meanwhile)."""
-    n = _n(p)
+    n = coords(p)
     jw = w + m * m + m + 2 * int(p[T_NPTS])
     for a in range(m * m):
         p[w + a] = 0.0
@@ -163,7 +83,7 @@ def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
         if mass == 0.0:
             continue
         for k in range(n):
-            p[jw + 2 * k], p[jw + 2 * k + 1] = _jacobian(p, t, i, q, k)
+            p[jw + 2 * k], p[jw + 2 * k + 1] = jacobian(p, t, i, q, k)
         for k in range(n):
             for col in range(k, n):
                 p[w + k * m + col] += mass * (p[jw + 2 * k] * p[jw + 2 * col] + p[jw + 2 * k + 1] * p[jw + 2 * col + 1])
@@ -207,9 +127,72 @@ def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
 
 
 @kernel
+def _pin_light(p: np.ndarray, t: int, w: int, m: int, r: int) -> None:
+    """Give the light coordinates of table t (zero rows and columns of M) a unit diagonal and a zero right side,
+    so that the heavy solve leaves them at 0 for :func:`_light_tier`."""
+    for k in range(coords(p)):
+        if light_flag(p, t, k):
+            p[w + k * m + k] = 1.0
+            p[r + k] = 0.0
+
+
+@kernel
+def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int, w: int, m: int, r: int) -> None:
+    """The light coordinates' equations, the limit of infinitesimal foot masses (Garcia et al. 1998): each light
+    row's balance across the light coordinates, sum_i J_iL^T (J_i a - b_i) = 0, with the heavy part of a already
+    solved in p[r:] and written back there (b_i: g - Jdot_i qd in the flow, the row's velocity just before an
+    impact, 0 for a push or at rest). The heavy equations do not see these rows: their masses vanish."""
+    n, npts = coords(p), int(p[T_NPTS])
+    size = 0
+    for k in range(n):
+        size += 1 if light_flag(p, t, k) else 0
+    if size == 0:
+        return
+    rhs = w + m * m + m + 2 * (npts + int(p[T_NLIGHT]))
+    for a in range(size):
+        p[rhs + a] = 0.0
+        for b in range(size):
+            p[w + a * m + b] = 0.0
+    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
+    for j in range(int(p[T_NLIGHT])):
+        base = row_offset(p, t, npts + j) + ROW_HEAD
+        cx = cy = 0.0
+        if mode == FLOW:
+            bx, by = bias(p, base, q, qd)
+            cx, cy = gx - bx, gy - by
+        elif mode == IMPACT:
+            before = row_offset(p, 0, npts + j) + ROW_HEAD
+            for k in range(n):
+                jx, jy = jacobian_column(p, 0, before, q, k)
+                cx, cy = cx + jx * qd[k], cy + jy * qd[k]
+        for k in range(n):
+            if not light_flag(p, t, k):
+                jx, jy = jacobian_column(p, t, base, q, k)
+                cx, cy = cx - jx * p[r + k], cy - jy * p[r + k]
+        a = 0
+        for k in range(n):
+            if light_flag(p, t, k):
+                jx, jy = jacobian_column(p, t, base, q, k)
+                p[rhs + a] += jx * cx + jy * cy
+                b = 0
+                for col in range(n):
+                    if light_flag(p, t, col):
+                        lx, ly = jacobian_column(p, t, base, q, col)
+                        p[w + a * m + b] += jx * lx + jy * ly
+                        b += 1
+                a += 1
+    _solve(p, w, m, size, rhs)
+    a = 0
+    for k in range(n):
+        if light_flag(p, t, k):
+            p[r + k] = p[rhs + a]
+            a += 1
+
+
+@kernel
 def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt: Kane's equations with the locked stops as constraints."""
-    n = _n(p)
+    n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
     w = work_offset(p)
@@ -222,11 +205,13 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
         mass = p[row_offset(p, 0, i)]
         if mass == 0.0:
             continue
-        bx, by = _bias(p, i, q, qd)
+        bx, by = bias(p, w_offset(p, 0, i), q, qd)
         for k in range(n):
-            jx, jy = _jacobian(p, 0, i, q, k)
+            jx, jy = jacobian(p, 0, i, q, k)
             p[r + k] += mass * (jx * (gx - bx) + jy * (gy - by))
+    _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
+    _light_tier(p, 0, q, qd, FLOW, w, m, r)
     for k in range(n):
         out[k] = qd[k]
         out[n + k] = p[r + k]
@@ -235,7 +220,7 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
 @kernel
 def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """(kinetic, potential) energy of the rows of table 0 (potential zero with every point on the ground line)."""
-    n = _n(p)
+    n = coords(p)
     q, qd = x[:n], x[n:]
     gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
     kinetic = potential = 0.0
@@ -254,7 +239,7 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
     """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
     (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being
     coordinate perm[k] before). The right side is each row's momentum just before, m J'^T v- + I omega-."""
-    n = _n(p)
+    n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
     w = work_offset(p)
@@ -274,21 +259,27 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
         own = int(p[o + 2])
         p[r + own] += p[o + 1] * qd[own]
         for k in range(n):
-            jx, jy = _jacobian(p, t, i, q, k)
+            jx, jy = jacobian(p, t, i, q, k)
             p[r + k] += p[o] * (jx * p[v + 2 * i] + jy * p[v + 2 * i + 1])
+    _pin_light(p, t, w, m, r)
     _solve(p, w, m, used, r)
+    _light_tier(p, t, q, qd, IMPACT, w, m, r)
     perm = perm_offset(p)
     for k in range(n):
         src = int(p[perm + k]) if strike else k
-        out[k] = q[src]
+        out[k] = q[src] + (p[perm + n + k] if strike else 0.0)
         out[n + k] = p[r + src]
 
 
 @kernel
 def tree_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     """The phase's guard (its downward zero ends it): a stop's margin, the stance foot's lead over the hip, or the
-    swing foot's height above the slope."""
-    n = _n(p)
+    heel strike's factor of the landing foot's clearance. With both legs locked (each a rigid body whose foot centre
+    is A from the hip, leaning phi from its hip body's axis) the clearance is 2 A sin((th_st + th_land + 2 phi) / 2)
+    sin((th_land - th_st) / 2): its second factor vanishes at the mid-stance scuff (ignored), the first at the
+    strike, th_st + th_land + 2 phi = 0 (th_land in the stance leg's coordinates: the wheel's next spoke is its
+    stance spoke's angle plus the spoke spacing, the shift)."""
+    n = coords(p)
     o = phase_offset(p, phase)
     kind = int(p[o])
     if kind == STOP:
@@ -297,15 +288,15 @@ def tree_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     npts = int(p[T_NPTS])
     if kind == PAST:
         hip_x, _ = point(p, npts, x[:n])
-        return -p[P_R] * x[int(p[_table(p, 0)])] - hip_x
-    _, foot_y = point(p, npts + 1, x[:n])
-    return foot_y - p[T_RSW]
+        return -p[P_R] * x[int(p[table_offset(p, 0)])] - hip_x
+    land = int(p[perm_offset(p)])  # the landing leg's hip body: coordinate 0 after the strike
+    return x[0] + x[land] + p[perm_offset(p) + n] + 2.0 * p[P_LEAN]
 
 
 @kernel
 def tree_guard_rate(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     """Time derivative of :func:`tree_guard` (positions move with the rates in x)."""
-    n = _n(p)
+    n = coords(p)
     o = phase_offset(p, phase)
     kind = int(p[o])
     if kind == STOP:
@@ -314,9 +305,8 @@ def tree_guard_rate(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     npts = int(p[T_NPTS])
     if kind == PAST:
         vx, _ = point_velocity(p, 0, npts, x[:n], x[n:])
-        return -p[P_R] * x[n + int(p[_table(p, 0)])] - vx
-    _, vy = point_velocity(p, 0, npts + 1, x[:n], x[n:])
-    return vy
+        return -p[P_R] * x[n + int(p[table_offset(p, 0)])] - vx
+    return x[n] + x[n + int(p[perm_offset(p)])]
 
 
 @kernel
@@ -354,7 +344,7 @@ def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
     hip's height minus 0.05 l."""
     if i < 2:
         return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
-    _, hip_y = point(p, int(p[T_NPTS]), x[: _n(p)])
+    _, hip_y = point(p, int(p[T_NPTS]), x[: coords(p)])
     return hip_y - FALL_HIP_FRACTION * p[P_L]
 
 
@@ -363,7 +353,7 @@ def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarra
     """out = the state just after an impulse (px, py) on the hip, ``[M A^T; A 0] [dqd; Lambda] = [J_hip^T p; 0]``
     (the stance foot and the locked stops hold); returns the ground's normal impulse (the walker's momentum change
     minus p, normal part: negative when the push would lift the stance foot)."""
-    n = _n(p)
+    n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
     w = work_offset(p)
@@ -373,16 +363,33 @@ def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarra
     for a in range(m):
         p[r + a] = 0.0
     for k in range(n):
-        jx, jy = _jacobian(p, 0, npts, q, k)
+        jx, jy = jacobian(p, 0, npts, q, k)
         p[r + k] = jx * px + jy * py
+    _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
+    _light_tier(p, 0, q, qd, AT_REST, w, m, r)
     normal = -py
     for i in range(npts):
         mass = p[row_offset(p, 0, i)]
         for k in range(n):
-            _, jy = _jacobian(p, 0, i, q, k)
+            _, jy = jacobian(p, 0, i, q, k)
             normal += mass * jy * p[r + k]
     for k in range(n):
         out[k] = q[k]
         out[n + k] = qd[k] + p[r + k]
     return normal
+
+
+@kernel
+def tree_light_rates(p: np.ndarray, x: np.ndarray) -> None:
+    """Fill in x the light coordinates' rates that the heavy rates imply with the light rows at rest across them
+    (just after a heel strike the new swing foot was the stance foot: Garcia's swing rate cos(2 theta) thetadot)."""
+    n = coords(p)
+    m = n + int(p[T_NLOCK])
+    w = work_offset(p)
+    r = w + m * m
+    for k in range(n):
+        p[r + k] = x[n + k]
+    _light_tier(p, 0, x[:n], x[n:], AT_REST, w, m, r)
+    for k in range(n):
+        x[n + k] = p[r + k]

@@ -1,48 +1,9 @@
-"""Continuation of the rigid period-1 gait in the slope, the period-doubling slope, and an independent
-route to the simplest walker's multipliers (the variational equations)."""
+"""Continuation of the rigid period-1 gait in the slope and the period-doubling slope."""
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from biped_sim.config import Config, derive
-from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError, rigid_limit_cycle
-from biped_sim.rigid.models import SimplestWalker
-from biped_sim.rigid.stepping import rigid_step
-
-
-def simplest_variational_jacobian(walker: SimplestWalker, z: np.ndarray) -> np.ndarray:
-    """Step-map Jacobian of the simplest walker from the variational equations (not finite differences).
-
-    Phi' = Df(x) Phi along the flow, the saltation through the strike guard g = theta_st + theta_sw
-    (the event time moves with the state), then the impact's Jacobian, in section coordinates.
-    """
-    from scipy.integrate import solve_ivp  # here: scipy.integrate adds 0.3 s to start-up
-
-    step = rigid_step(walker, walker.from_section(z))
-    if step.status != "strike":
-        raise StepFailedError(f"the simplest walker {step.status}")
-
-    def augmented(_t: float, y: np.ndarray) -> np.ndarray:
-        x, phi = y[:4], y[4:].reshape(4, 4)
-        return np.concatenate([walker.rhs(x), (walker.jacobian(x) @ phi).ravel()])
-
-    x0 = walker.from_section(z)
-    y0 = np.concatenate([x0, np.eye(4).ravel()])
-    sol = solve_ivp(augmented, (0.0, step.period), y0, method="DOP853", rtol=1e-12, atol=1e-12)
-    x_minus, phi = sol.y[:4, -1], sol.y[4:, -1].reshape(4, 4)
-    f = walker.rhs(x_minus)
-    grad = np.array([1.0, 1.0, 0.0, 0.0])
-    saltation = np.eye(4) - np.outer(f, grad) / (grad @ f)
-    full = walker.impact_jacobian(x_minus) @ saltation @ phi
-    # d(from_section)/dz and the section rows (theta_st, thetadot_st)
-    theta, theta_d = z
-    lift = np.array(
-        [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [-2.0 * math.sin(2.0 * theta) * theta_d, math.cos(2.0 * theta)]]
-    )
-    return full[[0, 2]] @ lift
+from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
 
 
 def continue_cycle(config: Config, slope: float, guess: dict[str, float]) -> LimitCycle:

@@ -20,12 +20,12 @@ from biped_sim.config import config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import SimplestWalker
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import simulate
 from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config
-from biped_sim.studies.continuation import period_doubling_slope, simplest_variational_jacobian
+from biped_sim.studies.continuation import period_doubling_slope
 from biped_sim.studies.drop_test import drop_test_table
+from biped_sim.studies.garcia import simplest_variational_jacobian
 from biped_sim.studies.uncertainty.checks import uncertainty_checks
 from biped_sim.studies.validation_studies import (
     basin_checks,
@@ -63,7 +63,7 @@ def garcia_checks(refs: dict[str, Any]) -> list[Check]:
             cycle.stable,
         ),
     ]
-    variational = np.linalg.eigvals(simplest_variational_jacobian(SimplestWalker(config), cycle.section_point))
+    variational = np.linalg.eigvals(simplest_variational_jacobian(rigid_walker(config), cycle.section_point))
     gap = float(np.max(np.abs(np.sort_complex(variational) - np.sort_complex(cycle.multipliers))))
     rows.append(
         Check(

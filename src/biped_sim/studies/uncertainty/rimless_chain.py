@@ -33,7 +33,6 @@ from biped_sim.config import Config
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_kernel, with_slope
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.models import RimlessWheel
 
 CHAIN_STATES = 800
 CHAIN_NODES = 4000
@@ -51,9 +50,9 @@ class Wheel:
     @classmethod
     def of(cls, config: Config) -> Wheel:
         walker = rigid_walker(config)
-        if not isinstance(walker, RimlessWheel):
+        if walker.name != "rimless_wheel":
             raise TypeError("the Markov chain is the rimless wheel's")
-        return cls(walker.half_angle, config.gravity / config.walker.leg_length, config.ground.slope)
+        return cls(0.5 * walker.shift, config.gravity / config.walker.leg_length, config.ground.slope)
 
     def apex_map(self, x: np.ndarray, gamma: np.ndarray) -> np.ndarray:
         """The next apex rate of apex rates ``x`` on slopes ``gamma`` (NaN: the wheel falls)."""
@@ -90,13 +89,13 @@ def wheel_walks(config: Config, roughness: float, seeds: range, cap: int) -> tup
     """Walks of the compiled rigid wheel on random slopes, one per seed: (strikes, fell), ``fell`` False for a
     walk that reached the cap."""
     walker = rigid_walker(config)
-    if not isinstance(walker, RimlessWheel):
+    if walker.name != "rimless_wheel":
         raise TypeError("wheel_walks walks the rimless wheel")
     cw = compile_walker(walker)
     start = walker.state_from_legs(rigid_limit_cycle(config).fixed_point)
     strikes, fell = np.zeros(len(seeds), dtype=np.int64), np.zeros(len(seeds), dtype=bool)
     for i, seed in enumerate(seeds):
-        strikes[i], fell[i] = _walk(cw, walker.half_angle, config.ground.slope, start, roughness, seed, cap)
+        strikes[i], fell[i] = _walk(cw, 0.5 * walker.shift, config.ground.slope, start, roughness, seed, cap)
     return strikes, fell
 
 
