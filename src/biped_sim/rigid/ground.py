@@ -3,7 +3,7 @@
 The rigid models keep a flat local ground under the stance foot: it rolls (round feet) or pivots (point
 feet) on the level of its own contact point, a line of the slope's direction, as on the plane. The profile
 enters at the heel strike only: once the swing foot has left its mid-stance scuff (which the rigid models
-ignore: :mod:`biped_sim.rigid.stepping`), the step ends when the lowest point of the swing foot's arc (the
+ignore: :mod:`biped_sim.rigid.compiled`), the step ends when the lowest point of the swing foot's arc (the
 foot point when R = 0) comes down to the profile's height at its x,
 
     clearance = level + (l - R)(cos theta_st - cos theta_sw) - h(x_swing),
@@ -20,9 +20,9 @@ as ``tripped`` (the run counts it as a fall). So does a swing foot already below
 is first sought (it crossed a riser during the mid-stance swing, whose scuffing the rigid model ignores). Only
 the lowest point is checked: the front of a round foot's arc may graze a riser unnoticed.
 
-The compiled step map (:mod:`biped_sim.rigid.compiled`) reads the same quantities from the kernels below: the
-walker's swing foot (:func:`tree_swing_foot`), its clearance (:func:`clearance`) and the riser test
-(:func:`riser_hit`, which :meth:`ProfileStrike.tripped` calls too).
+The compiled step map reads them from the kernels below: the swing foot (:func:`tree_swing_foot`), its
+clearance (:func:`clearance`) and the riser test (:func:`riser_hit`); :class:`ProfileStrike`, the scipy
+reference's view, calls the same clearance and riser kernels.
 
 The impact is the walker's own map (angular momentum about the new contact point and of the trailing leg
 about the hip), which holds for any leg angles (Garcia's published map for the simplest walker assumes the
