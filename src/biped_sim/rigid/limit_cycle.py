@@ -27,7 +27,8 @@ from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import initial_state, rigid_walker
 from biped_sim.rigid.compiled import CompiledWalker, compile_walker
 from biped_sim.rigid.compiled import rigid_step as compiled_step
-from biped_sim.rigid.stepping import RTOL, RigidStep, rigid_step
+from biped_sim.rigid.step import RTOL, RigidStep
+from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import RigidWalker
 
 RIGID_TOLERANCE = 1e-10

@@ -1,4 +1,5 @@
-"""One rigid step, and a rigid run of many: event-located integration of the flow between heel strikes.
+"""One rigid step by scipy: the slow reference that the compiled step map (:mod:`biped_sim.rigid.compiled`,
+which every run and study takes) is tested against, and the limit cycles' ``engine="scipy"``.
 
 The flow is integrated by scipy's DOP853 (8th order, 7th-order dense output) at rtol = atol = 1e-12.
 Each guard phase ends at a downward zero crossing of its guard function, found by root finding on the
