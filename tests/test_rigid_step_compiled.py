@@ -144,7 +144,8 @@ def test_a_riser_trips_both_at_the_same_point(case, at: float) -> None:  # type:
 
 @contextmanager
 def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """The rigid step map and every kernel it calls as plain Python: each compiled function is its ``.py_func``."""
+    """The rigid step map as plain Python: every compiled function of the rigid, integration and contact modules is
+    its ``.py_func`` (the equations' inlined copies, :func:`biped_sim.kernel.inlined`, stay compiled inside)."""
     with monkeypatch.context() as patch:
         for name, module in list(sys.modules.items()):
             if name.startswith(("biped_sim.rigid", "biped_sim.integrate", "biped_sim.contact")):
