@@ -113,6 +113,19 @@ def test_a_push_at_the_start_is_the_tree_walkers_hip_push(case) -> None:  # type
     assert step.pushes == [(0.0, pytest.approx(work, abs=1e-15), pytest.approx(normal, abs=1e-15))]
 
 
+def test_pushes_at_one_time_are_one_push_of_their_sum(case) -> None:  # type: ignore[no-untyped-def]
+    _, walker, x0 = case
+    (at, a), (_, b) = _pushes(walker)
+    # the jump is linear in the impulse at fixed angles; the second push, at or within 1e-15 s of the first, follows it
+    together = compiled.rigid_step(walker, x0, pushes=[(at, a + b)])
+    for second in (at, at + 1e-15):
+        apart = compiled.rigid_step(walker, x0, pushes=[(at, a), (second, b)])
+        assert [t for t, *_ in apart.pushes] == [at, at]  # the second at the state's time: within MIN_STEP of its own
+        assert apart.status == together.status == "strike"
+        assert np.max(np.abs(apart.x_minus - together.x_minus)) < 1e-11
+        assert sum(w for _, w, _ in apart.pushes) == pytest.approx(together.pushes[0][1], rel=1e-12)
+
+
 def test_a_step_down_is_scipys_strike_and_footing(case) -> None:  # type: ignore[no-untyped-def]
     config, walker, x0 = case
     profile = _profile(config, walker, x0, 0.6, -0.01)

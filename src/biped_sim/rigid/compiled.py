@@ -59,6 +59,7 @@ from biped_sim.rigid.integration import (
     OWN,
     REACHED,
     STALLED,
+    STATUS_NAMES,
     STOPS,
     STRIKE,
     TRIPPED,
@@ -87,7 +88,6 @@ from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
 from biped_sim.rigid.tree_kernels import tree_energy, tree_push
 from biped_sim.rigid.tree_layout import P_L, phase_offset
 
-STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
 

@@ -223,8 +223,8 @@ def stretch(
     while t < t_stop:
         clipped = h >= t_stop - t
         h = min(h, t_stop - t)
-        if h < MIN_STEP:
-            return STALLED, t
+        if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
+            return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
         for s in range(1, tab.stages):
             stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
             rigid_rhs(kind, p, sc.y_stage, sc.k[s])
