@@ -44,7 +44,6 @@ from biped_sim.integrate.stepper import (
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.kernels import (
-    P_SLOPE,
     TREE,
     end_phase,
     fall_check,
@@ -60,6 +59,7 @@ from biped_sim.rigid.kernels import (
 )
 from biped_sim.rigid.stepping import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
 from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_layout import P_GX, P_GY, gravity_vector
 
 STRIKE, FELL, STALLED = 0, 1, 2
 STATUS_NAMES = ("strike", "fell", "stalled")
@@ -89,7 +89,7 @@ def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
     """``cw`` on a ground of another slope (a copy of the parameters; the buffers are shared): the step of a
     walk on ground whose slope changes from step to step."""
     params = cw.params.copy()
-    params[P_SLOPE] = slope
+    params[P_GX], params[P_GY] = gravity_vector(math.hypot(params[P_GX], params[P_GY]), slope)
     return cw._replace(params=params)
 
 
@@ -236,10 +236,25 @@ def _polish(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, counters: n
 
 
 @kernel
+def _copy(source: np.ndarray, target: np.ndarray) -> None:
+    """target[:] = source, element by element (a slice assignment may allocate: no reference counts here)."""
+    for i in range(source.shape[0]):
+        target[i] = source[i]
+
+
+@kernel
+def _finite(x: np.ndarray) -> bool:
+    for v in x:
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@kernel(reference_counts=False)
 def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_plus: np.ndarray, counters: np.ndarray):
     """One step from a post-impact state: (status, duration); x_minus = the state at its end, x_plus after
     the strike (meaningful only if the status is STRIKE: a stop strike uses it as scratch)."""
-    x_minus[:] = x_start
+    _copy(x_start, x_minus)
     t = 0.0
     start_step(cw.kind, cw.params)
     for phase in range(first_phase(cw.kind), n_phases(cw.kind, cw.params)):
@@ -254,27 +269,35 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     return STRIKE, t
 
 
-@kernel
+class WalkOutcome(NamedTuple):
+    """Per start of :func:`walk_starts`: status code (STRIKE: walked every step), strikes, last post-impact state;
+    the evaluation and accepted-step counters of them all."""
+
+    status: np.ndarray
+    steps: np.ndarray
+    last: np.ndarray
+    counters: np.ndarray
+
+
+@kernel(reference_counts=False)
 def walk_kernel(
-    cw: CompiledWalker, starts: np.ndarray, max_steps: int, status: np.ndarray, steps: np.ndarray, last: np.ndarray
+    cw: CompiledWalker, starts: np.ndarray, max_steps: int, out: WalkOutcome, x_minus: np.ndarray, x_plus: np.ndarray
 ) -> None:
     """Walk each start (a row of ``starts``) up to ``max_steps`` strikes; per start: the final status (STRIKE:
     walked them all), the strikes taken and the last post-impact state (the start if none). A strike that takes
     no time (the legs together at the start: the guard is already zero) ends the walk as a stall."""
-    ny = starts.shape[1]
-    x_minus, x_plus = np.zeros(ny), np.zeros(ny)
-    counters = np.zeros(2, dtype=np.int64)
+    status, steps, last, counters = out.status, out.steps, out.last, out.counters
     for n in range(starts.shape[0]):
-        last[n, :] = starts[n]
+        _copy(starts[n], last[n])
         status[n], steps[n] = STRIKE, 0
         for k in range(max_steps):
             code, duration = step_kernel(cw, last[n], x_minus, x_plus, counters)
             if code == STRIKE and duration < DEGENERATE_STEP * cw.t_limit:
                 code = STALLED  # a strike in no time: the start sits on the guard (legs together), no step
-            if code != STRIKE or not np.all(np.isfinite(x_plus)):
+            if code != STRIKE or not _finite(x_plus):
                 status[n] = code if code != STRIKE else STALLED
                 break
-            last[n, :] = x_plus
+            _copy(x_plus, last[n])
             steps[n] = k + 1
 
 
@@ -295,18 +318,12 @@ def compiled_step(walker: RigidWalker, x_start: np.ndarray, cw: CompiledWalker |
     return RigidStep("strike", x0, x_minus, x_plus, period, length, int(counters[0]), accepted_steps=int(counters[1]))
 
 
-class WalkOutcome(NamedTuple):
-    """Per start of :func:`walk_starts`: status code (STRIKE: walked every step), strikes, last post-impact state."""
-
-    status: np.ndarray
-    steps: np.ndarray
-    last: np.ndarray
-
-
 def walk_starts(walker: RigidWalker, starts: np.ndarray, max_steps: int) -> WalkOutcome:
     """Walk every start (rows: post-impact states) up to ``max_steps`` strikes, compiled."""
     starts = np.ascontiguousarray(starts, dtype=float)
     n = starts.shape[0]
-    out = WalkOutcome(np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros_like(starts))
-    walk_kernel(compile_walker(walker), starts, max_steps, out.status, out.steps, out.last)
+    out = WalkOutcome(
+        np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros_like(starts), np.zeros(2, dtype=np.int64)
+    )
+    walk_kernel(compile_walker(walker), starts, max_steps, out, np.zeros(starts.shape[1]), np.zeros(starts.shape[1]))
     return out
