@@ -48,7 +48,7 @@ from biped_sim.rigid.tree_layout import (
     coords,
     fill_trig,
     jacobian_column,
-    light_flag,
+    light_flags,
     lock_offset,
     perm_offset,
     phase_offset,
@@ -127,7 +127,17 @@ def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool)
 @kernel
 def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix at p[w:] (row stride m) for the vector at p[r:], in
-    place (Gaussian elimination with partial pivoting: the constrained system is indefinite)."""
+    place: Cramer's rule up to 2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the
+    constrained system is indefinite)."""
+    if used <= 2:
+        a, f = p[w], p[r]
+        if used == 1:
+            p[r] = f / a
+            return
+        b, c, d, g = p[w + 1], p[w + m], p[w + m + 1], p[r + 1]
+        det = a * d - b * c
+        p[r], p[r + 1] = (d * f - b * g) / det, (a * g - c * f) / det
+        return
     for col in range(used):
         pivot = col
         for row in range(col + 1, used):
@@ -153,8 +163,9 @@ def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
 def _pin_light(p: np.ndarray, t: int, w: int, m: int, r: int) -> None:
     """Give the light coordinates of table t (zero rows and columns of M) a unit diagonal and a zero right side,
     so that the heavy solve leaves them at 0 for :func:`_light_tier`."""
+    flags = light_flags(p, t)
     for k in range(coords(p)):
-        if light_flag(p, t, k):
+        if p[flags + k] != 0.0:
             p[w + k * m + k] = 1.0
             p[r + k] = 0.0
 
@@ -166,10 +177,10 @@ def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int,
     solved in p[r:] and written back there (b_i: g - Jdot_i qd in the flow, the row's velocity just before an
     impact, 0 for a push or at rest). The heavy equations do not see these rows: their masses vanish. Light row j
     is foot j (the stance foot, then the landing one): the foot pinned in table t (row t) has no Jacobian."""
-    n, npts, n_light = coords(p), int(p[T_NPTS]), int(p[T_NLIGHT])
+    n, npts, n_light, flags = coords(p), int(p[T_NPTS]), int(p[T_NLIGHT]), light_flags(p, t)
     size = 0
     for k in range(n):
-        size += 1 if light_flag(p, t, k) else 0
+        size += 1 if p[flags + k] != 0.0 else 0
     if size == 0:
         return
     rhs = r + m + 2 * (npts + n_light)  # the Jacobian's scratch; the light system's right side after it
@@ -186,22 +197,22 @@ def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int,
         if mode == IMPACT:
             cx, cy = velocity_at(p, 0, row_offset(p, 0, npts + j) + ROW_HEAD, qd)
         for k in range(n):
-            if not light_flag(p, t, k):
+            if p[flags + k] == 0.0:
                 cx, cy = cx - p[jw + 2 * k] * p[r + k], cy - p[jw + 2 * k + 1] * p[r + k]
         a = 0
         for k in range(n):
-            if light_flag(p, t, k):
+            if p[flags + k] != 0.0:
                 p[rhs + a] += p[jw + 2 * k] * cx + p[jw + 2 * k + 1] * cy
                 b = 0
                 for col in range(n):
-                    if light_flag(p, t, col):
+                    if p[flags + col] != 0.0:
                         p[w + a * m + b] += p[jw + 2 * k] * p[jw + 2 * col] + p[jw + 2 * k + 1] * p[jw + 2 * col + 1]
                         b += 1
                 a += 1
     _solve(p, w, m, size, rhs)
     a = 0
     for k in range(n):
-        if light_flag(p, t, k):
+        if p[flags + k] != 0.0:
             p[r + k] = p[rhs + a]
             a += 1
 

@@ -84,10 +84,10 @@ def perm_offset(p: np.ndarray) -> int:
 
 
 @kernel
-def light_flag(p: np.ndarray, t: int, k: int) -> bool:
-    """Whether coordinate k is light in table t: no mass, inertia or lock turns with it, only the feet's
-    infinitesimal masses (Garcia's massless swing leg)."""
-    return p[int(p[T_PERM]) + (2 + t) * coords(p) + k] != 0.0
+def light_flags(p: np.ndarray, t: int) -> int:
+    """Offset of table t's light flags: p[offset + k] != 0 when no mass, inertia or lock turns with coordinate k,
+    only the feet's infinitesimal masses (Garcia's massless swing leg)."""
+    return int(p[T_PERM]) + (2 + t) * coords(p)
 
 
 @kernel
