@@ -214,6 +214,8 @@ def test_the_compliant_kneed_walker_closes_its_energy_balance_with_the_knee_stop
     assert np.max(np.abs(audit.residual)) < 1e-7 * scale
     assert np.max(np.abs(audit.residual - stops)) > 1e5 * np.max(np.abs(audit.residual))  # without W_stop: open
     assert result.summary["energy_dissipated"]["stops"] == pytest.approx(float(stops[-1]))
+    channels = {channel.path: channel.data for channel in result.trajectory().channels}
+    assert np.array_equal(channels["energy/dissipated_stops"], audit.dissipated_stops)  # W_stop in trajectory.h5
 
 
 @pytest.mark.slow

@@ -73,7 +73,6 @@ from biped_sim.rigid.integration import (
 )
 from biped_sim.rigid.integration import FELL as FELL  # re-exported with the other statuses of a step
 from biped_sim.rigid.kernels import (
-    P_SLOPE,
     TREE,
     end_phase,
     first_phase,
@@ -86,7 +85,7 @@ from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
 from biped_sim.rigid.tree_kernels import tree_energy, tree_push
-from biped_sim.rigid.tree_layout import P_L, phase_offset
+from biped_sim.rigid.tree_layout import P_GX, P_GY, P_L, gravity_vector, phase_offset
 
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
@@ -100,7 +99,7 @@ def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
     """``cw`` on a ground of another slope (a copy of the parameters; the buffers are shared): the step of a
     walk on ground whose slope changes from step to step."""
     params = cw.params.copy()
-    params[P_SLOPE] = slope
+    params[P_GX], params[P_GY] = gravity_vector(math.hypot(params[P_GX], params[P_GY]), slope)
     return cw._replace(params=params)
 
 
@@ -224,22 +223,24 @@ def _finite(x: np.ndarray) -> bool:
     return True
 
 
+class WalkOutcome(NamedTuple):
+    """Per start of :func:`walk_starts`: status code (STRIKE: walked every step), strikes, last post-impact state;
+    the evaluation and accepted-step counters of them all."""
+
+    status: np.ndarray
+    steps: np.ndarray
+    last: np.ndarray
+    counters: np.ndarray
+
+
 @kernel(reference_counts=False)
 def walk_kernel(
-    cw: CompiledWalker,
-    starts: np.ndarray,
-    max_steps: int,
-    status: np.ndarray,
-    steps: np.ndarray,
-    last: np.ndarray,
-    ends: np.ndarray,
-    counters: np.ndarray,
+    cw: CompiledWalker, starts: np.ndarray, max_steps: int, out: WalkOutcome, x_minus: np.ndarray, x_plus: np.ndarray
 ) -> None:
     """Walk each start (a row of ``starts``) up to ``max_steps`` strikes; per start: the final status (STRIKE:
     walked them all), the strikes taken and the last post-impact state (the start if none). A strike that takes
-    no time (the legs together at the start: the guard is already zero) ends the walk as a stall. ``ends``
-    (2, ny) holds each step's pre- and post-impact states, ``counters`` (2,) its solver counts."""
-    x_minus, x_plus = ends[0], ends[1]
+    no time (the legs together at the start: the guard is already zero) ends the walk as a stall."""
+    status, steps, last, counters = out.status, out.steps, out.last, out.counters
     for n in range(starts.shape[0]):
         copy_into(starts[n], last[n])
         status[n], steps[n] = STRIKE, 0
@@ -316,19 +317,12 @@ def rigid_step(
     )  # fmt: skip
 
 
-class WalkOutcome(NamedTuple):
-    """Per start of :func:`walk_starts`: status code (STRIKE: walked every step), strikes, last post-impact state."""
-
-    status: np.ndarray
-    steps: np.ndarray
-    last: np.ndarray
-
-
 def walk_starts(walker: RigidWalker, starts: np.ndarray, max_steps: int) -> WalkOutcome:
     """Walk every start (rows: post-impact states) up to ``max_steps`` strikes, compiled."""
     starts = np.ascontiguousarray(starts, dtype=float)
     n = starts.shape[0]
-    out = WalkOutcome(np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros_like(starts))
-    ends, counters = np.zeros((2, starts.shape[1])), np.zeros(2, dtype=np.int64)
-    walk_kernel(compile_walker(walker), starts, max_steps, out.status, out.steps, out.last, ends, counters)
+    out = WalkOutcome(
+        np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros_like(starts), np.zeros(2, dtype=np.int64)
+    )
+    walk_kernel(compile_walker(walker), starts, max_steps, out, np.zeros(starts.shape[1]), np.zeros(starts.shape[1]))
     return out

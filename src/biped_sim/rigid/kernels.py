@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.rigid.tree_kernels import (
     FALL_HIP_FRACTION,
     after_phase,
@@ -20,24 +20,26 @@ from biped_sim.rigid.tree_kernels import (
     tree_rhs,
 )
 from biped_sim.rigid.tree_layout import (
-    P_SLOPE,
     T_NPHASE,
 )
 
 TREE = 3
-__all__ = ["FALL_HIP_FRACTION", "P_SLOPE", "TREE"]
+# the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
+# its arguments' words and reference counts at every evaluation
+_rhs, _guard, _fall = inlined(tree_rhs), inlined(tree_guard), inlined(tree_fall)
+__all__ = ["FALL_HIP_FRACTION", "TREE"]
 
 
 @kernel
 def rigid_rhs(kind: int, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt."""
-    tree_rhs(p, x, out)
+    _rhs(p, x, out)
 
 
 @kernel
 def guard(kind: int, p: np.ndarray, phase: int, x: np.ndarray) -> float:
     """The phase's guard (its downward zero ends the phase)."""
-    return tree_guard(p, phase, x)
+    return _guard(p, phase, x)
 
 
 @kernel
@@ -78,7 +80,7 @@ def n_fall_checks(kind: int, p: np.ndarray) -> int:
 
 @kernel
 def fall_check(kind: int, p: np.ndarray, i: int, x: np.ndarray) -> float:
-    return tree_fall(p, i, x)
+    return _fall(p, i, x)
 
 
 @kernel

@@ -27,9 +27,9 @@ from biped_sim.rigid.tree_layout import (
     T_NLOCK,
     T_NPTS,
     T_RSW,
-    T_TABLES,
     lock_offset,
     point_velocity,
+    rolling,
     row_offset,
     w_offset,
 )
@@ -100,7 +100,7 @@ def _contact_jacobian(walker: RigidWalker, q: np.ndarray, landing: bool) -> np.n
     p = walker.params
     base = w_offset(p, 0, walker.n_points + 1) if landing else None
     jac = _free_jacobian(p, base, q)
-    foot_body = walker.landing_foot_body if landing else int(p[T_TABLES])
+    foot_body = rolling(p, 1 if landing else 0)
     radius = float(p[T_RSW]) if landing else walker.foot_radius
     jac[0, 2 + foot_body] += radius  # the arc turning about its centre R above the point
     return jac

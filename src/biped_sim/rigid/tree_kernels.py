@@ -30,35 +30,35 @@ jumps) known (:func:`_light_tier`). The energy and every heavy equation see only
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from biped_sim.kernel import kernel
 from biped_sim.rigid.tree_layout import (
     P_FALL,
-    P_G,
+    P_GX,
+    P_GY,
     P_L,
     P_LEAN,
     P_R,
-    P_SLOPE,
     ROW_HEAD,
     T_NLIGHT,
     T_NLOCK,
     T_NPHASE,
     T_NPTS,
-    bias,
     coords,
-    jacobian,
+    fill_trig,
     jacobian_column,
-    light_flag,
+    light_flags,
     lock_offset,
     perm_offset,
     phase_offset,
     point,
+    point_at,
     point_velocity,
+    rolling,
     row_offset,
-    table_offset,
+    turned,
+    velocity_at,
     w_offset,
     work_offset,
 )
@@ -69,24 +69,47 @@ FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a f
 
 
 @kernel
-def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
-    """Write M of table t and the active lock rows into the (m x m) matrix at p[w:]; returns the rows used (the
-    workspace's last 2 n floats hold a point's Jacobian meanwhile)."""
+def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> tuple[float, float]:
+    """Write the Jacobian columns of the point whose w vectors start at p[base] to p[jw:] (2 n floats) and return
+    its bias acceleration (:func:`bias`, from the same turned vectors: one pass, cached angles)."""
+    bx = by = 0.0
+    roll = rolling(p, t)
+    for k in range(coords(p)):
+        jx, jy = turned(p, base, k)
+        r2 = qd[k] * qd[k]
+        bx -= jy * r2
+        by += jx * r2
+        p[jw + 2 * k], p[jw + 2 * k + 1] = (jx - p[P_R], jy) if k == roll else (jx, jy)
+    return bx, by
+
+
+@kernel
+def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool) -> int:
+    """Write M of table t and the active lock rows into the (m x m) matrix at p[w:] and, for the ``flow``, the
+    generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into p[w + m m:]; returns the rows used (the workspace's
+    last 2 n floats hold a point's Jacobian meanwhile; the angles cached by :func:`fill_trig`)."""
     n = coords(p)
-    jw = w + m * m + m + 2 * int(p[T_NPTS])
+    r = w + m * m
+    jw = r + m + 2 * (int(p[T_NPTS]) + int(p[T_NLIGHT]))
+    gx, gy = p[P_GX], p[P_GY]
     for a in range(m * m):
         p[w + a] = 0.0
+    for a in range(m):
+        p[r + a] = 0.0
     for i in range(int(p[T_NPTS])):
         o = row_offset(p, t, i)
         mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
         p[w + own * m + own] += inertia
         if mass == 0.0:
             continue
+        bx, by = _row_jacobian(p, t, o + ROW_HEAD, qd, jw)
+        fx, fy = mass * (gx - bx), mass * (gy - by)
         for k in range(n):
-            p[jw + 2 * k], p[jw + 2 * k + 1] = jacobian(p, t, i, q, k)
-        for k in range(n):
+            jkx, jky = p[jw + 2 * k], p[jw + 2 * k + 1]
+            if flow:
+                p[r + k] += jkx * fx + jky * fy
             for col in range(k, n):
-                p[w + k * m + col] += mass * (p[jw + 2 * k] * p[jw + 2 * col] + p[jw + 2 * k + 1] * p[jw + 2 * col + 1])
+                p[w + k * m + col] += mass * (jkx * p[jw + 2 * col] + jky * p[jw + 2 * col + 1])
     for k in range(n):
         for col in range(k + 1, n):
             p[w + col * m + k] = p[w + k * m + col]
@@ -104,7 +127,17 @@ def _assemble(p: np.ndarray, t: int, q: np.ndarray, w: int, m: int) -> int:
 @kernel
 def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix at p[w:] (row stride m) for the vector at p[r:], in
-    place (Gaussian elimination with partial pivoting: the constrained system is indefinite)."""
+    place: Cramer's rule up to 2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the
+    constrained system is indefinite)."""
+    if used <= 2:
+        a, f = p[w], p[r]
+        if used == 1:
+            p[r] = f / a
+            return
+        b, c, d, g = p[w + 1], p[w + m], p[w + m + 1], p[r + 1]
+        det = a * d - b * c
+        p[r], p[r + 1] = (d * f - b * g) / det, (a * g - c * f) / det
+        return
     for col in range(used):
         pivot = col
         for row in range(col + 1, used):
@@ -130,8 +163,9 @@ def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
 def _pin_light(p: np.ndarray, t: int, w: int, m: int, r: int) -> None:
     """Give the light coordinates of table t (zero rows and columns of M) a unit diagonal and a zero right side,
     so that the heavy solve leaves them at 0 for :func:`_light_tier`."""
+    flags = light_flags(p, t)
     for k in range(coords(p)):
-        if light_flag(p, t, k):
+        if p[flags + k] != 0.0:
             p[w + k * m + k] = 1.0
             p[r + k] = 0.0
 
@@ -141,50 +175,44 @@ def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int,
     """The light coordinates' equations, the limit of infinitesimal foot masses (Garcia et al. 1998): each light
     row's balance across the light coordinates, sum_i J_iL^T (J_i a - b_i) = 0, with the heavy part of a already
     solved in p[r:] and written back there (b_i: g - Jdot_i qd in the flow, the row's velocity just before an
-    impact, 0 for a push or at rest). The heavy equations do not see these rows: their masses vanish."""
-    n, npts = coords(p), int(p[T_NPTS])
+    impact, 0 for a push or at rest). The heavy equations do not see these rows: their masses vanish. Light row j
+    is foot j (the stance foot, then the landing one): the foot pinned in table t (row t) has no Jacobian."""
+    n, npts, n_light, flags = coords(p), int(p[T_NPTS]), int(p[T_NLIGHT]), light_flags(p, t)
     size = 0
     for k in range(n):
-        size += 1 if light_flag(p, t, k) else 0
+        size += 1 if p[flags + k] != 0.0 else 0
     if size == 0:
         return
-    rhs = w + m * m + m + 2 * (npts + int(p[T_NLIGHT]))
+    rhs = r + m + 2 * (npts + n_light)  # the Jacobian's scratch; the light system's right side after it
+    jw = rhs + n
     for a in range(size):
         p[rhs + a] = 0.0
         for b in range(size):
             p[w + a * m + b] = 0.0
-    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
-    for j in range(int(p[T_NLIGHT])):
-        base = row_offset(p, t, npts + j) + ROW_HEAD
-        cx = cy = 0.0
-        if mode == FLOW:
-            bx, by = bias(p, base, q, qd)
-            cx, cy = gx - bx, gy - by
-        elif mode == IMPACT:
-            before = row_offset(p, 0, npts + j) + ROW_HEAD
-            for k in range(n):
-                jx, jy = jacobian_column(p, 0, before, q, k)
-                cx, cy = cx + jx * qd[k], cy + jy * qd[k]
+    for j in range(n_light):
+        if j == t:
+            continue
+        bx, by = _row_jacobian(p, t, row_offset(p, t, npts + j) + ROW_HEAD, qd, jw)
+        cx, cy = (p[P_GX] - bx, p[P_GY] - by) if mode == FLOW else (0.0, 0.0)
+        if mode == IMPACT:
+            cx, cy = velocity_at(p, 0, row_offset(p, 0, npts + j) + ROW_HEAD, qd)
         for k in range(n):
-            if not light_flag(p, t, k):
-                jx, jy = jacobian_column(p, t, base, q, k)
-                cx, cy = cx - jx * p[r + k], cy - jy * p[r + k]
+            if p[flags + k] == 0.0:
+                cx, cy = cx - p[jw + 2 * k] * p[r + k], cy - p[jw + 2 * k + 1] * p[r + k]
         a = 0
         for k in range(n):
-            if light_flag(p, t, k):
-                jx, jy = jacobian_column(p, t, base, q, k)
-                p[rhs + a] += jx * cx + jy * cy
+            if p[flags + k] != 0.0:
+                p[rhs + a] += p[jw + 2 * k] * cx + p[jw + 2 * k + 1] * cy
                 b = 0
                 for col in range(n):
-                    if light_flag(p, t, col):
-                        lx, ly = jacobian_column(p, t, base, q, col)
-                        p[w + a * m + b] += jx * lx + jy * ly
+                    if p[flags + col] != 0.0:
+                        p[w + a * m + b] += p[jw + 2 * k] * p[jw + 2 * col] + p[jw + 2 * k + 1] * p[jw + 2 * col + 1]
                         b += 1
                 a += 1
     _solve(p, w, m, size, rhs)
     a = 0
     for k in range(n):
-        if light_flag(p, t, k):
+        if p[flags + k] != 0.0:
             p[r + k] = p[rhs + a]
             a += 1
 
@@ -195,20 +223,10 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
+    fill_trig(p, q)
     w = work_offset(p)
     r = w + m * m
-    used = _assemble(p, 0, q, w, m)
-    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
-    for a in range(m):
-        p[r + a] = 0.0
-    for i in range(int(p[T_NPTS])):
-        mass = p[row_offset(p, 0, i)]
-        if mass == 0.0:
-            continue
-        bx, by = bias(p, w_offset(p, 0, i), q, qd)
-        for k in range(n):
-            jx, jy = jacobian(p, 0, i, q, k)
-            p[r + k] += mass * (jx * (gx - bx) + jy * (gy - by))
+    used = _assemble(p, 0, w, m, qd, True)
     _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
     _light_tier(p, 0, q, qd, FLOW, w, m, r)
@@ -222,13 +240,14 @@ def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """(kinetic, potential) energy of the rows of table 0 (potential zero with every point on the ground line)."""
     n = coords(p)
     q, qd = x[:n], x[n:]
-    gx, gy = p[P_G] * math.sin(p[P_SLOPE]), -p[P_G] * math.cos(p[P_SLOPE])
+    fill_trig(p, q)
+    gx, gy = p[P_GX], p[P_GY]
     kinetic = potential = 0.0
     for i in range(int(p[T_NPTS])):
         o = row_offset(p, 0, i)
         mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
-        vx, vy = point_velocity(p, 0, i, q, qd)
-        px, py = point(p, i, q)
+        vx, vy = velocity_at(p, 0, w_offset(p, 0, i), qd)
+        px, py = point_at(p, w_offset(p, 0, i), q)
         kinetic += 0.5 * mass * (vx * vx + vy * vy) + 0.5 * inertia * qd[own] * qd[own]
         potential -= mass * (gx * px + gy * py)
     return kinetic, potential
@@ -242,6 +261,7 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
     n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
+    fill_trig(p, q)
     w = work_offset(p)
     r, v = w + m * m, w + m * m + m
     t = 1 if strike else 0
@@ -250,8 +270,8 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
         for j in range(int(p[T_NLOCK])):
             p[lock_offset(p, j) + 4] = 1.0
     for i in range(npts):
-        p[v + 2 * i], p[v + 2 * i + 1] = point_velocity(p, 0, i, q, qd)
-    used = _assemble(p, t, q, w, m)
+        p[v + 2 * i], p[v + 2 * i + 1] = velocity_at(p, 0, w_offset(p, 0, i), qd)
+    used = _assemble(p, t, w, m, qd, False)
     for a in range(m):
         p[r + a] = 0.0
     for i in range(npts):
@@ -259,7 +279,7 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
         own = int(p[o + 2])
         p[r + own] += p[o + 1] * qd[own]
         for k in range(n):
-            jx, jy = jacobian(p, t, i, q, k)
+            jx, jy = jacobian_column(p, t, w_offset(p, t, i), k)
             p[r + k] += p[o] * (jx * p[v + 2 * i] + jy * p[v + 2 * i + 1])
     _pin_light(p, t, w, m, r)
     _solve(p, w, m, used, r)
@@ -288,7 +308,7 @@ def tree_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     npts = int(p[T_NPTS])
     if kind == PAST:
         hip_x, _ = point(p, npts, x[:n])
-        return -p[P_R] * x[int(p[table_offset(p, 0)])] - hip_x
+        return -p[P_R] * x[rolling(p, 0)] - hip_x
     land = int(p[perm_offset(p)])  # the landing leg's hip body: coordinate 0 after the strike
     return x[0] + x[land] + p[perm_offset(p) + n] + 2.0 * p[P_LEAN]
 
@@ -305,7 +325,7 @@ def tree_guard_rate(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     npts = int(p[T_NPTS])
     if kind == PAST:
         vx, _ = point_velocity(p, 0, npts, x[:n], x[n:])
-        return -p[P_R] * x[n + int(p[table_offset(p, 0)])] - vx
+        return -p[P_R] * x[n + rolling(p, 0)] - vx
     return x[n] + x[n + int(p[perm_offset(p)])]
 
 
@@ -356,14 +376,15 @@ def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarra
     n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
+    fill_trig(p, q)
     w = work_offset(p)
     r = w + m * m
     npts = int(p[T_NPTS])
-    used = _assemble(p, 0, q, w, m)
+    used = _assemble(p, 0, w, m, qd, False)
     for a in range(m):
         p[r + a] = 0.0
     for k in range(n):
-        jx, jy = jacobian(p, 0, npts, q, k)
+        jx, jy = jacobian_column(p, 0, w_offset(p, 0, npts), k)
         p[r + k] = jx * px + jy * py
     _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
@@ -372,7 +393,7 @@ def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarra
     for i in range(npts):
         mass = p[row_offset(p, 0, i)]
         for k in range(n):
-            _, jy = jacobian(p, 0, i, q, k)
+            _, jy = jacobian_column(p, 0, w_offset(p, 0, i), k)
             normal += mass * jy * p[r + k]
     for k in range(n):
         out[k] = q[k]
@@ -390,6 +411,7 @@ def tree_light_rates(p: np.ndarray, x: np.ndarray) -> None:
     r = w + m * m
     for k in range(n):
         p[r + k] = x[n + k]
+    fill_trig(p, x[:n])
     _light_tier(p, 0, x[:n], x[n:], AT_REST, w, m, r)
     for k in range(n):
         x[n + k] = p[r + k]

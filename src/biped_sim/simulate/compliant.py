@@ -89,7 +89,8 @@ class CompliantRunResult(RunResult):
         run, model = self.run, self.model
         channels = [Channel(f"contact/{name}", values, CHANNEL_UNITS[name]) for name, values in self.contact.items()]
         channels.append(Channel("contact/modes", run.modes, "armed (1/0), touching (1/0), impact velocity (m/s)"))
-        channels += [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in ENERGY_TERMS]
+        stops = ("dissipated_stops",) if model.system.stops.law.shape[0] else ()  # W_stop, for walkers with stops
+        channels += [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in (*ENERGY_TERMS, *stops)]
         channels += [
             Channel(f"constraints/{name}", self.violation[:, k], VIOLATION_UNITS[name])
             for k, name in enumerate(violation_names(model))

@@ -1,0 +1,212 @@
+"""A walker's description laid out as the parameter vector of the compiled rigid kernels (:mod:`.tree_layout`).
+
+Coordinates in role order (the stance leg's bodies from the hip down, then the swing leg's); every point the
+equations need is the pinned foot's contact plus sum_k Rot(theta_k) w_k, and this module computes the w_k from the
+tree; the rows (bodies with their point masses folded in), the light rows and flags, the locks, the phases and the
+heel strike's relabelling. :class:`~biped_sim.rigid.tree.RigidWalker` is the model built on it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from biped_sim.config import Config, FootSpec, WalkerDescription
+from biped_sim.errors import ConfigError
+from biped_sim.rigid.tree_kernels import PAST, STOP, STRIKE
+from biped_sim.rigid.tree_layout import T_ROWS, T_TABLES, T_TRIG, T_WORK, gravity_vector, layout_offsets
+
+Vec = np.ndarray
+SPACING_TOLERANCE = 1e-9  # a wheel's feet: equal radii and spacing to this relative tolerance
+
+
+def _rot(theta: float, v: Vec) -> Vec:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+class Tree:
+    """The description in role order: coordinate k is body ``order[k]`` (the stance leg's hip down, then the swing
+    leg's); a point's position is sum_k Rot(theta_k) w[k] (+ the pinned foot's contact). ``feet``: the stance foot
+    and the one that lands next; ``shift``: the landing foot's angle from the stance foot's about the hip (a wheel)."""
+
+    def __init__(self, d: WalkerDescription) -> None:
+        self.order = [b for leg in d.legs for b in leg]
+        names = [b.name for b in d.bodies]
+        if len(d.legs) > 2 or sorted(self.order) != sorted(names):
+            raise ConfigError("walker.description.legs", "rigid dynamics needs one or two legs holding every body")
+        self.index = {name: k for k, name in enumerate(self.order)}
+        self.body = {b.name: b for b in d.bodies}
+        self.joint = {j.child: j for j in d.joints}
+        self.root = d.bodies[0].name
+        self.shift = 0.0
+        if len(d.legs) == 2:
+            feet = [[f for f in d.feet if f.body in leg] for leg in d.legs]
+            if any(len(f) != 1 for f in feet):
+                raise ConfigError("walker.description.feet", "rigid dynamics needs one foot on each leg")
+            self.feet = (feet[0][0], feet[1][0])
+        else:
+            self.feet = (d.feet[0], d.feet[1]) if len(d.feet) > 1 else (d.feet[0], d.feet[0])
+            self.shift = _wheel_spacing(d)
+
+    def origin(self, name: str, pinned: FootSpec) -> dict[int, Vec]:
+        """w of body ``name``'s origin with foot ``pinned``'s centre at the origin (its contact below it)."""
+        if name == self.root:
+            w = {self.index[pinned.body]: -np.array(pinned.centre)}
+            body = pinned.body
+            while body != self.root:  # up from the foot: origin(parent) = origin(body) - Rot(parent) at
+                j = self.joint[body]
+                w[self.index[j.parent]] = w.get(self.index[j.parent], np.zeros(2)) - np.array(j.at)
+                body = j.parent
+            return w
+        j = self.joint[name]
+        w = dict(self.origin(j.parent, pinned))
+        w[self.index[j.parent]] = w.get(self.index[j.parent], np.zeros(2)) + np.array(j.at)
+        return w
+
+    def at(self, name: str, local: tuple[float, float], pinned: FootSpec) -> dict[int, Vec]:
+        """w of a point fixed in body ``name``."""
+        w = dict(self.origin(name, pinned))
+        w[self.index[name]] = w.get(self.index[name], np.zeros(2)) + np.array(local)
+        return w
+
+
+def _wheel_spacing(d: WalkerDescription) -> float:
+    """The angle between a one-body walker's consecutive feet (ConfigError unless they are N >= 2 point feet evenly
+    spaced on a circle about the body's origin, counted around it, the centre of mass at the origin)."""
+    field = "walker.description.feet"
+    if len(d.legs[0]) != 1 or len(d.feet) < 2 or any(f.radius != 0.0 for f in d.feet):
+        raise ConfigError(field, "a one-legged rigid walker needs one body with two or more point feet (a wheel)")
+    radii = [math.hypot(*f.centre) for f in d.feet]
+    angles = [math.atan2(f.centre[0], -f.centre[1]) for f in d.feet]
+    spacing = 2.0 * math.pi / len(d.feet)
+    steps = [(b - a) % (2.0 * math.pi) for a, b in zip(angles, angles[1:] + angles[:1], strict=True)]
+    if max(radii) - min(radii) > SPACING_TOLERANCE * max(radii) or any(
+        abs(step - spacing) > SPACING_TOLERANCE for step in steps
+    ):
+        raise ConfigError(field, "a rigid wheel's feet must be evenly spaced on a circle about its origin, in order")
+    if any(b.com != (0.0, 0.0) for b in d.bodies) or any(pm.at != (0.0, 0.0) for pm in d.point_masses):
+        raise ConfigError("walker.description.bodies", "a rigid wheel's mass must be at its hub (the body's origin)")
+    return spacing
+
+
+def _rows(tree: Tree, d: WalkerDescription, pinned: FootSpec) -> list[tuple[float, float, int, dict[int, Vec]]]:
+    """(mass, inertia, coordinate, w) of each body with mass or inertia, its point masses folded in (their mass, the
+    joint centre of mass, the parallel-axis inertia about it)."""
+    rows = []
+    for b in d.bodies:
+        parts = [(b.mass, np.array(b.com))] + [(pm.mass, np.array(pm.at)) for pm in d.point_masses if pm.body == b.name]
+        mass = sum(m for m, _ in parts)
+        if mass == 0.0 and b.inertia == 0.0:
+            continue
+        com = sum((m * at for m, at in parts), np.zeros(2)) / mass if mass > 0.0 else parts[0][1]
+        inertia = b.inertia + sum(m * float((at - com) @ (at - com)) for m, at in parts)
+        rows.append((mass, inertia, tree.index[b.name], tree.at(b.name, (float(com[0]), float(com[1])), pinned)))
+    return rows
+
+
+def _light_rows(tree: Tree, pinned: FootSpec) -> list[tuple[float, float, int, dict[int, Vec]]]:
+    """The feet's infinitesimal masses, unit weights (the stance and the landing foot, in that order)."""
+    return [(1.0, 0.0, tree.index[f.body], tree.at(f.body, f.centre, pinned)) for f in tree.feet]
+
+
+def _light_flags(tree: Tree, rows: list, locks: list, radius: float, rolling: int, n: int) -> list[float]:
+    """1 for each coordinate that no mass, inertia or lock turns with (a massless body's), else 0."""
+    heavy = set()
+    for mass, inertia, own, w in rows:
+        if inertia > 0.0:
+            heavy.add(own)
+        if mass > 0.0:
+            heavy.update(k for k, v in w.items() if np.any(v != 0.0))
+            heavy.update([rolling] if radius > 0.0 else [])
+    heavy.update(k for lock in locks for k in lock[:2])
+    return [0.0 if k in heavy else 1.0 for k in range(n)]
+
+
+def _flat(w: dict[int, Vec], n: int) -> list[float]:
+    out = np.zeros((n, 2))
+    for k, v in w.items():
+        out[k] = v
+    return out.ravel().tolist()
+
+
+def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, float, float, int]]:
+    """(parent, child, limit, sign, active, leg) of every stop; a leg joint needs one stop, or two at one angle (a
+    locked joint: leg -1, never a phase), the hip none."""
+    locks = []
+    for j in d.joints:
+        leg = next(i for i, leg in enumerate(d.legs) if j.child in leg)
+        if j.parent not in d.legs[leg]:
+            if j.stops:
+                raise ConfigError("walker.description.joints", f"{j.name}: rigid dynamics takes stops in legs only")
+            continue
+        lower, upper = j.lower_upper()
+        if len(j.stops) == 2 and lower == upper:
+            locks.append((tree.index[j.parent], tree.index[j.child], upper, 1.0, 1.0, -1))
+            continue
+        if len(j.stops) != 1:
+            raise ConfigError(
+                "walker.description.joints",
+                f"{j.name}: rigid dynamics needs one stop (or two at one angle) in a leg",
+            )
+        stop = j.stops[0]
+        sign = 1.0 if stop.side == "upper" else -1.0
+        locks.append((tree.index[j.parent], tree.index[j.child], stop.angle, sign, float(leg == 0), leg))
+    return locks
+
+
+def _relabelling(tree: Tree, n: int) -> tuple[list[int], list[float]]:
+    """(perm, shift) of the heel strike: coordinate k after it is coordinate perm[k] before plus shift[k]."""
+    if tree.shift:
+        return [0], [tree.shift]
+    half = n // 2
+    return [half + k for k in range(half)] + list(range(half)), [0.0] * n
+
+
+def _leg_lean(tree: Tree, n: int, locks: list) -> tuple[float, float]:
+    """(depth, lean) of the stance foot's centre below the hip with the leg locked at its stops and its hip body
+    vertical, and its angle from the hip body's axis (phi = atan2(d, l - R) for the compass)."""
+    foot = point_of(tree, tree.at(tree.feet[0].body, tree.feet[0].centre, tree.feet[0]), n, locks)
+    return -foot[1], math.atan2(foot[0], -foot[1])
+
+
+def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndarray:
+    """The parameter vector of the kernels (the header, the tables, locks, phases, relabelling, workspace)."""
+    tree = Tree(d)
+    n = len(tree.order)
+    locks = tree_locks(tree, d)
+    rows = [_rows(tree, d, foot) for foot in tree.feet]
+    rolling = [tree.index[foot.body] for foot in tree.feet]
+    flags = [_light_flags(tree, rows[t], locks, tree.feet[t].radius, rolling[t], n) for t in (0, 1)]
+    light = [_light_rows(tree, foot) for foot in tree.feet] if any(map(any, flags)) else [[], []]
+    phases = [(STOP, j) for j, lock in enumerate(locks) if lock[5] == 1]
+    phases += [(PAST, 0), (STRIKE, 0)] if len(d.legs) == 2 else [(STRIKE, 0)]
+    perm, shift = _relabelling(tree, n)
+    depth, lean = _leg_lean(tree, n, locks)
+    radius = tree.feet[0].radius
+    gx, gy = gravity_vector(gravity, config.ground.slope)
+    header = [n, depth + radius, radius, lean, gx, gy, config.simulation.fall_leg_angle]
+    offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases))
+    p = [*header, len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0])]
+    p += [offsets[k] for k in range(T_ROWS, T_TABLES)]
+    for t in (0, 1):
+        p.append(rolling[t])
+        for mass, inertia, own, w in rows[t] + light[t]:
+            p += [mass, inertia, own, *_flat(w, n)]
+    p += _flat(tree.origin(tree.root, tree.feet[0]), n)
+    p += _flat(tree.at(tree.feet[1].body, tree.feet[1].centre, tree.feet[0]), n)
+    p += [v for lock in locks for v in lock[:5]] + [v for phase in phases for v in phase]
+    p += perm + shift + flags[0] + flags[1]
+    assert len(p) == offsets[T_WORK], (len(p), offsets)
+    return np.array(p + [0.0] * (offsets[T_TRIG] + 2 * n - len(p)), dtype=float)
+
+
+def point_of(tree: Tree, w: dict[int, Vec], n: int, locks: list) -> Vec:  # type: ignore[type-arg]
+    """A point's position (relative to the hip's w-sum) with every leg joint at its stop and the legs vertical."""
+    angles = np.zeros(n)
+    for parent, child, limit, *_ in locks:
+        angles[child] = angles[parent] + limit
+    return sum((_rot(angles[k], v) for k, v in w.items()), np.zeros(2)) - sum(
+        (_rot(angles[k], v) for k, v in tree.origin(tree.root, tree.feet[0]).items()), np.zeros(2)
+    )
