@@ -307,14 +307,18 @@ def rigid_step(
         code = STALLED
     strike = code == STRIKE
     length = walker.step_length(x0, x_minus) if strike else math.nan
+    evals, accepted = counters.tolist()
+    step = RigidStep(STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, evals,
+                     accepted_steps=accepted)  # fmt: skip
     rec = cw.record
-    applied, sampled, stops = (int(c) for c in rec.counts)
-    return RigidStep(
-        STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, int(counters[0]),
-        samples_t=rec.samples_t[:sampled].copy(), samples_x=rec.samples_x[:sampled].copy(),
-        accepted_steps=int(counters[1]), pushes=[tuple(map(float, row)) for row in rec.pushes[:applied]],
-        stop_strikes=[(float(at), float(loss)) for at, loss in rec.stops[:stops]],
-    )  # fmt: skip
+    applied, sampled, stops = rec.counts.tolist()
+    if applied:  # the record read only where it holds something: a plain step costs no more than before
+        step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]
+    if sampled:
+        step.samples_t, step.samples_x = rec.samples_t[:sampled].copy(), rec.samples_x[:sampled].copy()
+    if stops:
+        step.stop_strikes = [tuple(row) for row in rec.stops[:stops].tolist()]
+    return step
 
 
 def walk_starts(walker: RigidWalker, starts: np.ndarray, max_steps: int) -> WalkOutcome:
