@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 
 from biped_sim.config import derive, load_config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import compiled_step
+from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import RigidWalker

@@ -10,7 +10,8 @@ import pytest
 from biped_sim import load_config
 from biped_sim.config import Config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, compiled_step, walk_starts
+from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, walk_starts
+from biped_sim.rigid.compiled import rigid_step as compiled_step
 from biped_sim.rigid.limit_cycle import map_jacobian, rigid_limit_cycle, rigid_map
 from biped_sim.rigid.stepping import rigid_step
 

@@ -2,7 +2,8 @@
 
 * Per step: the median wall time of one step from each rigid walker's fixed point, scipy's ``solve_ivp``
   (the reference, :func:`~biped_sim.rigid.stepping.rigid_step`) against the compiled map
-  (:func:`~biped_sim.rigid.compiled.compiled_step`, its buffers reused), after a warm-up.
+  (:func:`~biped_sim.rigid.compiled.rigid_step`, its buffers reused), after a warm-up; and a run's step of the
+  kneed walker (``kneed_run_step``: a push on the hip, a step down ahead, samples at 1 kHz).
 * Basins (full benchmark only): the wall time of ``biped-sim basin``'s computation, the worker pool's start
   included, with 2 workers: the simplest walker's 41 x 41 grid at 30 steps (target < 60 s) and the default
   compliant walker's 21 x 21 grid at 10 steps (target < 10 min).
@@ -13,19 +14,28 @@ from __future__ import annotations
 import statistics
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from biped_sim.config import load_config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import compile_walker, compiled_step
+from biped_sim.rigid.compiled import compile_walker
+from biped_sim.rigid.compiled import rigid_step as compiled_step
+from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.stepping import rigid_step
 from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
 from biped_sim.sweep import local_executor
 
 CONFIGS = Path(__file__).resolve().parents[3] / "configs"
+# the kneed walker's run step: a push on the hip, a step down of 5 mm ahead, samples at 1 kHz
+RUN_STEP_PUSHES = [(0.2, np.array([0.02, 0.0]))]
+RUN_STEP_PROFILE = "ground.profile={kind: steps, steps: [{at: 0.3, height: -0.005}]}"
+RUN_STEP_RATE = 1000.0
 STEP_CASES = {  # walker -> (config, overrides)
     "simplest": ("simplest_walker.yaml", ["dynamics=rigid"]),
     "compass": ("compass_goswami.yaml", ["dynamics=rigid"]),
@@ -62,11 +72,35 @@ def per_step_times(repeats: int = 20) -> dict[str, dict[str, float]]:
         walker = rigid_walker(config)
         x0 = walker.from_section(rigid_limit_cycle(config).section_point)
         cw = compile_walker(walker)
-        compiled_step(walker, x0, cw)  # warm-up: loads the compiled code
-        scipy_s = _median_time(lambda w=walker, x=x0: rigid_step(w, x), max(3, repeats // 4))
-        compiled_s = _median_time(lambda w=walker, x=x0, c=cw: compiled_step(w, x, c), repeats)
-        out[name] = {"scipy_us": scipy_s * 1e6, "compiled_us": compiled_s * 1e6, "speedup": scipy_s / compiled_s}
+        out[name] = _step_times(
+            lambda w=walker, x=x0: rigid_step(w, x), lambda w=walker, x=x0, c=cw: compiled_step(w, x, cw=c), repeats
+        )
+    out["kneed_run_step"] = _run_step_times(repeats)
     return out
+
+
+def _run_step_times(repeats: int) -> dict[str, float]:
+    """The kneed walker's step from its fixed point with RUN_STEP_PUSHES, on RUN_STEP_PROFILE, sampled."""
+    config = load_config(CONFIGS / "kneed_walker.yaml")
+    walker = rigid_walker(config)
+    x0 = walker.from_section(rigid_limit_cycle(config).section_point)
+    ground = rigid_ground(load_config(CONFIGS / "kneed_walker.yaml", [RUN_STEP_PROFILE]))
+    assert ground is not None
+    profile = ProfileStrike(walker, ground, Footing(0.0, 0.0))
+    cw = compile_walker(walker)
+    return _step_times(
+        lambda: rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile),
+        lambda: compiled_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw),
+        repeats,
+    )
+
+
+def _step_times(reference: Callable[[], object], compiled: Callable[[], object], repeats: int) -> dict[str, float]:
+    """Median wall times [us] of a step by scipy and compiled (after a warm-up that loads the compiled code)."""
+    compiled()
+    scipy_s = _median_time(reference, max(3, repeats // 4))
+    compiled_s = _median_time(compiled, repeats)
+    return {"scipy_us": scipy_s * 1e6, "compiled_us": compiled_s * 1e6, "speedup": scipy_s / compiled_s}
 
 
 def basin_time(name: str) -> dict[str, Any]:

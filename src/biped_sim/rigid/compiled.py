@@ -1,8 +1,11 @@
 """The rigid step map compiled: DOP853 with dense output, guards located on it, polish, impact (numba).
 
-The same algorithm as :func:`biped_sim.rigid.stepping.rigid_step`, which stays the slow reference (scipy's
-``solve_ivp``; the tests check that fixed points and multipliers agree to 1e-10), for maps of thousands
-of starts (limit cycles, basins of attraction):
+One step map for every use of the rigid walkers: a run's steps with pushes, ground profiles and samples
+(:func:`rigid_step`, which :mod:`biped_sim.simulate.rigid` takes) and the plain map of limit
+cycles, basins, bifurcation and robustness (:func:`rigid_step` without them, :func:`walk_starts`). It computes
+what :func:`biped_sim.rigid.stepping.rigid_step` (scipy's ``solve_ivp``) computes, to the integration's ~1e-12
+(the tests also check that fixed points and multipliers agree to 1e-10); run as plain Python (``.py_func`` of
+each kernel) it gives the same bits. A phase's integration is :mod:`biped_sim.rigid.integration`'s:
 
 * the flow of :mod:`biped_sim.rigid.kernels` is integrated by DOP853 at rtol = atol = 1e-12 with scipy's
   step-size control (Hairer's norm, safety 0.9, factors 0.2..10, no growth after a rejection), from
@@ -13,71 +16,78 @@ of starts (limit cycles, basins of attraction):
   compared with their values at the step's start; the earliest crossing is located on the degree-7 dense
   output by the Illinois variant of regula falsi, to 4 machine epsilon in time (scipy: brentq);
 * a located guard is polished by Newton along the flow, dt = -g / (dg/dt), x += dt f(x + dt f / 2), until
-  |g| <= 1e-14 (the reference differentiates g by central differences: the same step to round-off);
+  |g| <= 1e-14 (the reference differentiates g by central differences: the same step to round-off; so does
+  this map for the profile's guard, which has no analytic rate at the profile's vertices);
 * a fall (a leg past the fall angle, the hip below 0.05 l) or a stall (no strike within ``MAX_STEP_TIME``
   natural periods, or a step below ``MIN_STEP``) ends the step with a status.
+
+A step's plan (:class:`StepPlan`, empty for the plain map) and what it did (:class:`StepRecord`,
+preallocated buffers and counts) travel in the :class:`CompiledWalker`:
+
+* pushes: the flow stops at each push time before the step ends, :func:`~biped_sim.rigid.tree_kernels.tree_push`
+  makes the velocity jump on the hip and the same phase goes on, restarted as scipy restarts ``solve_ivp``
+  (a fresh starting step); each is booked as (t, work = the kinetic energy's jump, the ground's normal impulse);
+* a ground profile (:mod:`biped_sim.rigid.ground`): the walker's last phase gives way to the swing foot leaving
+  its mid-stance scuff (the plane's strike guard turning positive) and then its clearance above the profile; a
+  foot below the profile when that strike is first sought, or a strike located at a riser below its top, ends
+  the step ``tripped``;
+* samples on the grid k / sample_rate of the step's clock, from the dense output of the accepted steps (whatever
+  the step's outcome); stop strikes as (t, the kinetic energy lost).
+
+The kernels of the step map count no references (``kernel(reference_counts=False)``: they allocate nothing, and
+the walker's tuple of some thirty arrays would otherwise be counted at every call); the guard and event functions
+are inlined into the integration loop for the same reason.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
 
-from biped_sim.integrate.dense import (
-    dense_eval,
-    dop853_coefficients,
-    dop853_extra_stage_input,
-    illinois_point,
-    illinois_update,
-)
-from biped_sim.integrate.stepper import (
-    Scratch,
-    error_norm,
-    initial_step_size,
-    initial_step_trial,
-    make_scratch,
-    propagate,
-    stage_input,
-)
-from biped_sim.integrate.tableaus import Tableau, tableau
+from biped_sim.integrate.stepper import make_scratch
+from biped_sim.integrate.tableaus import tableau
 from biped_sim.kernel import kernel
+from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike, riser_hit, tree_swing_foot
+from biped_sim.rigid.integration import (
+    APPLIED,
+    N_EVENTS,
+    ON_PROFILE,
+    OUT,
+    OWN,
+    REACHED,
+    STALLED,
+    STATUS_NAMES,
+    STOPS,
+    STRIKE,
+    TRIPPED,
+    CompiledWalker,
+    StepPlan,
+    StepRecord,
+    copy_into,
+    phase_guard,
+    polish,
+    stretch,
+)
+from biped_sim.rigid.integration import FELL as FELL  # re-exported with the other statuses of a step
 from biped_sim.rigid.kernels import (
     TREE,
     end_phase,
-    fall_check,
     first_phase,
-    guard,
-    guard_rate,
-    n_fall_checks,
     n_phases,
     phase_skipped,
     rigid_impact,
-    rigid_rhs,
     start_step,
 )
-from biped_sim.rigid.stepping import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
+from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.rigid.tree_layout import P_GX, P_GY, gravity_vector
+from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
+from biped_sim.rigid.tree_kernels import tree_energy, tree_push
+from biped_sim.rigid.tree_layout import P_GX, P_GY, P_L, gravity_vector, phase_offset
 
-STRIKE, FELL, STALLED = 0, 1, 2
-STATUS_NAMES = ("strike", "fell", "stalled")
-MIN_STEP = 1e-14  # a smaller step means the flow cannot be integrated: the step counts as a stall
-ROOT_TOL = 4.0 * np.finfo(float).eps  # relative width of the final bracket of an event time
-N_EVENTS = 4  # the guard, and at most three fall functions (two legs, the hip)
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
-
-
-class CompiledWalker(NamedTuple):
-    """A rigid walker as the kernels read it, with the integration's buffers."""
-
-    kind: int
-    params: np.ndarray
-    tab: Tableau
-    sc: Scratch
-    q_work: np.ndarray  # (4,) scratch of the impact map
-    t_limit: float  # a step longer than this stalls
 
 
 def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
@@ -93,180 +103,124 @@ def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
     return cw._replace(params=params)
 
 
+def _empty_plan() -> StepPlan:
+    """The plain step's plan: no pushes, the walker's own strike guard, no samples."""
+    return StepPlan(np.zeros(0), np.zeros((0, 2)), False, np.zeros((0, 2)), np.zeros(2), np.zeros(2), 0.0)
+
+
+def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
+    return StepRecord(
+        np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
+        np.zeros((n_stops, 2)),
+    )  # fmt: skip
+
+
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
-    """The kernels' view of ``walker`` and fresh buffers (one per thread of work)."""
+    """The kernels' view of ``walker`` and fresh buffers (one per thread of work), with the plain step's plan."""
     kind, params = walker_params(walker)
     ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
-    return CompiledWalker(kind, params, tableau("dop853"), make_scratch(ny, 1, N_EVENTS), np.zeros(4), t_limit)
+    scratch = make_scratch(ny, 1, N_EVENTS)
+    record = _record(ny, 0, 0, int(n_phases(kind, params)))
+    return CompiledWalker(kind, params, tableau("dop853"), scratch, np.zeros(4), t_limit, _empty_plan(), record)
 
 
-@kernel
-def _events(kind: int, p: np.ndarray, phase: int, y: np.ndarray, out: np.ndarray) -> int:
-    """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
-    out[0] = guard(kind, p, phase, y)
-    n = n_fall_checks(kind, p)
-    for i in range(n):
-        out[1 + i] = fall_check(kind, p, i, y)
-    return n + 1
+@kernel(reference_counts=False)
+def _push(cw: CompiledWalker, t: float, y: np.ndarray) -> None:
+    """The next push's velocity jump on y (in place, through sc.y_new) and its record (t, work, normal impulse)."""
+    p, rec, plan = cw.params, cw.record, cw.plan
+    i = rec.counts[APPLIED]
+    before, _ = tree_energy(p, y)
+    normal = tree_push(p, y, plan.push_impulses[i, 0], plan.push_impulses[i, 1], cw.sc.y_new)
+    copy_into(cw.sc.y_new, y)
+    after, _ = tree_energy(p, y)
+    rec.pushes[i, 0], rec.pushes[i, 1], rec.pushes[i, 2] = t, after - before, normal
+    rec.counts[APPLIED] = i + 1
 
 
-@kernel
-def _crossed(j: int, g_old: float, g_new: float) -> bool:
-    """Event j crossed over the step: the guard (j = 0) downward only, a fall function either way (as scipy)."""
-    down = g_old >= 0.0 and g_new <= 0.0
-    return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
-
-
-@kernel
-def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
-    """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
-    h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
-    rigid_rhs(kind, p, sc.y_stage, sc.k[1])
-    return initial_step_size(tab, sc, h0, d1, span)
-
-
-@kernel
-def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
-    """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
-    for e in range(3):
-        rigid_rhs(kind, p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
-    dop853_coefficients(tab, h, y, sc)
-
-
-@kernel
-def _event_value(kind: int, p: np.ndarray, phase: int, j: int, y: np.ndarray) -> float:
-    return guard(kind, p, phase, y) if j == 0 else fall_check(kind, p, j - 1, y)
-
-
-@kernel
-def _root(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, j: int, t: float, h: float, y: np.ndarray):
-    """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
-    lo, hi = 0.0, 1.0
-    g_lo, g_hi = sc.g_old[j], sc.g_new[j]
-    if g_hi == 0.0:
-        return 1.0
-    side = 0
-    tol = ROOT_TOL * max(1.0, abs(t)) / h
-    for _ in range(200):
-        if hi - lo <= tol or g_lo == 0.0:
-            break
-        mid = illinois_point(lo, hi, g_lo, g_hi)
-        dense_eval(tab, mid, h, y, sc, sc.y_dense)
-        g = _event_value(kind, p, phase, j, sc.y_dense)
-        same_sign = (g > 0.0) == (g_lo > 0.0) and g != 0.0
-        lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, same_sign)
-    return lo if abs(g_lo) < abs(g_hi) else hi
-
-
-@kernel
-def _phase(cw: CompiledWalker, phase: int, t: float, y: np.ndarray, counters: np.ndarray) -> tuple[int, float]:
-    """Integrate from (t, y) to the phase's guard, a fall or the time limit; y ends at the event (in place)."""
-    kind, p, tab, sc = cw.kind, cw.params, cw.tab, cw.sc
-    expo = -1.0 / (tab.error_order + 1)
-    rigid_rhs(kind, p, y, sc.k[0])
-    h = _initial_step(kind, p, tab, sc, y, cw.t_limit - t)
-    counters[0] += 2
-    n_ev = _events(kind, p, phase, y, sc.g_old)
-    rejected = False
-    while t < cw.t_limit:
-        h = min(h, cw.t_limit - t)
-        if h < MIN_STEP:
+@kernel(reference_counts=False)
+def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, counters: np.ndarray):
+    """Integrate from (t, y) to the phase's guard, a fall or the time limit, stopping at each pending push (one at or
+    before t applies at once) for its jump; y ends at the event (in place)."""
+    plan, rec = cw.plan, cw.record
+    while True:
+        pending = rec.counts[APPLIED] < plan.push_times.shape[0]
+        t_stop = min(plan.push_times[rec.counts[APPLIED]], cw.t_limit) if pending else cw.t_limit
+        if t_stop > t:
+            status, t = stretch(cw, phase, mode, t, t_stop, y, counters)
+            if status != REACHED:
+                return status, t
+        elif not pending:
             return STALLED, t
-        for s in range(1, tab.stages):
-            stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
-            rigid_rhs(kind, p, sc.y_stage, sc.k[s])
-        finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
-        rigid_rhs(kind, p, sc.y_new, sc.k[tab.stages])
-        counters[0] += tab.stages
-        err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
-        if not err < 1.0:
-            h *= max(0.2, 0.9 * err**expo) if math.isfinite(err) else 0.2
-            rejected = True
-            continue
-        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err**expo)
-        if rejected:
-            factor = min(1.0, factor)
-        rejected = False
-        counters[1] += 1
-        _events(kind, p, phase, sc.y_new, sc.g_new)
-        best, first = 2.0, -1
-        for j in range(n_ev):
-            if _crossed(j, sc.g_old[j], sc.g_new[j]):
-                if first < 0:  # the first crossing of this step: the dense output is needed
-                    _prepare_dense(kind, p, tab, h, y, sc)
-                    counters[0] += 3
-                theta = _root(kind, p, tab, sc, phase, j, t, h, y)
-                if theta < best:
-                    best, first = theta, j
-        if first >= 0:
-            dense_eval(tab, best, h, y, sc, sc.y_dense)
-            y[:] = sc.y_dense
-            return (STRIKE if first == 0 else FELL), t + best * h
-        t += h
-        y[:] = sc.y_new
-        sc.k[0, :] = sc.k[tab.stages]
-        sc.g_old[:] = sc.g_new
-        h *= factor
-    return STALLED, t
+        _push(cw, t, y)
 
 
-@kernel
-def _polish(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
-    """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2); returns the new t."""
-    kind, p, sc = cw.kind, cw.params, cw.sc
-    f, f_mid = sc.k[1], sc.k[2]
-    for _ in range(4):
-        g = guard(kind, p, phase, x)
-        if abs(g) <= GUARD_TOLERANCE:
-            break
-        rigid_rhs(kind, p, x, f)
-        rate = guard_rate(kind, p, phase, x, f)
-        if rate == 0.0:
-            break
-        dt = -g / rate
-        for i in range(x.shape[0]):
-            sc.y_stage[i] = x[i] + 0.5 * dt * f[i]
-        rigid_rhs(kind, p, sc.y_stage, f_mid)
-        counters[0] += 2
-        for i in range(x.shape[0]):
-            x[i] += dt * f_mid[i]
-        t += dt
-    return t
+@kernel(reference_counts=False)
+def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
+    """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
+    kind, p, rec = cw.kind, cw.params, cw.record
+    struck = int(p[phase_offset(p, phase)]) == STOP_PHASE
+    n = rec.counts[STOPS]
+    if not struck or n >= rec.stops.shape[0]:
+        end_phase(kind, p, phase, x, scratch)
+        return
+    before, _ = tree_energy(p, x)
+    end_phase(kind, p, phase, x, scratch)
+    after, _ = tree_energy(p, x)
+    rec.stops[n, 0], rec.stops[n, 1] = t, before - after
+    rec.counts[STOPS] = n + 1
 
 
-@kernel
-def _copy(source: np.ndarray, target: np.ndarray) -> None:
-    """target[:] = source, element by element (a slice assignment may allocate: no reference counts here)."""
-    for i in range(source.shape[0]):
-        target[i] = source[i]
-
-
-@kernel
-def _finite(x: np.ndarray) -> bool:
-    for v in x:
-        if not math.isfinite(v):
-            return False
-    return True
+@kernel(reference_counts=False)
+def _tripped(cw: CompiledWalker, x: np.ndarray) -> bool:
+    """The swing foot's lowest point at a riser's x, below its top (the profile's strike located there)."""
+    plan = cw.plan
+    foot_x, foot_y = tree_swing_foot(cw.params, x, plan.footing[0], plan.footing[1])
+    return riser_hit(foot_x, foot_y, plan.vertices, RISER_TOLERANCE * cw.params[P_L])
 
 
 @kernel(reference_counts=False)
 def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_plus: np.ndarray, counters: np.ndarray):
     """One step from a post-impact state: (status, duration); x_minus = the state at its end, x_plus after
-    the strike (meaningful only if the status is STRIKE: a stop strike uses it as scratch)."""
-    _copy(x_start, x_minus)
+    the strike (meaningful only if the status is STRIKE: a stop strike uses it as scratch). ``cw.plan`` says
+    what else the step does, ``cw.record`` gets what it did (reset here).
+
+    On a profile the walker's last phase (the plane's strike) gives way to two: the swing foot out of its
+    mid-stance scuff (the plane's strike guard turning positive; skipped if it already is), then the clearance
+    above the profile; a swing foot already below the profile by RISER_TOLERANCE l then, or a strike located at a
+    riser, ends the step TRIPPED."""
+    kind, p, plan = cw.kind, cw.params, cw.plan
+    copy_into(x_start, x_minus)
+    cw.record.counts[:] = 0
     t = 0.0
-    start_step(cw.kind, cw.params)
-    for phase in range(first_phase(cw.kind), n_phases(cw.kind, cw.params)):
-        if phase_skipped(cw.kind, cw.params, phase, x_minus):
+    start_step(kind, p)
+    last = n_phases(kind, p) - 1
+    for phase in range(first_phase(kind), last + 2 if plan.on_profile else last + 1):
+        own = min(phase, last)
+        mode = OWN if phase < last or not plan.on_profile else (OUT if phase == last else ON_PROFILE)
+        if mode == OWN and phase_skipped(kind, p, own, x_minus):
             continue
-        status, t = _phase(cw, phase, t, x_minus, counters)
+        if mode == OUT and phase_guard(cw, own, mode, x_minus) <= 0.0:
+            continue  # the swing foot is already past its mid-stance scuff
+        if mode == ON_PROFILE and phase_guard(cw, own, mode, x_minus) < -RISER_TOLERANCE * p[P_L]:
+            return TRIPPED, t  # below the profile: in a riser
+        status, t = _phase(cw, own, mode, t, x_minus, counters)
         if status != STRIKE:
             return status, t
-        t = _polish(cw, phase, t, x_minus, counters)
-        end_phase(cw.kind, cw.params, phase, x_minus, x_plus)
-    rigid_impact(cw.kind, cw.params, x_minus, cw.q_work, x_plus)
+        if mode == ON_PROFILE and _tripped(cw, x_minus):
+            return TRIPPED, t
+        t = polish(cw, own, mode, t, x_minus, counters)
+        _end_phase(cw, own, t, x_minus, x_plus)
+    rigid_impact(kind, p, x_minus, cw.q_work, x_plus)
     return STRIKE, t
+
+
+@kernel
+def _finite(x: np.ndarray) -> bool:
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return False
+    return True
 
 
 class WalkOutcome(NamedTuple):
@@ -288,7 +242,7 @@ def walk_kernel(
     no time (the legs together at the start: the guard is already zero) ends the walk as a stall."""
     status, steps, last, counters = out.status, out.steps, out.last, out.counters
     for n in range(starts.shape[0]):
-        _copy(starts[n], last[n])
+        copy_into(starts[n], last[n])
         status[n], steps[n] = STRIKE, 0
         for k in range(max_steps):
             code, duration = step_kernel(cw, last[n], x_minus, x_plus, counters)
@@ -297,25 +251,74 @@ def walk_kernel(
             if code != STRIKE or not _finite(x_plus):
                 status[n] = code if code != STRIKE else STALLED
                 break
-            _copy(x_plus, last[n])
+            copy_into(x_plus, last[n])
             steps[n] = k + 1
 
 
-def compiled_step(walker: RigidWalker, x_start: np.ndarray, cw: CompiledWalker | None = None) -> RigidStep:
-    """:func:`~biped_sim.rigid.stepping.rigid_step` without samples, compiled (``cw`` reuses buffers)."""
+def with_plan(
+    cw: CompiledWalker,
+    sample_rate: float | None = None,
+    pushes: Sequence[tuple[float, np.ndarray]] = (),
+    profile: ProfileStrike | None = None,
+) -> CompiledWalker:
+    """``cw`` with a step's plan (pushes, profile, samples) and a record sized for it (the other buffers shared).
+
+    The sample buffer holds a whole step's grid, t in [0, t_limit], and one more point per phase (a polish that
+    moves a strike back repeats a grid point, as the reference's restart does)."""
+    n = len(pushes)
+    times = np.array([float(at) for at, _ in pushes])
+    impulses = np.array([np.asarray(impulse, dtype=float)[:2] for _, impulse in pushes]).reshape(n, 2)
+    vertices, ends, footing = cw.plan.vertices, cw.plan.ends, cw.plan.footing
+    if profile is not None:
+        vertices = np.ascontiguousarray(profile.ground.vertices, dtype=float).reshape(-1, 2)
+        ends = np.ascontiguousarray(profile.ground.ends, dtype=float)
+        footing = np.array([profile.footing.origin, profile.footing.level])
+    rate = 0.0 if sample_rate is None else float(sample_rate)
+    n_phases = cw.record.stops.shape[0]
+    n_samples = math.floor(cw.t_limit * rate) + n_phases + 3 if rate > 0.0 else 0
+    plan = StepPlan(times, impulses, profile is not None, vertices, ends, footing, rate)
+    return cw._replace(plan=plan, record=_record(cw.sc.y_new.shape[0], n, n_samples, n_phases))
+
+
+def rigid_step(
+    walker: RigidWalker,
+    x_start: np.ndarray,
+    sample_rate: float | None = None,
+    pushes: Sequence[tuple[float, np.ndarray]] = (),
+    profile: ProfileStrike | None = None,
+    cw: CompiledWalker | None = None,
+) -> RigidStep:
+    """One step from a post-impact state, compiled: :func:`~biped_sim.rigid.stepping.rigid_step`'s arguments and
+    result (``cw`` reuses the buffers of :func:`compile_walker`; without pushes, profile or samples the step runs on
+    them as they are, the step map of limit cycles and basins).
+
+    The samples fall on the grid k / sample_rate of the step's clock and are kept whatever the step's outcome;
+    ``pushes`` (time on the step's clock, impulse on the hip) in time order; ``profile``: the strike on a ground
+    profile. A strike in no time (the start on the guard: legs together) is a stall, as in walks.
+    """
     cw = cw or compile_walker(walker)
+    if sample_rate is not None or pushes or profile is not None:
+        cw = with_plan(cw, sample_rate, pushes, profile)
     x0 = np.asarray(x_start, dtype=float)
     x_minus, x_plus = np.zeros_like(x0), np.zeros_like(x0)
     counters = np.zeros(2, dtype=np.int64)
     code, period = step_kernel(cw, x0, x_minus, x_plus, counters)
     if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
-        code = STALLED  # as in walk_kernel: a strike in no time is no step (the start sits on the guard)
-    if code != STRIKE:
-        return RigidStep(
-            STATUS_NAMES[code], x0, x_minus, None, period, math.nan, int(counters[0]), accepted_steps=int(counters[1])
-        )
-    length = walker.step_length(x0, x_minus)
-    return RigidStep("strike", x0, x_minus, x_plus, period, length, int(counters[0]), accepted_steps=int(counters[1]))
+        code = STALLED
+    strike = code == STRIKE
+    length = walker.step_length(x0, x_minus) if strike else math.nan
+    evals, accepted = counters.tolist()
+    step = RigidStep(STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, evals,
+                     accepted_steps=accepted)  # fmt: skip
+    rec = cw.record
+    applied, sampled, stops = rec.counts.tolist()
+    if applied:  # the record read only where it holds something: a plain step costs no more than before
+        step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]
+    if sampled:
+        step.samples_t, step.samples_x = rec.samples_t[:sampled].copy(), rec.samples_x[:sampled].copy()
+    if stops:
+        step.stop_strikes = [tuple(row) for row in rec.stops[:stops].tolist()]
+    return step
 
 
 def walk_starts(walker: RigidWalker, starts: np.ndarray, max_steps: int) -> WalkOutcome:

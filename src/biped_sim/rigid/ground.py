@@ -3,7 +3,7 @@
 The rigid models keep a flat local ground under the stance foot: it rolls (round feet) or pivots (point
 feet) on the level of its own contact point, a line of the slope's direction, as on the plane. The profile
 enters at the heel strike only: once the swing foot has left its mid-stance scuff (which the rigid models
-ignore: :mod:`biped_sim.rigid.stepping`), the step ends when the lowest point of the swing foot's arc (the
+ignore: :mod:`biped_sim.rigid.compiled`), the step ends when the lowest point of the swing foot's arc (the
 foot point when R = 0) comes down to the profile's height at its x,
 
     clearance = level + (l - R)(cos theta_st - cos theta_sw) - h(x_swing),
@@ -20,6 +20,10 @@ as ``tripped`` (the run counts it as a fall). So does a swing foot already below
 is first sought (it crossed a riser during the mid-stance swing, whose scuffing the rigid model ignores). Only
 the lowest point is checked: the front of a round foot's arc may graze a riser unnoticed.
 
+The compiled step map reads them from the kernels below: the swing foot (:func:`tree_swing_foot`), its
+clearance (:func:`clearance`) and the riser test (:func:`riser_hit`); :class:`ProfileStrike`, the scipy
+reference's view, calls the same clearance and riser kernels.
+
 The impact is the walker's own map (angular momentum about the new contact point and of the trailing leg
 about the hip), which holds for any leg angles (Garcia's published map for the simplest walker assumes the
 symmetric strike of flat ground; the tree's limit of infinitesimal foot masses is its general form).
@@ -34,28 +38,44 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.contact.ground import ground_height
 from biped_sim.contact.profile import FlatProfile, profile_arrays
+from biped_sim.kernel import kernel
 from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_layout import T_NPTS, T_RSW, point
 
 RISER_TOLERANCE = 1e-9  # a strike this close to a riser's x and below its top is a trip [leg lengths]
 
 
+@kernel
+def tree_swing_foot(p: np.ndarray, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
+    """(x, height) of the swing foot's lowest point, the stance contact at (origin - R theta, level)."""
+    foot_x, foot_y = point(p, int(p[T_NPTS]) + 1, x)
+    return origin + foot_x, level + foot_y - p[T_RSW]
+
+
+@kernel
+def clearance(foot_x: float, foot_y: float, vertices: np.ndarray, ends: np.ndarray) -> float:
+    """Height of a foot point above the profile below it: the strike guard on a profile."""
+    return foot_y - ground_height(foot_x, vertices, ends)
+
+
+@kernel
+def riser_hit(foot_x: float, foot_y: float, vertices: np.ndarray, tolerance: float) -> bool:
+    """The foot point is within ``tolerance`` of a riser's x (a step up: consecutive vertices at one x, rising) and
+    more than ``tolerance`` below its top: it hit the riser, not the tread."""
+    for i in range(1, vertices.shape[0]):
+        x, top = vertices[i, 0], vertices[i, 1]
+        riser = x == vertices[i - 1, 0] and top > vertices[i - 1, 1]
+        if riser and abs(x - foot_x) <= tolerance and top > foot_y + tolerance:
+            return True
+    return False
+
+
 @dataclass(frozen=True)
 class RigidGround:
-    """A compiled profile (:func:`biped_sim.contact.profile.profile_arrays`) and its risers (x, top)."""
+    """A compiled profile (:func:`biped_sim.contact.profile.profile_arrays`)."""
 
     vertices: np.ndarray
     ends: np.ndarray
-
-    @property
-    def risers(self) -> np.ndarray:
-        """(k, 2): x and top height of each step up (consecutive vertices at one x, rising)."""
-        v = self.vertices
-        up = (v[1:, 0] == v[:-1, 0]) & (v[1:, 1] > v[:-1, 1])
-        return v[1:][up]
-
-    def height(self, x: float) -> float:
-        """The profile's height at x (after the step at a riser's x)."""
-        return float(ground_height(x, self.vertices, self.ends))
 
 
 def rigid_ground(config: Config) -> RigidGround | None:
@@ -89,14 +109,12 @@ class ProfileStrike:
     def clearance(self, x: np.ndarray) -> float:
         """Height of the swing foot's lowest point above the profile below it: the strike guard."""
         foot_x, foot_y = self.swing_foot(x)
-        return foot_y - self.ground.height(foot_x)
+        return float(clearance(foot_x, foot_y, self.ground.vertices, self.ground.ends))
 
     def tripped(self, x: np.ndarray) -> bool:
         """The swing foot is at a riser's x below its top: it hit the riser, not the tread."""
         foot_x, foot_y = self.swing_foot(x)
-        risers = self.ground.risers
-        near = np.abs(risers[:, 0] - foot_x) <= RISER_TOLERANCE * self.walker.leg_length
-        return bool(np.any(risers[near, 1] > foot_y + RISER_TOLERANCE * self.walker.leg_length))
+        return bool(riser_hit(foot_x, foot_y, self.ground.vertices, RISER_TOLERANCE * self.walker.leg_length))
 
     def impact(self, x_minus: np.ndarray) -> np.ndarray:
         """The post-impact state (general leg angles)."""

@@ -25,8 +25,10 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import initial_state, rigid_walker
-from biped_sim.rigid.compiled import CompiledWalker, compile_walker, compiled_step
-from biped_sim.rigid.stepping import RTOL, RigidStep, rigid_step
+from biped_sim.rigid.compiled import CompiledWalker, compile_walker
+from biped_sim.rigid.compiled import rigid_step as compiled_step
+from biped_sim.rigid.step import RTOL, RigidStep
+from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import RigidWalker
 
 RIGID_TOLERANCE = 1e-10
@@ -116,7 +118,7 @@ def rigid_map(
     Compiled (:mod:`biped_sim.rigid.compiled`) when ``compiled`` is given, else scipy's reference step.
     """
     x_start = walker.from_section(np.asarray(z, dtype=float))
-    step = rigid_step(walker, x_start) if compiled is None else compiled_step(walker, x_start, compiled)
+    step = rigid_step(walker, x_start) if compiled is None else compiled_step(walker, x_start, cw=compiled)
     if step.status != "strike" or step.x_plus is None:
         raise StepFailedError(f"the rigid {walker.name} {step.status} during the step")
     return walker.to_section(step.x_plus), step

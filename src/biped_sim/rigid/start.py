@@ -11,7 +11,7 @@ from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import NONDIMENSIONAL_KINDS, rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.stepping import RTOL
+from biped_sim.rigid.step import RTOL
 from biped_sim.rigid.tree import RigidWalker
 
 NONDIMENSIONAL = "1 (g = l = 1)"

@@ -1,4 +1,5 @@
-"""One rigid step, and a rigid run of many: event-located integration of the flow between heel strikes.
+"""One rigid step by scipy: the slow reference that the compiled step map (:mod:`biped_sim.rigid.compiled`,
+which every run and study takes) is tested against, and the limit cycles' ``engine="scipy"``.
 
 The flow is integrated by scipy's DOP853 (8th order, 7th-order dense output) at rtol = atol = 1e-12.
 Each guard phase ends at a downward zero crossing of its guard function, found by root finding on the
@@ -17,39 +18,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 
 from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike
+from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, MAX_STEP_TIME, RTOL, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
-
-RTOL = 1e-12
-ATOL = 1e-12
-MAX_STEP_TIME = 20.0  # in units of sqrt(l / g)
-GUARD_TOLERANCE = 1e-14
-
-StepStatus = Literal["strike", "fell", "stalled", "tripped"]
-
-
-@dataclass
-class RigidStep:
-    """A step from a post-impact state to the next strike."""
-
-    status: StepStatus
-    x_start: np.ndarray
-    x_minus: np.ndarray  # just before the strike (or the state when the step ended otherwise)
-    x_plus: np.ndarray | None  # just after the strike
-    period: float
-    length: float
-    rhs_evals: int
-    samples_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    samples_x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    accepted_steps: int = 0  # DOP853 steps taken
-    pushes: list[tuple[float, float, float]] = field(default_factory=list)  # applied: (t, work, ground normal impulse)
-    stop_strikes: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (t, energy lost)
 
 
 def _guard_event(guard, direction: float):  # type: ignore[no-untyped-def]
@@ -123,13 +98,14 @@ def rigid_step(
         return step
 
     phases = walker.guard_phases()
+    n_own = len(phases)  # the walker's own phases; on a profile the last gives way to two of the profile's
     if profile is not None:
         plane_strike = phases[-1][1]
         phases = [*phases[:-1], ("swing_foot_out", lambda y: -plane_strike(y)), ("heel_strike", profile.clearance)]
     walker.begin_step()
     for index, (name, guard) in enumerate(phases):
         on_profile = profile is not None and index == len(phases) - 1
-        if walker.skip_phase(index, x) or (name == "swing_foot_out" and guard(x) <= 0.0):
+        if (index < n_own and walker.skip_phase(index, x)) or (name == "swing_foot_out" and guard(x) <= 0.0):
             continue  # the swing foot is already past its mid-stance scuff
         if on_profile and guard(x) < -RISER_TOLERANCE * walker.leg_length:  # below the profile: in a riser
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
@@ -157,8 +133,8 @@ def rigid_step(
         if on_profile and profile.tripped(x):  # type: ignore[union-attr]
             return finish(RigidStep("tripped", x_start, x, None, t, math.nan, evals))
         t, x = _polish(walker, guard, t, x)
-        x_after = walker.after_phase(index, x)
-        if x_after is not x:  # a joint stop struck: book its plastic loss
+        x_after = walker.after_phase(index, x) if index < n_own else x
+        if not np.array_equal(x_after, x):  # a joint stop struck: book its plastic loss
             stops.append((t, walker.energy(x)[0] - walker.energy(x_after)[0]))
         x = x_after
     x_plus = walker.impact(x) if profile is None else profile.impact(x)

@@ -1,14 +1,15 @@
 """A rigid run: the classical impulsive model of a walker config, walked step after step and measured.
 
 ``dynamics: rigid`` simulates the config's walker (``compass`` with round or point feet, Garcia's
-``simplest`` walker, the ``rimless_wheel``) with the models of :mod:`biped_sim.rigid.tree`: the stance
-foot rolls without slip, the swing leg swings freely (mid-stance scuffing ignored) and each heel strike is
-an instantaneous, perfectly plastic impact located to about 1e-12 by :func:`~biped_sim.rigid.stepping.rigid_step`.
+``simplest`` walker, the ``rimless_wheel``, a described walker) with the models of :mod:`biped_sim.rigid.tree`:
+the stance foot rolls without slip, the swing leg swings freely (mid-stance scuffing ignored) and each heel strike
+is an instantaneous, perfectly plastic impact located to about 1e-12 by the compiled step map
+(:func:`~biped_sim.rigid.compiled.rigid_step`).
 
 The run starts just after a heel strike, from ``simulation.initial`` (or the rigid limit cycle), with the
 stance contact point at x = 0, and steps until ``simulation.t_end``, ``simulation.max_steps`` heel strikes,
 or a fall. A step that ends in a fall (a leg past ``simulation.fall_leg_angle``, the hip on the ground) or a
-stall (no heel strike within ``stepping.MAX_STEP_TIME`` natural periods: the walker rocked back or stopped)
+stall (no heel strike within ``MAX_STEP_TIME`` natural periods: the walker rocked back or stopped)
 ends the run with status ``fell`` and ``stop_time`` at the end of that step: a stall counts as a fall.
 
 What it measures, and how it relates to a compliant run:
@@ -58,9 +59,10 @@ from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable
+from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
-from biped_sim.rigid.stepping import MAX_STEP_TIME, RigidStep, rigid_step
+from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
@@ -162,6 +164,7 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
 def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:
     """Step from the start until t_end, max_steps, a fall or the wall-time budget."""
     walker = start.walker
+    cw = compile_walker(walker)  # its buffers kept from step to step
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
     deadline = wall_deadline(config)
     pushes = ordered_pushes(config)
@@ -179,7 +182,7 @@ def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] |
                 return trace, WalkEnd("walking", None, None, t0, evals, accepted)
             return trace, WalkEnd("timeout", TIMEOUT_REASON, t0, t0, evals, accepted)
         pending = [(at - t0, impulse) for at, impulse in pushes[len(trace.pushes) :]]
-        step = rigid_step(walker, x, rate, pending, profile)
+        step = rigid_step(walker, x, rate, pending, profile, cw=cw)
         trace.pushes += [(t0 + at, work, ground) for at, work, ground in step.pushes]
         trace.stop_losses += [(t0 + at, loss) for at, loss in step.stop_strikes]
         evals += step.rhs_evals
@@ -212,7 +215,7 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     ``energy_dissipated``: ``impact`` is the kinetic energy lost at the strikes; ``normal`` repeats it (the
     plastic impact is the rigid limit of normal damping, so tables of rigid and compliant runs compare) and
     ``friction`` is 0 (no slip): impact = normal + friction. ``constraint_violation_max`` is exactly 0: the
-    reduced coordinates satisfy the constraints by construction. Solver counters are scipy's DOP853's.
+    reduced coordinates satisfy the constraints by construction. Solver counters are the compiled DOP853's.
     """
     config, walker = result.config, result.walker
     impact = float(result.energy.dissipated_impact[-1]) if len(result.time) else 0.0

@@ -21,8 +21,8 @@ from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.io.atomic import write_text_atomic
 from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import LimitCycle, rigid_limit_cycle
-from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.continuation import bisect_flip, continue_cycle, flip_margin
 

@@ -17,7 +17,7 @@ from biped_sim.config.walker_registry import require_study
 from biped_sim.errors import ArgumentError
 from biped_sim.multibody.dispatch import measures
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import compiled_step
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError, rigid_limit_cycle
 from biped_sim.rigid.strike_check import StrikeCheck, strike_check
 from biped_sim.simulate import CompliantRunResult, simulate
@@ -53,7 +53,7 @@ def rigid_strike_check(config: Config, rigid: LimitCycle, mu_kinetic: float | No
     """
     mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic
     walker = rigid_walker(config)
-    step = compiled_step(walker, walker.from_section(rigid.section_point))
+    step = rigid_step(walker, walker.from_section(rigid.section_point))
     if step.status != "strike":
         raise StepFailedError(f"rigid_strike_check: the rigid cycle's step {step.status}")
     return strike_check(walker, step.x_minus, mu_kinetic)

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from biped_sim.rigid.compiled import compiled_step
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import StepFailedError
 from biped_sim.rigid.tree import RigidWalker
 
@@ -63,7 +63,7 @@ def simplest_variational_jacobian(walker: RigidWalker, z: np.ndarray) -> np.ndar
     from scipy.integrate import solve_ivp  # here: scipy.integrate adds 0.3 s to start-up
 
     x0 = walker.from_section(z)
-    step = compiled_step(walker, x0)
+    step = rigid_step(walker, x0)
     if step.status != "strike":
         raise StepFailedError(f"the simplest walker {step.status}")
     slope = walker.slope

@@ -1,0 +1,293 @@
+"""One phase of a rigid step integrated, compiled: DOP853 with dense output, its events located, samples (numba).
+
+The integration that :mod:`biped_sim.rigid.compiled`'s step map runs phase after phase, and the step's data it
+reads and writes (:class:`CompiledWalker`: the walker, the integration's buffers, the step's :class:`StepPlan`
+and :class:`StepRecord`). :func:`stretch` integrates from a state to the phase's guard, a fall or a stop time (a
+push's, or the step's time limit), sampling on the way; :func:`polish` moves a located guard onto its zero. The
+algorithm (scipy's DOP853, the events, Newton's polish) is described in :mod:`biped_sim.rigid.compiled`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from biped_sim.integrate.dense import (
+    dense_eval,
+    dop853_coefficients,
+    dop853_extra_stage_input,
+    illinois_point,
+    illinois_update,
+)
+from biped_sim.integrate.stepper import (
+    Scratch,
+    error_norm,
+    initial_step_size,
+    initial_step_trial,
+    propagate,
+    stage_input,
+)
+from biped_sim.integrate.tableaus import Tableau
+from biped_sim.kernel import kernel
+from biped_sim.rigid.ground import clearance, tree_swing_foot
+from biped_sim.rigid.kernels import fall_check, guard, guard_rate, n_fall_checks, rigid_rhs
+from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
+
+STRIKE, FELL, STALLED, TRIPPED = 0, 1, 2, 3
+STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
+REACHED = -1  # a stretch of a phase reached its stop time (a push's) before any event
+OWN, OUT, ON_PROFILE = 0, 1, 2  # guard modes: the walker's own; the plane's strike guard negated; the profile's
+APPLIED, SAMPLED, STOPS = 0, 1, 2  # StepRecord.counts: pushes applied, samples taken, stop strikes
+MIN_STEP = 1e-14  # a smaller step means the flow cannot be integrated: the step counts as a stall
+ROOT_TOL = 4.0 * np.finfo(float).eps  # relative width of the final bracket of an event time
+N_EVENTS = 4  # the guard, and at most three fall functions (two legs, the hip)
+FD_STEP = 1e-7  # the central difference of the profile guard's rate along the flow (as the scipy reference)
+
+
+class StepPlan(NamedTuple):
+    """What a step takes besides its start state (the kernels only read it); an empty plan is the plain step."""
+
+    push_times: np.ndarray  # (k,) on the step's clock, in time order
+    push_impulses: np.ndarray  # (k, 2) on the hip, slope frame
+    on_profile: bool  # the strike is sought on the profile below the swing foot (else the walker's own guard)
+    vertices: np.ndarray  # (n, 2) the profile's polyline (:func:`biped_sim.contact.profile.profile_arrays`)
+    ends: np.ndarray  # (2,) its slopes beyond the polyline
+    footing: np.ndarray  # (2,) the stance contact's origin and level (:class:`~biped_sim.rigid.ground.Footing`)
+    sample_rate: float  # samples on the grid k / sample_rate of the step's clock; 0: none
+
+
+class StepRecord(NamedTuple):
+    """What a step writes besides its end states: ``counts`` says how many rows of each buffer it filled."""
+
+    counts: np.ndarray  # (3,) int64: pushes applied, samples, stop strikes
+    pushes: np.ndarray  # (k, 3): t, work (the kinetic energy's jump), the ground's normal impulse
+    samples_t: np.ndarray  # (m,)
+    samples_x: np.ndarray  # (m, ny)
+    stops: np.ndarray  # (s, 2): t, the kinetic energy lost
+
+
+class CompiledWalker(NamedTuple):
+    """A rigid walker as the kernels read it, with the integration's buffers and a step's plan and record."""
+
+    kind: int
+    params: np.ndarray
+    tab: Tableau
+    sc: Scratch
+    q_work: np.ndarray  # (4,) scratch of the impact map
+    t_limit: float  # a step longer than this stalls
+    plan: StepPlan
+    record: StepRecord
+
+
+@njit(cache=True, inline="always")
+def copy_into(source: np.ndarray, target: np.ndarray) -> None:
+    """target = source, element by element (a slice assignment may allocate: not in an uncounted kernel)."""
+    for i in range(source.shape[0]):
+        target[i] = source[i]
+
+
+@njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
+def phase_guard(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray) -> float:
+    """The guard of the phase in ``mode``: the walker's own, the plane's strike negated (the swing foot leaving
+    its mid-stance scuff), or the swing foot's clearance above the profile (a tree walker's)."""
+    if mode == OWN:
+        return guard(cw.kind, cw.params, phase, y)
+    if mode == OUT:
+        return -guard(cw.kind, cw.params, phase, y)
+    plan = cw.plan
+    foot_x, foot_y = tree_swing_foot(cw.params, y, plan.footing[0], plan.footing[1])
+    return clearance(foot_x, foot_y, plan.vertices, plan.ends)
+
+
+@kernel(reference_counts=False)
+def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.ndarray) -> float:
+    """d(guard)/dt along the flow f: analytic for the walker's guards, a central difference (step FD_STEP along f,
+    as the scipy reference) for the profile's (sc.k[3] holds the probe)."""
+    if mode == OWN:
+        return guard_rate(cw.kind, cw.params, phase, x, f)
+    if mode == OUT:
+        return -guard_rate(cw.kind, cw.params, phase, x, f)
+    probe = cw.sc.k[3]
+    for i in range(x.shape[0]):
+        probe[i] = x[i] + FD_STEP * f[i]
+    ahead = phase_guard(cw, phase, mode, probe)
+    for i in range(x.shape[0]):
+        probe[i] = x[i] - FD_STEP * f[i]
+    return (ahead - phase_guard(cw, phase, mode, probe)) / (2.0 * FD_STEP)
+
+
+@njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
+def _events(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray, out: np.ndarray) -> int:
+    """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
+    out[0] = phase_guard(cw, phase, mode, y)
+    n = n_fall_checks(cw.kind, cw.params)
+    for i in range(n):
+        out[1 + i] = fall_check(cw.kind, cw.params, i, y)
+    return n + 1
+
+
+@kernel
+def _crossed(j: int, g_old: float, g_new: float) -> bool:
+    """Event j crossed over the step: the guard (j = 0) downward only, a fall function either way (as scipy)."""
+    down = g_old >= 0.0 and g_new <= 0.0
+    return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
+
+
+@kernel
+def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
+    """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
+    h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
+    rigid_rhs(kind, p, sc.y_stage, sc.k[1])
+    return initial_step_size(tab, sc, h0, d1, span)
+
+
+@kernel
+def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+    """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
+    for e in range(3):
+        rigid_rhs(kind, p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
+    dop853_coefficients(tab, h, y, sc)
+
+
+@njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
+def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarray) -> float:
+    return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.kind, cw.params, j - 1, y)
+
+
+@kernel(reference_counts=False)
+def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float, y: np.ndarray) -> float:
+    """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
+    tab, sc = cw.tab, cw.sc
+    lo, hi = 0.0, 1.0
+    g_lo, g_hi = sc.g_old[j], sc.g_new[j]
+    if g_hi == 0.0:
+        return 1.0
+    side = 0
+    tol = ROOT_TOL * max(1.0, abs(t)) / h
+    for _ in range(200):
+        if hi - lo <= tol or g_lo == 0.0:
+            break
+        mid = illinois_point(lo, hi, g_lo, g_hi)
+        dense_eval(tab, mid, h, y, sc, sc.y_dense)
+        g = _event_value(cw, phase, mode, j, sc.y_dense)
+        same_sign = (g > 0.0) == (g_lo > 0.0) and g != 0.0
+        lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, same_sign)
+    return lo if abs(g_lo) < abs(g_hi) else hi
+
+
+@kernel
+def _first_sample(rate: float, t: float) -> int:
+    """The first grid index k with k / rate >= t (0 when not sampling)."""
+    if rate == 0.0:
+        return 0
+    k = math.ceil(t * rate)
+    while k / rate < t:
+        k += 1
+    return k
+
+
+@kernel(reference_counts=False)
+def _sample(cw: CompiledWalker, k: int, t: float, h: float, t_end: float, y: np.ndarray) -> int:
+    """Record the grid points k / rate in [t, t_end) of the last accepted step (from (t, y), length h) on its dense
+    output, prepared by the caller; returns the next grid index. The buffer is sized for a step's whole grid."""
+    rate, rec = cw.plan.sample_rate, cw.record
+    n = rec.counts[SAMPLED]
+    while k / rate < t_end and n < rec.samples_t.shape[0]:
+        rec.samples_t[n] = k / rate
+        dense_eval(cw.tab, (k / rate - t) / h, h, y, cw.sc, rec.samples_x[n])
+        n += 1
+        k += 1
+    rec.counts[SAMPLED] = n
+    return k
+
+
+@kernel(reference_counts=False)
+def stretch(
+    cw: CompiledWalker, phase: int, mode: int, t: float, t_stop: float, y: np.ndarray, counters: np.ndarray
+) -> tuple[int, float]:
+    """Integrate from (t, y) to the phase's guard, a fall or t_stop (REACHED; STALLED if it is the step's time
+    limit), sampling on the way; y ends at the event or at t_stop (in place). A fresh start, as scipy's solve_ivp
+    after a push: the starting step, the events' values at the start."""
+    kind, p, tab, sc = cw.kind, cw.params, cw.tab, cw.sc
+    rate = cw.plan.sample_rate
+    k_next = _first_sample(rate, t)
+    expo = -1.0 / (tab.error_order + 1)
+    rigid_rhs(kind, p, y, sc.k[0])
+    h = _initial_step(kind, p, tab, sc, y, t_stop - t)
+    counters[0] += 2
+    n_ev = _events(cw, phase, mode, y, sc.g_old)
+    rejected = False
+    while t < t_stop:
+        clipped = h >= t_stop - t
+        h = min(h, t_stop - t)
+        if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
+            return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
+        for s in range(1, tab.stages):
+            stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
+            rigid_rhs(kind, p, sc.y_stage, sc.k[s])
+        finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
+        rigid_rhs(kind, p, sc.y_new, sc.k[tab.stages])
+        counters[0] += tab.stages
+        err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
+        if not err < 1.0:
+            h *= max(0.2, 0.9 * err**expo) if math.isfinite(err) else 0.2
+            rejected = True
+            continue
+        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err**expo)
+        if rejected:
+            factor = min(1.0, factor)
+        rejected = False
+        counters[1] += 1
+        _events(cw, phase, mode, sc.y_new, sc.g_new)
+        best, first = 2.0, -1
+        for j in range(n_ev):
+            if _crossed(j, sc.g_old[j], sc.g_new[j]):
+                if first < 0:  # the first crossing of this step: the dense output is needed
+                    _prepare_dense(kind, p, tab, h, y, sc)
+                    counters[0] += 3
+                theta = _root(cw, phase, mode, j, t, h, y)
+                if theta < best:
+                    best, first = theta, j
+        t_end = t + best * h if first >= 0 else (t_stop if clipped else t + h)
+        if rate > 0.0 and k_next / rate < t_end:
+            if first < 0:
+                _prepare_dense(kind, p, tab, h, y, sc)
+                counters[0] += 3
+            k_next = _sample(cw, k_next, t, h, t_end, y)
+        if first >= 0:
+            dense_eval(tab, best, h, y, sc, sc.y_dense)
+            copy_into(sc.y_dense, y)
+            return (STRIKE if first == 0 else FELL), t_end
+        t = t_end
+        copy_into(sc.y_new, y)
+        copy_into(sc.k[tab.stages], sc.k[0])
+        copy_into(sc.g_new, sc.g_old)
+        h *= factor
+    return (STALLED if t_stop >= cw.t_limit else REACHED), t
+
+
+@kernel(reference_counts=False)
+def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
+    """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2); returns the new t."""
+    kind, p, sc = cw.kind, cw.params, cw.sc
+    f, f_mid = sc.k[1], sc.k[2]
+    for _ in range(4):
+        g = phase_guard(cw, phase, mode, x)
+        if abs(g) <= GUARD_TOLERANCE:
+            break
+        rigid_rhs(kind, p, x, f)
+        rate = _guard_rate(cw, phase, mode, x, f)
+        if rate == 0.0:
+            break
+        dt = -g / rate
+        for i in range(x.shape[0]):
+            sc.y_stage[i] = x[i] + 0.5 * dt * f[i]
+        rigid_rhs(kind, p, sc.y_stage, f_mid)
+        counters[0] += 2
+        for i in range(x.shape[0]):
+            x[i] += dt * f_mid[i]
+        t += dt
+    return t

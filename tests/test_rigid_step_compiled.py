@@ -1,0 +1,205 @@
+"""The compiled rigid step with pushes, ground profiles, samples and stop strikes, against scipy's reference.
+
+Walkers: Chen's kneed walker (a knee stop strikes mid-swing) and the compass (Goswami's near-point feet and the
+round-foot walker), each started near its gait (section points of their rigid limit cycles). The compiled step
+(:func:`biped_sim.rigid.compiled.rigid_step`) and scipy's (:func:`biped_sim.rigid.stepping.rigid_step`) integrate
+the same equations at rtol = atol = 1e-12 with different step sequences: they agree to ~1e-12.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+import pytest
+from numba.core.registry import CPUDispatcher
+
+from biped_sim import load_config, simulate
+from biped_sim.config import Config, derive
+from biped_sim.rigid import compiled, stepping
+from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
+from biped_sim.rigid.step import RigidStep
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.simulate import rigid as rigid_run
+
+from .conftest import CONFIGS
+
+AGREEMENT = 1e-9
+
+# config, a section point near its gait (stance angle, both rates)
+WALKERS = {
+    "kneed": (CONFIGS / "kneed_walker.yaml", [0.23858546, -1.10958733, -0.05714811]),
+    "compass": (CONFIGS / "compass_goswami.yaml", [0.27130009, -1.09317942, -0.37759863]),
+    "round_foot": (CONFIGS / "round_foot_walker.yaml", [0.27136095, -1.61448028, -0.84377804]),
+}
+
+
+def _config(name: str) -> Config:
+    return load_config(WALKERS[name][0], ["dynamics=rigid"])
+
+
+@pytest.fixture(scope="module", params=list(WALKERS))
+def case(request: pytest.FixtureRequest) -> tuple[Config, RigidWalker, np.ndarray]:
+    config = _config(request.param)
+    walker = rigid_walker(config)
+    return config, walker, walker.from_section(np.array(WALKERS[request.param][1]))
+
+
+def _pushes(walker: RigidWalker) -> list[tuple[float, np.ndarray]]:
+    """Two pushes on the hip, forward then back, of a few percent of the walker's momentum scale."""
+    scale = walker.reference_mass * np.sqrt(walker.gravity * walker.leg_length)
+    return [(0.15, scale * np.array([0.02, 0.005])), (0.3, scale * np.array([-0.01, 0.0]))]
+
+
+def _profile(config: Config, walker: RigidWalker, x0: np.ndarray, at: float, height: float) -> ProfileStrike:
+    """One step of ``height`` leg lengths at ``at`` of the plane's step length ahead of the stance contact (x = 0)."""
+    step = {"at": at * compiled.rigid_step(walker, x0).length, "height": height * walker.leg_length}
+    ground = rigid_ground(derive(config, {"ground.profile": {"kind": "steps", "steps": [step]}}))
+    assert ground is not None
+    return ProfileStrike(walker, ground, Footing(walker.foot_radius * x0[0], 0.0))
+
+
+def assert_same_step(a: RigidStep, b: RigidStep) -> None:
+    """Two steps agree to AGREEMENT: outcome, time, end states, pushes, stop strikes and samples."""
+    assert a.status == b.status
+    assert abs(a.period - b.period) < AGREEMENT
+    assert np.max(np.abs(a.x_minus - b.x_minus)) < AGREEMENT
+    if a.status == "strike":
+        assert a.x_plus is not None and b.x_plus is not None
+        assert np.max(np.abs(a.x_plus - b.x_plus)) < AGREEMENT and abs(a.length - b.length) < AGREEMENT
+    assert len(a.pushes) == len(b.pushes) and len(a.stop_strikes) == len(b.stop_strikes)
+    for mine, theirs in [*zip(a.pushes, b.pushes, strict=True), *zip(a.stop_strikes, b.stop_strikes, strict=True)]:
+        assert np.max(np.abs(np.array(mine) - np.array(theirs))) < AGREEMENT
+    assert np.array_equal(a.samples_t, b.samples_t)  # the same grid points k / rate
+    if len(a.samples_t):
+        assert np.max(np.abs(a.samples_x - b.samples_x)) < AGREEMENT
+
+
+def test_a_plain_step_and_its_stop_strikes_are_scipys(case) -> None:  # type: ignore[no-untyped-def]
+    _, walker, x0 = case
+    mine, reference = compiled.rigid_step(walker, x0), stepping.rigid_step(walker, x0)
+    assert mine.status == "strike"
+    assert_same_step(mine, reference)
+    knees = walker.n_q > 2
+    assert len(mine.stop_strikes) == (1 if knees else 0)  # the kneed walker's knee strike, booked with its loss
+    if knees:
+        assert 0.0 < mine.stop_strikes[0][0] < mine.period and mine.stop_strikes[0][1] > 0.0
+
+
+def test_pushes_are_scipys_and_their_work_closes_the_energy_balance(case) -> None:  # type: ignore[no-untyped-def]
+    _, walker, x0 = case
+    pushes = _pushes(walker)
+    mine, reference = compiled.rigid_step(walker, x0, pushes=pushes), stepping.rigid_step(walker, x0, pushes=pushes)
+    assert mine.status == "strike" and [t for t, *_ in mine.pushes] == [0.15, 0.3]
+    assert_same_step(mine, reference)
+    # between strikes the energy changes only by the pushes' work and the stop strikes' losses
+    work = sum(w for _, w, _ in mine.pushes) - sum(loss for _, loss in mine.stop_strikes)
+    change = sum(walker.energy(mine.x_minus)) - sum(walker.energy(x0))
+    assert abs(work) > 1e-3 * walker.reference_mass * walker.gravity * walker.leg_length  # pushes that do work
+    assert change == pytest.approx(work, abs=1e-10 * walker.reference_mass * walker.gravity * walker.leg_length)
+
+
+def test_a_push_at_the_start_is_the_tree_walkers_hip_push(case) -> None:  # type: ignore[no-untyped-def]
+    _, walker, x0 = case
+    impulse = _pushes(walker)[1][1]  # backward: a forward one would snap the kneed walker's swing knee straight at once
+    step = compiled.rigid_step(walker, x0, sample_rate=100.0, pushes=[(0.0, impulse)])
+    walker.begin_step()  # the locks of a step's start (the walker's parameters keep those of its last use)
+    after, normal = walker.hip_push(x0, impulse)
+    assert step.samples_t[0] == 0.0 and np.array_equal(step.samples_x[0], after)  # the sample after the push
+    work = walker.energy(after)[0] - walker.energy(x0)[0]
+    assert step.pushes == [(0.0, pytest.approx(work, abs=1e-15), pytest.approx(normal, abs=1e-15))]
+
+
+def test_pushes_at_one_time_are_one_push_of_their_sum(case) -> None:  # type: ignore[no-untyped-def]
+    _, walker, x0 = case
+    (at, a), (_, b) = _pushes(walker)
+    # the jump is linear in the impulse at fixed angles; the second push, at or within 1e-15 s of the first, follows it
+    together = compiled.rigid_step(walker, x0, pushes=[(at, a + b)])
+    for second in (at, at + 1e-15):
+        apart = compiled.rigid_step(walker, x0, pushes=[(at, a), (second, b)])
+        assert [t for t, *_ in apart.pushes] == [at, at]  # the second at the state's time: within MIN_STEP of its own
+        assert apart.status == together.status == "strike"
+        assert np.max(np.abs(apart.x_minus - together.x_minus)) < 1e-11
+        assert sum(w for _, w, _ in apart.pushes) == pytest.approx(together.pushes[0][1], rel=1e-12)
+
+
+def test_a_step_down_is_scipys_strike_and_footing(case) -> None:  # type: ignore[no-untyped-def]
+    config, walker, x0 = case
+    profile = _profile(config, walker, x0, 0.6, -0.01)
+    mine = compiled.rigid_step(walker, x0, 200.0, _pushes(walker), profile)
+    reference = stepping.rigid_step(walker, x0, 200.0, _pushes(walker), profile)
+    assert mine.status == "strike" and len(mine.samples_t) > 50
+    assert_same_step(mine, reference)
+    assert mine.x_plus is not None and reference.x_plus is not None
+    footing, expected = (
+        profile.after(mine.x_minus, mine.x_plus).footing,
+        profile.after(reference.x_minus, reference.x_plus).footing,
+    )
+    assert footing.level == pytest.approx(-0.01 * walker.leg_length, abs=1e-12)  # landed on the lower tread
+    assert abs(footing.origin - expected.origin) < AGREEMENT and abs(footing.level - expected.level) < AGREEMENT
+    assert abs(mine.period - compiled.rigid_step(walker, x0, pushes=_pushes(walker)).period) > 1e-4  # a later strike
+
+
+@pytest.mark.parametrize("at", [0.3, 0.9])  # the swing foot below the profile when the strike is sought; a riser hit
+def test_a_riser_trips_both_at_the_same_point(case, at: float) -> None:  # type: ignore[no-untyped-def]
+    config, walker, x0 = case
+    profile = _profile(config, walker, x0, at, 0.2)
+    mine, reference = (
+        compiled.rigid_step(walker, x0, 200.0, (), profile),
+        stepping.rigid_step(walker, x0, 200.0, (), profile),
+    )
+    assert mine.status == "tripped" and mine.x_plus is None and len(mine.samples_t) > 20  # sampled up to the trip
+    assert_same_step(mine, reference)
+
+
+@contextmanager
+def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """The rigid step map as plain Python: every compiled function of the rigid, integration and contact modules is
+    its ``.py_func`` (the equations' inlined copies, :func:`biped_sim.kernel.inlined`, stay compiled inside)."""
+    with monkeypatch.context() as patch:
+        for name, module in list(sys.modules.items()):
+            if name.startswith(("biped_sim.rigid", "biped_sim.integrate", "biped_sim.contact")):
+                for attribute, value in list(vars(module).items()):
+                    if isinstance(value, CPUDispatcher):
+                        patch.setattr(module, attribute, value.py_func)
+        yield
+
+
+def test_the_compiled_step_is_its_plain_python_run_bit_for_bit(monkeypatch: pytest.MonkeyPatch) -> None:
+    config = _config("round_foot")
+    walker = rigid_walker(config)
+    x0 = walker.from_section(np.array(WALKERS["round_foot"][1]))
+    profile = _profile(config, walker, x0, 0.6, -0.01)
+    args = (walker, x0, 100.0, _pushes(walker), profile)
+    fast = compiled.rigid_step(*args)
+    with plain_python(monkeypatch):
+        assert not isinstance(compiled.step_kernel, CPUDispatcher)
+        plain = compiled.rigid_step(*args)
+    assert fast.status == plain.status == "strike" and len(fast.pushes) == 2
+    assert fast.period == plain.period and (fast.rhs_evals, fast.accepted_steps) == (
+        plain.rhs_evals,
+        plain.accepted_steps,
+    )
+    for field in ("x_minus", "x_plus", "samples_t", "samples_x"):
+        assert getattr(fast, field).tobytes() == getattr(plain, field).tobytes(), field
+    assert fast.pushes == plain.pushes and fast.stop_strikes == plain.stop_strikes
+
+
+def test_a_run_takes_the_compiled_step(monkeypatch: pytest.MonkeyPatch) -> None:
+    overrides = [
+        "simulation.t_end=2.5",
+        "simulation.pushes=[{time: 0.9, impulse: [0.03, 0.0]}]",
+        "ground.profile={kind: steps, steps: [{at: 0.7, height: -0.004}, {at: 1.6, height: 0.003}]}",
+    ]
+    config = load_config(CONFIGS / "kneed_walker.yaml", overrides)
+    run = simulate(config)
+    monkeypatch.setattr(rigid_run, "rigid_step", lambda *args, cw: stepping.rigid_step(*args))
+    reference = simulate(config)
+    assert run.status == reference.status == "walking" and len(run.strike_time) >= 4  # type: ignore[attr-defined]
+    for field in ("strike_time", "strike_post", "time", "state", "hip"):  # each step's samples on its own clock
+        assert np.max(np.abs(getattr(run, field) - getattr(reference, field))) < AGREEMENT, field
+    assert np.max(np.abs(np.array(run.pushes) - np.array(reference.pushes))) < AGREEMENT  # type: ignore[attr-defined]
+    assert np.max(np.abs(run.energy.residual)) < 1e-9 * run.walker.reference_mass * run.walker.gravity  # type: ignore[attr-defined]
