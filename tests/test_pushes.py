@@ -14,7 +14,7 @@ from biped_sim.multibody.euler_parameters import point_state
 from biped_sim.multibody.minimal import tree_system
 from biped_sim.multibody.tree import tree_state
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.simulate import prepare_model
 from biped_sim.testing import default_walker
 

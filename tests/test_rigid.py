@@ -9,8 +9,8 @@ import pytest
 
 from biped_sim import config_from_dict, load_config
 from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import RigidWalker
 
 from .conftest import CONFIGS

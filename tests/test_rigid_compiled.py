@@ -1,4 +1,4 @@
-"""The compiled rigid step map against scipy's reference: steps, fixed points, multipliers, falls and walks."""
+"""The compiled rigid step map of every rigid walker: energy through a step, falls, walks of many starts, stalls."""
 
 from __future__ import annotations
 
@@ -10,14 +10,11 @@ import pytest
 from biped_sim import load_config
 from biped_sim.config import Config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, compile_walker, walk_starts
-from biped_sim.rigid.compiled import rigid_step as compiled_step
-from biped_sim.rigid.limit_cycle import map_jacobian, rigid_limit_cycle, rigid_map
-from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, rigid_step, walk_starts
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 
 from .conftest import CONFIGS
-
-AGREEMENT = 1e-10
 
 # (config, overrides, a post-impact start near its gait)
 CASES = {
@@ -39,46 +36,23 @@ def _config(name: str) -> Config:
 
 
 @pytest.mark.parametrize("name", CASES)
-def test_compiled_step_matches_the_scipy_step(name: str) -> None:
+def test_a_step_keeps_its_energy_until_the_plastic_strike_takes_some(name: str) -> None:
     walker = rigid_walker(_config(name))
-    x0 = np.array(CASES[name][2])
-    reference, compiled = rigid_step(walker, x0), compiled_step(walker, x0)
-    assert compiled.status == reference.status == "strike"
-    assert compiled.period == pytest.approx(reference.period, abs=AGREEMENT)
-    assert compiled.length == pytest.approx(reference.length, abs=AGREEMENT)
-    assert np.max(np.abs(compiled.x_minus - reference.x_minus)) < AGREEMENT
-    assert np.max(np.abs(compiled.x_plus - reference.x_plus)) < AGREEMENT
+    step = rigid_step(walker, np.array(CASES[name][2]), sample_rate=200.0)
+    assert step.status == "strike" and step.x_plus is not None and len(step.samples_t) > 20
+    energy = np.array([sum(walker.energy(x)) for x in [*step.samples_x, step.x_minus]])
+    assert np.ptp(energy) < 1e-10 * walker.reference_mass * walker.gravity * walker.leg_length
+    assert walker.energy(step.x_plus)[0] < walker.energy(step.x_minus)[0]
 
 
-@pytest.mark.parametrize("name", CASES)
-def test_compiled_fixed_point_and_multipliers_match_the_scipy_map(name: str) -> None:
-    config = _config(name)
-    guess = dict(zip(rigid_walker(config).state_names, CASES[name][2], strict=True))
-    legs = {"stance_angle": 0.0, "stance_rate": 0.0, "swing_angle": 0.0, "swing_rate": 0.0, **guess}
-    compiled = rigid_limit_cycle(config, legs, engine="compiled")
-    reference = rigid_limit_cycle(config, legs, engine="scipy")
-    assert compiled.converged and reference.converged
-    assert np.max(np.abs(compiled.section_point - reference.section_point)) < AGREEMENT
-    # the cycles' own multipliers (relative step 1e-6) agree only to the maps' difference / 1e-6 ~ 1e-9: compare
-    # the two maps' multipliers at one point with a step (1e-4) whose noise, 1e-15 / 1e-4, is below 1e-10
-    walker = rigid_walker(config)
-    cw = compile_walker(walker)
-    z = reference.section_point
-    multipliers = [
-        np.sort_complex(np.linalg.eigvals(map_jacobian(lambda v, c=c: rigid_map(walker, v, c)[0], z, 1e-4)))
-        for c in (cw, None)
-    ]
-    assert np.max(np.abs(multipliers[0] - multipliers[1])) < AGREEMENT
-    assert np.max(np.abs(multipliers[1] - np.sort_complex(reference.multipliers))) < 1e-3  # to the step's h^2
-    assert np.max(np.abs(multipliers[1])) > 0.1  # a real comparison: nonzero multipliers
-
-
-def test_a_fall_is_a_status_at_the_same_time_as_scipy() -> None:
+def test_a_fall_is_a_status_ended_on_a_fall_criterion() -> None:
     walker = rigid_walker(_config("compass"))
     x0 = np.array([0.3, -0.3, 0.5, 2.0])  # rocking back uphill with the swing leg flung forward
-    reference, compiled = rigid_step(walker, x0), compiled_step(walker, x0)
-    assert compiled.status == reference.status != "strike"
-    assert compiled.period == pytest.approx(reference.period, abs=AGREEMENT)
+    step = rigid_step(walker, x0)
+    assert step.status == "fell" and step.x_plus is None and 0.0 < step.period < 5.0
+    leg_margin = walker.fall_leg_angle - np.max(np.abs(step.x_minus[:2]))
+    hip_margin = walker.hip_height(step.x_minus) - FALL_HIP_FRACTION * walker.leg_length
+    assert min(abs(leg_margin), abs(hip_margin)) < 1e-12  # located on the criterion it crossed
 
 
 def test_walk_from_the_fixed_point_keeps_it_and_from_far_away_falls() -> None:
@@ -129,7 +103,7 @@ def test_compass_with_offsets_conserves_energy_between_strikes() -> None:
     config = load_config(CONFIGS / "compass_goswami.yaml", ["walker.leg_com_offset=0.03", "walker.foot_offset=0.02"])
     walker = rigid_walker(config)
     x0 = np.array(CASES["compass"][2])
-    step = compiled_step(walker, x0)
-    plain = compiled_step(rigid_walker(_config("compass")), x0)
+    step = rigid_step(walker, x0)
+    plain = rigid_step(rigid_walker(_config("compass")), x0)
     assert step.status == "strike" and abs(step.period - plain.period) > 1e-3  # the offsets change the gait
     assert _offset_compass_energy(config, step.x_minus) == pytest.approx(_offset_compass_energy(config, x0), abs=1e-8)

@@ -9,9 +9,9 @@ import pytest
 
 from biped_sim import load_config, simulate
 from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, RigidGround
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate.rigid import RigidRunResult
 
 from .conftest import CONFIGS, invoke, one_line_error

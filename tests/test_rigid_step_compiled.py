@@ -1,9 +1,8 @@
-"""The compiled rigid step with pushes, ground profiles, samples and stop strikes, against scipy's reference.
+"""The compiled rigid step with pushes, ground profiles, samples and stop strikes: its energy books, its footing on
+a profile, its trips, and its slow reference, the same code run as plain Python, bit for bit.
 
 Walkers: Chen's kneed walker (a knee stop strikes mid-swing) and the compass (Goswami's near-point feet and the
-round-foot walker), each started near its gait (section points of their rigid limit cycles). The compiled step
-(:func:`biped_sim.rigid.compiled.rigid_step`) and scipy's (:func:`biped_sim.rigid.stepping.rigid_step`) integrate
-the same equations at rtol = atol = 1e-12 with different step sequences: they agree to ~1e-12.
+round-foot walker), each started near its gait (section points of their rigid limit cycles).
 """
 
 from __future__ import annotations
@@ -18,16 +17,12 @@ from numba.core.registry import CPUDispatcher
 
 from biped_sim import load_config, simulate
 from biped_sim.config import Config, derive
-from biped_sim.rigid import compiled, stepping
+from biped_sim.rigid import compiled
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
-from biped_sim.rigid.step import RigidStep
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.simulate import rigid as rigid_run
 
 from .conftest import CONFIGS
-
-AGREEMENT = 1e-9
 
 # config, a section point near its gait (stance angle, both rates)
 WALKERS = {
@@ -59,42 +54,26 @@ def _profile(config: Config, walker: RigidWalker, x0: np.ndarray, at: float, hei
     step = {"at": at * compiled.rigid_step(walker, x0).length, "height": height * walker.leg_length}
     ground = rigid_ground(derive(config, {"ground.profile": {"kind": "steps", "steps": [step]}}))
     assert ground is not None
-    return ProfileStrike(walker, ground, Footing(walker.foot_radius * x0[0], 0.0))
+    return ProfileStrike(walker, ground, Footing(-walker.contact_point(x0[: walker.n_q])[0], 0.0))
 
 
-def assert_same_step(a: RigidStep, b: RigidStep) -> None:
-    """Two steps agree to AGREEMENT: outcome, time, end states, pushes, stop strikes and samples."""
-    assert a.status == b.status
-    assert abs(a.period - b.period) < AGREEMENT
-    assert np.max(np.abs(a.x_minus - b.x_minus)) < AGREEMENT
-    if a.status == "strike":
-        assert a.x_plus is not None and b.x_plus is not None
-        assert np.max(np.abs(a.x_plus - b.x_plus)) < AGREEMENT and abs(a.length - b.length) < AGREEMENT
-    assert len(a.pushes) == len(b.pushes) and len(a.stop_strikes) == len(b.stop_strikes)
-    for mine, theirs in [*zip(a.pushes, b.pushes, strict=True), *zip(a.stop_strikes, b.stop_strikes, strict=True)]:
-        assert np.max(np.abs(np.array(mine) - np.array(theirs))) < AGREEMENT
-    assert np.array_equal(a.samples_t, b.samples_t)  # the same grid points k / rate
-    if len(a.samples_t):
-        assert np.max(np.abs(a.samples_x - b.samples_x)) < AGREEMENT
-
-
-def test_a_plain_step_and_its_stop_strikes_are_scipys(case) -> None:  # type: ignore[no-untyped-def]
+def test_a_plain_step_conserves_energy_but_for_its_stop_strikes(case) -> None:  # type: ignore[no-untyped-def]
     _, walker, x0 = case
-    mine, reference = compiled.rigid_step(walker, x0), stepping.rigid_step(walker, x0)
+    mine = compiled.rigid_step(walker, x0)
     assert mine.status == "strike"
-    assert_same_step(mine, reference)
+    scale = walker.reference_mass * walker.gravity * walker.leg_length
+    change = sum(walker.energy(mine.x_minus)) - sum(walker.energy(x0))
+    assert change == pytest.approx(-sum(loss for _, loss in mine.stop_strikes), abs=1e-10 * scale)
     knees = walker.n_q > 2
     assert len(mine.stop_strikes) == (1 if knees else 0)  # the kneed walker's knee strike, booked with its loss
     if knees:
         assert 0.0 < mine.stop_strikes[0][0] < mine.period and mine.stop_strikes[0][1] > 0.0
 
 
-def test_pushes_are_scipys_and_their_work_closes_the_energy_balance(case) -> None:  # type: ignore[no-untyped-def]
+def test_pushes_work_closes_the_energy_balance(case) -> None:  # type: ignore[no-untyped-def]
     _, walker, x0 = case
-    pushes = _pushes(walker)
-    mine, reference = compiled.rigid_step(walker, x0, pushes=pushes), stepping.rigid_step(walker, x0, pushes=pushes)
+    mine = compiled.rigid_step(walker, x0, pushes=_pushes(walker))
     assert mine.status == "strike" and [t for t, *_ in mine.pushes] == [0.15, 0.3]
-    assert_same_step(mine, reference)
     # between strikes the energy changes only by the pushes' work and the stop strikes' losses
     work = sum(w for _, w, _ in mine.pushes) - sum(loss for _, loss in mine.stop_strikes)
     change = sum(walker.energy(mine.x_minus)) - sum(walker.energy(x0))
@@ -126,20 +105,14 @@ def test_pushes_at_one_time_are_one_push_of_their_sum(case) -> None:  # type: ig
         assert sum(w for _, w, _ in apart.pushes) == pytest.approx(together.pushes[0][1], rel=1e-12)
 
 
-def test_a_step_down_is_scipys_strike_and_footing(case) -> None:  # type: ignore[no-untyped-def]
+def test_a_step_down_lands_on_the_lower_tread(case) -> None:  # type: ignore[no-untyped-def]
     config, walker, x0 = case
     profile = _profile(config, walker, x0, 0.6, -0.01)
     mine = compiled.rigid_step(walker, x0, 200.0, _pushes(walker), profile)
-    reference = stepping.rigid_step(walker, x0, 200.0, _pushes(walker), profile)
-    assert mine.status == "strike" and len(mine.samples_t) > 50
-    assert_same_step(mine, reference)
-    assert mine.x_plus is not None and reference.x_plus is not None
-    footing, expected = (
-        profile.after(mine.x_minus, mine.x_plus).footing,
-        profile.after(reference.x_minus, reference.x_plus).footing,
-    )
+    assert mine.status == "strike" and len(mine.samples_t) > 50 and mine.x_plus is not None
+    footing = profile.after(mine.x_minus, mine.x_plus).footing
     assert footing.level == pytest.approx(-0.01 * walker.leg_length, abs=1e-12)  # landed on the lower tread
-    assert abs(footing.origin - expected.origin) < AGREEMENT and abs(footing.level - expected.level) < AGREEMENT
+    assert abs(profile.clearance(mine.x_minus)) < 1e-12  # the swing foot's lowest point on the profile
     assert abs(mine.period - compiled.rigid_step(walker, x0, pushes=_pushes(walker)).period) > 1e-4  # a later strike
 
 
@@ -147,12 +120,9 @@ def test_a_step_down_is_scipys_strike_and_footing(case) -> None:  # type: ignore
 def test_a_riser_trips_both_at_the_same_point(case, at: float) -> None:  # type: ignore[no-untyped-def]
     config, walker, x0 = case
     profile = _profile(config, walker, x0, at, 0.2)
-    mine, reference = (
-        compiled.rigid_step(walker, x0, 200.0, (), profile),
-        stepping.rigid_step(walker, x0, 200.0, (), profile),
-    )
+    mine = compiled.rigid_step(walker, x0, 200.0, (), profile)
     assert mine.status == "tripped" and mine.x_plus is None and len(mine.samples_t) > 20  # sampled up to the trip
-    assert_same_step(mine, reference)
+    assert profile.tripped(mine.x_minus) or profile.clearance(mine.x_minus) < 0.0  # at the riser, or under the tread
 
 
 @contextmanager
@@ -188,18 +158,12 @@ def test_the_compiled_step_is_its_plain_python_run_bit_for_bit(monkeypatch: pyte
     assert fast.pushes == plain.pushes and fast.stop_strikes == plain.stop_strikes
 
 
-def test_a_run_takes_the_compiled_step(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_run_with_a_push_and_steps_closes_its_energy_balance() -> None:
     overrides = [
         "simulation.t_end=2.5",
         "simulation.pushes=[{time: 0.9, impulse: [0.03, 0.0]}]",
         "ground.profile={kind: steps, steps: [{at: 0.7, height: -0.004}, {at: 1.6, height: 0.003}]}",
     ]
-    config = load_config(CONFIGS / "kneed_walker.yaml", overrides)
-    run = simulate(config)
-    monkeypatch.setattr(rigid_run, "rigid_step", lambda *args, cw: stepping.rigid_step(*args))
-    reference = simulate(config)
-    assert run.status == reference.status == "walking" and len(run.strike_time) >= 4  # type: ignore[attr-defined]
-    for field in ("strike_time", "strike_post", "time", "state", "hip"):  # each step's samples on its own clock
-        assert np.max(np.abs(getattr(run, field) - getattr(reference, field))) < AGREEMENT, field
-    assert np.max(np.abs(np.array(run.pushes) - np.array(reference.pushes))) < AGREEMENT  # type: ignore[attr-defined]
+    run = simulate(load_config(CONFIGS / "kneed_walker.yaml", overrides))
+    assert run.status == "walking" and len(run.strike_time) >= 4 and len(run.pushes) == 1  # type: ignore[attr-defined]
     assert np.max(np.abs(run.energy.residual)) < 1e-9 * run.walker.reference_mass * run.walker.gravity  # type: ignore[attr-defined]

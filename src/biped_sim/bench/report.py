@@ -218,13 +218,22 @@ def rigid_map_notes(rigid: dict[str, Any] | None) -> list[str]:
     """The rigid step map's lines: per-step times compiled vs scipy, and the basins' wall times."""
     if not rigid:
         return []
+    rows = rigid["per_step"]
     parts = [
         f"{name} {v['scipy_us']:.0f} -> {v['compiled_us']:.1f} us ({v['speedup']:.0f}x)"
-        for name, v in rigid["per_step"].items()
+        for name, v in rows.items()
+        if "scipy_us" in v
     ]
     lines = [
-        "Rigid step from the fixed point, scipy solve_ivp DOP853 -> compiled (rtol 1e-12): " + ", ".join(parts) + "."
+        "Rigid step from the fixed point, scipy solve_ivp DOP853 over the same equations -> compiled (rtol 1e-12): "
+        + ", ".join(parts)
+        + "."
     ]
+    if run := rows.get("kneed_run_step"):
+        lines.append(
+            f"Kneed run step (a push, a step down, samples at 1 kHz): {run['compiled_us']:.1f} us, "
+            f"{run['over_plain']:.2f}x its plain step."
+        )
     for name, basin in rigid.get("basins", {}).items():
         lines.append(
             f"Basin {name}: {basin['cells']} cells x {basin['steps']} steps in {basin['wall_s']:.1f} s with "

@@ -1,9 +1,10 @@
 """Benchmark rows of the rigid step map and of basins: compiled against scipy per step, basin wall times.
 
-* Per step: the median wall time of one step from each rigid walker's fixed point, scipy's ``solve_ivp``
-  (the reference, :func:`~biped_sim.rigid.stepping.rigid_step`) against the compiled map
-  (:func:`~biped_sim.rigid.compiled.rigid_step`, its buffers reused), after a warm-up; and a run's step of the
-  kneed walker (``kneed_run_step``: a push on the hip, a step down ahead, samples at 1 kHz).
+* Per step: the median wall time of one step from each rigid walker's fixed point, the compiled map
+  (:func:`~biped_sim.rigid.compiled.rigid_step`, its buffers reused, after a warm-up) against scipy's
+  ``solve_ivp`` DOP853 integrating the same compiled equations phase by phase to the same guards (the baseline:
+  :func:`scipy_step`, no falls, no polish); and a run's step of the kneed walker (``kneed_run_step``: a push on the
+  hip, a step down ahead, samples at 1 kHz) against its plain step.
 * Basins (full benchmark only): the wall time of ``biped-sim basin``'s computation, the worker pool's start
   included, with 2 workers: the simplest walker's 41 x 41 grid at 30 steps (target < 60 s) and the default
   compliant walker's 21 x 21 grid at 10 steps (target < 10 min).
@@ -23,11 +24,11 @@ import numpy as np
 
 from biped_sim.config import load_config
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import compile_walker
-from biped_sim.rigid.compiled import rigid_step as compiled_step
+from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.stepping import rigid_step
+from biped_sim.rigid.step import ATOL, RTOL
+from biped_sim.rigid.tree import RigidWalker
 from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
 from biped_sim.sweep import local_executor
 
@@ -64,6 +65,23 @@ def _median_time(func, repeats: int) -> float:  # type: ignore[no-untyped-def]
     return statistics.median(walls)
 
 
+def scipy_step(walker: RigidWalker, x: np.ndarray) -> np.ndarray:
+    """The baseline: the post-impact state after one step by scipy's DOP853 (rtol = atol = 1e-12) over the walker's
+    compiled flow, each phase ended by its guard (scipy's event location), the stop strikes and the heel strike."""
+    from scipy.integrate import solve_ivp  # here: scipy.integrate adds 0.3 s to start-up
+
+    walker.begin_step()
+    for phase, (_, guard) in enumerate(walker.guard_phases()):
+        if walker.skip_phase(phase, x):
+            continue
+        event = lambda _t, y, g=guard: g(y)  # noqa: E731
+        event.terminal, event.direction = True, -1.0  # type: ignore[attr-defined]
+        span = (0.0, 20.0 * np.sqrt(walker.leg_length / walker.gravity))
+        sol = solve_ivp(lambda _t, y: walker.rhs(y), span, x, method="DOP853", rtol=RTOL, atol=ATOL, events=event)
+        x = walker.after_phase(phase, sol.y[:, -1])
+    return walker.impact(x)
+
+
 def per_step_times(repeats: int = 20) -> dict[str, dict[str, float]]:
     """Per walker: scipy's and the compiled step's median wall time [us] from the fixed point, and the ratio."""
     out = {}
@@ -73,14 +91,15 @@ def per_step_times(repeats: int = 20) -> dict[str, dict[str, float]]:
         x0 = walker.from_section(rigid_limit_cycle(config).section_point)
         cw = compile_walker(walker)
         out[name] = _step_times(
-            lambda w=walker, x=x0: rigid_step(w, x), lambda w=walker, x=x0, c=cw: compiled_step(w, x, cw=c), repeats
+            lambda w=walker, x=x0: scipy_step(w, x), lambda w=walker, x=x0, c=cw: rigid_step(w, x, cw=c), repeats
         )
     out["kneed_run_step"] = _run_step_times(repeats)
     return out
 
 
 def _run_step_times(repeats: int) -> dict[str, float]:
-    """The kneed walker's step from its fixed point with RUN_STEP_PUSHES, on RUN_STEP_PROFILE, sampled."""
+    """The kneed walker's step from its fixed point with RUN_STEP_PUSHES, on RUN_STEP_PROFILE, sampled, against its
+    plain step (the extras' cost, as a ratio)."""
     config = load_config(CONFIGS / "kneed_walker.yaml")
     walker = rigid_walker(config)
     x0 = walker.from_section(rigid_limit_cycle(config).section_point)
@@ -88,15 +107,14 @@ def _run_step_times(repeats: int) -> dict[str, float]:
     assert ground is not None
     profile = ProfileStrike(walker, ground, Footing(0.0, 0.0))
     cw = compile_walker(walker)
-    return _step_times(
-        lambda: rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile),
-        lambda: compiled_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw),
-        repeats,
-    )
+    rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw)  # warm-up
+    run_s = _median_time(lambda: rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw), repeats)
+    plain_s = _median_time(lambda: rigid_step(walker, x0, cw=cw), repeats)
+    return {"compiled_us": run_s * 1e6, "plain_us": plain_s * 1e6, "over_plain": run_s / plain_s}
 
 
 def _step_times(reference: Callable[[], object], compiled: Callable[[], object], repeats: int) -> dict[str, float]:
-    """Median wall times [us] of a step by scipy and compiled (after a warm-up that loads the compiled code)."""
+    """Median wall times [us] of a step by the scipy baseline and compiled (after a warm-up that loads the code)."""
     compiled()
     scipy_s = _median_time(reference, max(3, repeats // 4))
     compiled_s = _median_time(compiled, repeats)

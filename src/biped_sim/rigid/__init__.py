@@ -1,7 +1,9 @@
-"""Rigid (impulsive-impact) reference models of the walkers: flow, heel strike, impact map, limit cycles.
+"""Rigid (impulsive-impact) models of the walkers: flow, strikes, the compiled step map, limit cycles.
 
-``models`` holds the walkers (one multibody description for the compass and the rimless wheel, MODEL.md
-8's equations for Garcia's simplest walker), ``stepping`` the event-located integration of a step,
-``limit_cycle`` the step map's fixed points and multipliers, ``start`` a rigid run's validated start.
+Every rigid walker is its description's tree (``tree``: the model, ``tree_build``: its parameter vector,
+``tree_layout`` and ``tree_kernels``: the compiled equations), stepped by one compiled step map (``compiled``,
+``integration``; ``ground``: the strike on a ground profile), whose fixed points and multipliers ``limit_cycle``
+finds; ``start`` is a rigid run's validated start, ``strike_check`` whether the plastic strike is the stiff
+contact's limit.
 The rigid run itself (many steps, measured and written) is :mod:`biped_sim.simulate.rigid`.
 """

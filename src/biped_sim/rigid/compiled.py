@@ -2,10 +2,10 @@
 
 One step map for every use of the rigid walkers: a run's steps with pushes, ground profiles and samples
 (:func:`rigid_step`, which :mod:`biped_sim.simulate.rigid` takes) and the plain map of limit
-cycles, basins, bifurcation and robustness (:func:`rigid_step` without them, :func:`walk_starts`). It computes
-what :func:`biped_sim.rigid.stepping.rigid_step` (scipy's ``solve_ivp``) computes, to the integration's ~1e-12
-(the tests also check that fixed points and multipliers agree to 1e-10); run as plain Python (``.py_func`` of
-each kernel) it gives the same bits. A phase's integration is :mod:`biped_sim.rigid.integration`'s:
+cycles, basins, bifurcation and robustness (:func:`rigid_step` without them, :func:`walk_starts`). Its slow
+reference is itself run as plain Python (``.py_func`` of each kernel), which gives the same bits (a test); a test
+also integrates the kneed walker's phases with scipy's ``solve_ivp`` to the same strike (1e-10). A phase's
+integration is :mod:`biped_sim.rigid.integration`'s:
 
 * the flow of :mod:`biped_sim.rigid.kernels` is integrated by DOP853 at rtol = atol = 1e-12 with scipy's
   step-size control (Hairer's norm, safety 0.9, factors 0.2..10, no growth after a rejection), from
@@ -16,8 +16,8 @@ each kernel) it gives the same bits. A phase's integration is :mod:`biped_sim.ri
   compared with their values at the step's start; the earliest crossing is located on the degree-7 dense
   output by the Illinois variant of regula falsi, to 4 machine epsilon in time (scipy: brentq);
 * a located guard is polished by Newton along the flow, dt = -g / (dg/dt), x += dt f(x + dt f / 2), until
-  |g| <= 1e-14 (the reference differentiates g by central differences: the same step to round-off; so does
-  this map for the profile's guard, which has no analytic rate at the profile's vertices);
+  |g| <= 1e-14 (the profile's guard, which has no analytic rate at the profile's vertices, by central
+  differences);
 * a fall (a leg past the fall angle, the hip below 0.05 l) or a stall (no strike within ``MAX_STEP_TIME``
   natural periods, or a step below ``MIN_STEP``) ends the step with a status.
 
@@ -288,9 +288,8 @@ def rigid_step(
     profile: ProfileStrike | None = None,
     cw: CompiledWalker | None = None,
 ) -> RigidStep:
-    """One step from a post-impact state, compiled: :func:`~biped_sim.rigid.stepping.rigid_step`'s arguments and
-    result (``cw`` reuses the buffers of :func:`compile_walker`; without pushes, profile or samples the step runs on
-    them as they are, the step map of limit cycles and basins).
+    """One step from a post-impact state (``cw`` reuses the buffers of :func:`compile_walker`; without pushes,
+    profile or samples the step runs on them as they are, the step map of limit cycles and basins).
 
     The samples fall on the grid k / sample_rate of the step's clock and are kept whatever the step's outcome;
     ``pushes`` (time on the step's clock, impulse on the hip) in time order; ``profile``: the strike on a ground

@@ -123,5 +123,5 @@ class ProfileStrike:
     def after(self, x_minus: np.ndarray, x_plus: np.ndarray) -> ProfileStrike:
         """The next step's strike: the new stance foot stands where the swing foot landed."""
         foot_x, foot_y = self.swing_foot(x_minus)
-        footing = Footing(foot_x + self.walker.foot_radius * float(x_plus[0]), foot_y)
+        footing = Footing(foot_x - float(self.walker.contact_point(x_plus[: self.walker.n_q])[0]), foot_y)
         return ProfileStrike(self.walker, self.ground, footing)

@@ -18,17 +18,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import initial_state, rigid_walker
-from biped_sim.rigid.compiled import CompiledWalker, compile_walker
-from biped_sim.rigid.compiled import rigid_step as compiled_step
+from biped_sim.rigid.compiled import CompiledWalker, compile_walker, rigid_step
 from biped_sim.rigid.step import RTOL, RigidStep
-from biped_sim.rigid.stepping import rigid_step
 from biped_sim.rigid.tree import RigidWalker
 
 RIGID_TOLERANCE = 1e-10
@@ -40,8 +38,6 @@ STABILITY_MARGIN = 1e-9  # |lambda| < 1 - margin counts as stable
 SCAN_ANGLES = (0.1, 0.15, 0.2, 0.25, 0.3)
 SCAN_RATES = (0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0)
 SCAN_SWING_RATIO = 0.6
-
-Engine = Literal["compiled", "scipy"]
 
 
 @dataclass
@@ -113,12 +109,10 @@ class StepFailedError(RuntimeError):
 def rigid_map(
     walker: RigidWalker, z: np.ndarray, compiled: CompiledWalker | None = None
 ) -> tuple[np.ndarray, RigidStep]:
-    """The step-to-step map on the section: post-impact coordinates -> the next ones.
-
-    Compiled (:mod:`biped_sim.rigid.compiled`) when ``compiled`` is given, else scipy's reference step.
-    """
+    """The step-to-step map on the section: post-impact coordinates -> the next ones (the compiled step map of
+    :mod:`biped_sim.rigid.compiled`; ``compiled``: its buffers, reused)."""
     x_start = walker.from_section(np.asarray(z, dtype=float))
-    step = rigid_step(walker, x_start) if compiled is None else compiled_step(walker, x_start, cw=compiled)
+    step = rigid_step(walker, x_start, cw=compiled)
     if step.status != "strike" or step.x_plus is None:
         raise StepFailedError(f"the rigid {walker.name} {step.status} during the step")
     return walker.to_section(step.x_plus), step
@@ -232,7 +226,6 @@ def rigid_limit_cycle(
     config: Config,
     guess: dict[str, float] | None = None,
     settle_steps: int = SETTLE_STEPS,
-    engine: Engine = "compiled",
 ) -> LimitCycle:
     """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
 
@@ -242,7 +235,6 @@ def rigid_limit_cycle(
     when neither converges (the walker falls from the guess), the same two tries run from each point of
     :func:`scan_starts` in turn. ``settle_steps = 0`` finds the cycle nearest the guess, stable or not (no
     scan: a continuation must not jump branch). The record's ``start`` says which start found the cycle.
-    ``engine``: the compiled step map, or scipy's reference (a run's start uses it, so that runs keep their bits).
     """
     rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
     walker = rigid_walker(rigid)
@@ -253,7 +245,7 @@ def rigid_limit_cycle(
     else:
         starts = [("the config's initial state", initial_state(rigid, walker))]
 
-    compiled = compile_walker(walker) if engine == "compiled" else None
+    compiled = compile_walker(walker)
 
     def step_map(z: np.ndarray) -> np.ndarray:
         return rigid_map(walker, z, compiled)[0]
@@ -322,12 +314,8 @@ def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
 
 
 def rigid_limit_cycle_initial(config: Config) -> dict[str, float]:
-    """The rigid model's period-1 fixed point as a run's initial state (the four README keys).
-
-    Found with scipy's reference step map: runs that start on the cycle keep the bits they had before the
-    compiled map (which agrees to about 1e-12).
-    """
-    cycle = rigid_limit_cycle(config, engine="scipy")
+    """The rigid model's period-1 fixed point as a run's initial state (the initial-state keys)."""
+    cycle = rigid_limit_cycle(config)
     if not cycle.converged:
         raise ConfigError(
             "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"

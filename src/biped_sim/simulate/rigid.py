@@ -171,7 +171,11 @@ def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] |
     trace = RigidTrace()
     t0, x = 0.0, start.state
     ground = rigid_ground(config)
-    profile = None if ground is None else ProfileStrike(walker, ground, Footing(walker.foot_radius * x[0], 0.0))
+    profile = (
+        None
+        if ground is None
+        else ProfileStrike(walker, ground, Footing(-walker.contact_point(x[: walker.n_q])[0], 0.0))
+    )
     evals = accepted = 0
     while True:
         step_index = len(trace.strike_time)

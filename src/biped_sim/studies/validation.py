@@ -19,8 +19,8 @@ import numpy as np
 from biped_sim.config import config_from_dict, load_config, parse_yaml
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic
 from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.stepping import rigid_step
 from biped_sim.simulate import simulate
 from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config
 from biped_sim.studies.continuation import period_doubling_slope
@@ -170,17 +170,12 @@ def rigid_physics_checks() -> list[Check]:
     scale = walker.reference_mass * walker.gravity * walker.leg_length
     drift = float(np.ptp(energy) / scale)
     x_minus, x_plus = step.x_minus, walker.impact(step.x_minus)
-    hip = walker.body_kinematics(x_minus[:2], x_minus[2:])[2][0]
-    contact = (
-        hip
-        + (walker.leg_length - walker.foot_radius) * np.array([math.sin(x_minus[1]), -math.cos(x_minus[1])])
-        - [0, walker.foot_radius]
-    )
-    after = type(walker)(config)
+    foot_x, _ = walker.swing_foot(x_minus, 0.0, 0.0)
+    contact = np.array([foot_x, 0.0])  # the landing foot's contact point, in the frame of x_minus
     # the post-impact state is in the new stance foot's frame: shift it onto the same contact point
-    shift = contact - after.contact_point(x_plus[:2])
+    shift = contact - walker.contact_point(x_plus[: walker.n_q])
     before_l = walker.angular_momentum(x_minus, contact)
-    after_l = after.angular_momentum(x_plus, contact - shift)
+    after_l = walker.angular_momentum(x_plus, contact - shift)
     group = "Rigid model physics (round-foot walker)"
     return [
         Check(group, "energy drift during a step / (m g l)", "0", f"{drift:.1e}", "1e-10", drift <= 1e-10),
