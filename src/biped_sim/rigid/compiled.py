@@ -73,26 +73,15 @@ from biped_sim.rigid.integration import (
 )
 from biped_sim.rigid.integration import FELL as FELL  # re-exported with the other statuses of a step
 from biped_sim.rigid.kernels import (
-    TREE,
-    end_phase,
-    first_phase,
     n_phases,
-    phase_skipped,
-    rigid_impact,
-    start_step,
 )
 from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
-from biped_sim.rigid.tree_kernels import tree_energy, tree_push
+from biped_sim.rigid.tree_kernels import after_phase, begin_step, skip_phase, tree_energy, tree_impact, tree_push
 from biped_sim.rigid.tree_layout import P_GX, P_GY, P_L, gravity_vector, phase_offset
 
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
-
-
-def walker_params(walker: RigidWalker) -> tuple[int, np.ndarray]:
-    """(kind, parameter vector) of a rigid walker: a copy (the kernels keep their workspace in it)."""
-    return TREE, walker.params.copy()
 
 
 def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
@@ -117,12 +106,12 @@ def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
 
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work), with the plain step's plan."""
-    kind, params = walker_params(walker)
+    params = walker.params.copy()  # a copy: the kernels keep their workspace in it
     ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     scratch = make_scratch(ny, 1, N_EVENTS)
-    record = _record(ny, 0, 0, int(n_phases(kind, params)))
-    return CompiledWalker(kind, params, tableau("dop853"), scratch, np.zeros(4), t_limit, _empty_plan(), record)
+    record = _record(ny, 0, 0, int(n_phases(params)))
+    return CompiledWalker(params, tableau("dop853"), scratch, t_limit, _empty_plan(), record)
 
 
 @kernel(reference_counts=False)
@@ -158,14 +147,14 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
 @kernel(reference_counts=False)
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
     """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
-    kind, p, rec = cw.kind, cw.params, cw.record
+    p, rec = cw.params, cw.record
     struck = int(p[phase_offset(p, phase)]) == STOP_PHASE
     n = rec.counts[STOPS]
     if not struck or n >= rec.stops.shape[0]:
-        end_phase(kind, p, phase, x, scratch)
+        after_phase(p, phase, x, scratch)
         return
     before, _ = tree_energy(p, x)
-    end_phase(kind, p, phase, x, scratch)
+    after_phase(p, phase, x, scratch)
     after, _ = tree_energy(p, x)
     rec.stops[n, 0], rec.stops[n, 1] = t, before - after
     rec.counts[STOPS] = n + 1
@@ -189,16 +178,16 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     mid-stance scuff (the plane's strike guard turning positive; skipped if it already is), then the clearance
     above the profile; a swing foot already below the profile by RISER_TOLERANCE l then, or a strike located at a
     riser, ends the step TRIPPED."""
-    kind, p, plan = cw.kind, cw.params, cw.plan
+    p, plan = cw.params, cw.plan
     copy_into(x_start, x_minus)
     cw.record.counts[:] = 0
     t = 0.0
-    start_step(kind, p)
-    last = n_phases(kind, p) - 1
-    for phase in range(first_phase(kind), last + 2 if plan.on_profile else last + 1):
+    begin_step(p)
+    last = n_phases(p) - 1
+    for phase in range(last + 2 if plan.on_profile else last + 1):
         own = min(phase, last)
         mode = OWN if phase < last or not plan.on_profile else (OUT if phase == last else ON_PROFILE)
-        if mode == OWN and phase_skipped(kind, p, own, x_minus):
+        if mode == OWN and skip_phase(p, own, x_minus):
             continue
         if mode == OUT and phase_guard(cw, own, mode, x_minus) <= 0.0:
             continue  # the swing foot is already past its mid-stance scuff
@@ -211,7 +200,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             return TRIPPED, t
         t = polish(cw, own, mode, t, x_minus, counters)
         _end_phase(cw, own, t, x_minus, x_plus)
-    rigid_impact(kind, p, x_minus, cw.q_work, x_plus)
+    tree_impact(p, x_minus, True, x_plus)
     return STRIKE, t
 
 

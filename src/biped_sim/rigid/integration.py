@@ -72,11 +72,9 @@ class StepRecord(NamedTuple):
 class CompiledWalker(NamedTuple):
     """A rigid walker as the kernels read it, with the integration's buffers and a step's plan and record."""
 
-    kind: int
     params: np.ndarray
     tab: Tableau
     sc: Scratch
-    q_work: np.ndarray  # (4,) scratch of the impact map
     t_limit: float  # a step longer than this stalls
     plan: StepPlan
     record: StepRecord
@@ -94,9 +92,9 @@ def phase_guard(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray) -> flo
     """The guard of the phase in ``mode``: the walker's own, the plane's strike negated (the swing foot leaving
     its mid-stance scuff), or the swing foot's clearance above the profile (a tree walker's)."""
     if mode == OWN:
-        return guard(cw.kind, cw.params, phase, y)
+        return guard(cw.params, phase, y)
     if mode == OUT:
-        return -guard(cw.kind, cw.params, phase, y)
+        return -guard(cw.params, phase, y)
     plan = cw.plan
     foot_x, foot_y = tree_swing_foot(cw.params, y, plan.footing[0], plan.footing[1])
     return clearance(foot_x, foot_y, plan.vertices, plan.ends)
@@ -107,9 +105,9 @@ def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.
     """d(guard)/dt along the flow f: analytic for the walker's guards, a central difference (step FD_STEP along f,
     as the scipy reference) for the profile's (sc.k[3] holds the probe)."""
     if mode == OWN:
-        return guard_rate(cw.kind, cw.params, phase, x, f)
+        return guard_rate(cw.params, phase, x, f)
     if mode == OUT:
-        return -guard_rate(cw.kind, cw.params, phase, x, f)
+        return -guard_rate(cw.params, phase, x, f)
     probe = cw.sc.k[3]
     for i in range(x.shape[0]):
         probe[i] = x[i] + FD_STEP * f[i]
@@ -123,9 +121,9 @@ def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.
 def _events(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray, out: np.ndarray) -> int:
     """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
     out[0] = phase_guard(cw, phase, mode, y)
-    n = n_fall_checks(cw.kind, cw.params)
+    n = n_fall_checks(cw.params)
     for i in range(n):
-        out[1 + i] = fall_check(cw.kind, cw.params, i, y)
+        out[1 + i] = fall_check(cw.params, i, y)
     return n + 1
 
 
@@ -137,24 +135,24 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
 
 
 @kernel
-def _initial_step(kind: int, p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
+def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
-    rigid_rhs(kind, p, sc.y_stage, sc.k[1])
+    rigid_rhs(p, sc.y_stage, sc.k[1])
     return initial_step_size(tab, sc, h0, d1, span)
 
 
 @kernel
-def _prepare_dense(kind: int, p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+def _prepare_dense(p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
-        rigid_rhs(kind, p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
+        rigid_rhs(p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
     dop853_coefficients(tab, h, y, sc)
 
 
 @njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
 def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarray) -> float:
-    return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.kind, cw.params, j - 1, y)
+    return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.params, j - 1, y)
 
 
 @kernel(reference_counts=False)
@@ -211,12 +209,12 @@ def stretch(
     """Integrate from (t, y) to the phase's guard, a fall or t_stop (REACHED; STALLED if it is the step's time
     limit), sampling on the way; y ends at the event or at t_stop (in place). A fresh start, as scipy's solve_ivp
     after a push: the starting step, the events' values at the start."""
-    kind, p, tab, sc = cw.kind, cw.params, cw.tab, cw.sc
+    p, tab, sc = cw.params, cw.tab, cw.sc
     rate = cw.plan.sample_rate
     k_next = _first_sample(rate, t)
     expo = -1.0 / (tab.error_order + 1)
-    rigid_rhs(kind, p, y, sc.k[0])
-    h = _initial_step(kind, p, tab, sc, y, t_stop - t)
+    rigid_rhs(p, y, sc.k[0])
+    h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
     n_ev = _events(cw, phase, mode, y, sc.g_old)
     rejected = False
@@ -227,9 +225,9 @@ def stretch(
             return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
         for s in range(1, tab.stages):
             stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
-            rigid_rhs(kind, p, sc.y_stage, sc.k[s])
+            rigid_rhs(p, sc.y_stage, sc.k[s])
         finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
-        rigid_rhs(kind, p, sc.y_new, sc.k[tab.stages])
+        rigid_rhs(p, sc.y_new, sc.k[tab.stages])
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
         if not err < 1.0:
@@ -246,7 +244,7 @@ def stretch(
         for j in range(n_ev):
             if _crossed(j, sc.g_old[j], sc.g_new[j]):
                 if first < 0:  # the first crossing of this step: the dense output is needed
-                    _prepare_dense(kind, p, tab, h, y, sc)
+                    _prepare_dense(p, tab, h, y, sc)
                     counters[0] += 3
                 theta = _root(cw, phase, mode, j, t, h, y)
                 if theta < best:
@@ -254,7 +252,7 @@ def stretch(
         t_end = t + best * h if first >= 0 else (t_stop if clipped else t + h)
         if rate > 0.0 and k_next / rate < t_end:
             if first < 0:
-                _prepare_dense(kind, p, tab, h, y, sc)
+                _prepare_dense(p, tab, h, y, sc)
                 counters[0] += 3
             k_next = _sample(cw, k_next, t, h, t_end, y)
         if first >= 0:
@@ -272,20 +270,20 @@ def stretch(
 @kernel(reference_counts=False)
 def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
     """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2); returns the new t."""
-    kind, p, sc = cw.kind, cw.params, cw.sc
+    p, sc = cw.params, cw.sc
     f, f_mid = sc.k[1], sc.k[2]
     for _ in range(4):
         g = phase_guard(cw, phase, mode, x)
         if abs(g) <= GUARD_TOLERANCE:
             break
-        rigid_rhs(kind, p, x, f)
+        rigid_rhs(p, x, f)
         rate = _guard_rate(cw, phase, mode, x, f)
         if rate == 0.0:
             break
         dt = -g / rate
         for i in range(x.shape[0]):
             sc.y_stage[i] = x[i] + 0.5 * dt * f[i]
-        rigid_rhs(kind, p, sc.y_stage, f_mid)
+        rigid_rhs(p, sc.y_stage, f_mid)
         counters[0] += 2
         for i in range(x.shape[0]):
             x[i] += dt * f_mid[i]
