@@ -7,7 +7,6 @@ import numpy as np
 
 from biped_sim.kernel import inlined, kernel
 from biped_sim.rigid.tree_kernels import (
-    FALL_HIP_FRACTION,
     tree_fall,
     tree_guard,
     tree_guard_rate,
@@ -20,7 +19,6 @@ from biped_sim.rigid.tree_layout import (
 # the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
 # its arguments' words and reference counts at every evaluation
 _rhs, _guard, _fall = inlined(tree_rhs), inlined(tree_guard), inlined(tree_fall)
-__all__ = ["FALL_HIP_FRACTION"]
 
 
 @kernel
