@@ -51,7 +51,8 @@ class PointMassSpec(Strict):
 
 
 class StopSpec(Strict):
-    """A one-sided limit of a joint's relative angle (child angle - parent angle), e.g. a knee's hyperextension."""
+    """A one-sided limit of a joint's relative angle (child angle - parent angle), e.g. a knee's hyperextension;
+    optionally latching (a knee latch, as on McGeer's machines and in Chen's model: the straight stance knee)."""
 
     side: Literal["upper", "lower"] = Field(..., description="'upper': angle <= limit; 'lower': angle >= limit.")
     angle: float = Field(0.0, description="The limit [rad].")
@@ -60,6 +61,13 @@ class StopSpec(Strict):
     )
     stiffness: float = Field(1.0e4, gt=0, description="Compliant dynamics: the stop's stiffness [N m/rad^n].")
     restitution: float = Field(0.0, ge=0, le=1, description="Compliant dynamics: the stop's restitution.")
+    latch: bool = Field(
+        False,
+        description="Compliant dynamics: a latch engages when the stop is struck (and at the start on the stance "
+        "leg) and holds the joint at its limit from both sides with the stop's law until the leg's foot leaves the "
+        "ground behind the other leg's; only for a joint within one leg (a knee) of a two-legged walker whose leg "
+        "has a foot. Rigid dynamics locks a struck stop until its leg swings again, latch or not.",
+    )
 
 
 class JointSpec(Strict):
@@ -136,7 +144,23 @@ class WalkerDescription(Strict):
         if len(depth) != len(names):
             raise ValueError("joints: the bodies must form one tree hanging from the first body")
         self._legs_alike()
+        self._latches_on_legs()
         return self
+
+    def _latches_on_legs(self) -> None:
+        """A latching stop holds a joint within one leg (a knee): it is released by that leg's foot."""
+        leg_of = {b: k for k, leg in enumerate(self.legs) for b in leg}
+        feet = {leg_of.get(f.body) for f in self.feet}
+        for j, joint in enumerate(self.joints):
+            for k, stop in enumerate(joint.stops):
+                leg = leg_of.get(joint.child)
+                if stop.latch and not (len(self.legs) == 2 and leg is not None and leg_of.get(joint.parent) == leg
+                                       and leg in feet):  # fmt: skip
+                    raise ValueError(  # the full key: a validator's own dotted field is taken as it is
+                        f"walker.description.joints.{j}.stops.{k}.latch: a latch needs the joint within one leg "
+                        "(parent and child on it) of a two-legged walker, with a foot on that leg (its toe-off "
+                        "releases the latch)"
+                    )
 
     def _legs_alike(self) -> None:
         flat = [b for leg in self.legs for b in leg]

@@ -63,16 +63,16 @@ class ContactBuffers(NamedTuple):
     """Per-foot buffers of the mode update, part of every formulation's workspace (allocated once)."""
 
     onset: np.ndarray  # (nf,) int64: TOUCHDOWN marks written by update_contact_modes
-    gates: np.ndarray  # (2 nf + ns,) the event functions at the update: penetration, lead over the partner; stops
+    gates: np.ndarray  # the event functions at the update: each foot's penetration and lead over its partner; stops
     approach: np.ndarray  # (nf,) the approach velocities at the update
     bristles: np.ndarray  # (nf, k) int64: indices in y of each foot's k friction (LuGre bristle) states
 
 
-def make_contact_buffers(bristles: np.ndarray, n_stops: int = 0) -> ContactBuffers:
-    """Allocate the buffers for the feet whose bristle-state indices are the rows of ``bristles`` and ``n_stops``
-    joint stops (:mod:`.stop`: one event function each)."""
+def make_contact_buffers(bristles: np.ndarray, n_stop_events: int = 0) -> ContactBuffers:
+    """Allocate the buffers for the feet whose bristle-state indices are the rows of ``bristles`` and the joint
+    stops' ``n_stop_events`` event functions (:mod:`.stop`: one per stop, one more per latching stop)."""
     nf = bristles.shape[0]
-    gates = np.zeros(2 * nf + n_stops)
+    gates = np.zeros(2 * nf + n_stop_events)
     return ContactBuffers(np.zeros(nf, dtype=np.int64), gates, np.zeros(nf), bristles.astype(np.int64))
 
 

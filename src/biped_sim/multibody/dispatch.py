@@ -17,6 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from biped_sim.contact.response import ContactBuffers, make_contact_buffers
+from biped_sim.contact.stop import stop_event_count
 from biped_sim.kernel import overload_by_type
 from biped_sim.multibody import minimal, planar, spatial_kernels
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES, Formulation, Measures
@@ -91,7 +92,7 @@ def make_workspace(system: tuple) -> tuple:
 def contact_buffers(system: tuple) -> ContactBuffers:
     """Allocate the per-foot buffers of ``system``'s contact-mode update (its feet's bristle states from the layout)."""
     return make_contact_buffers(
-        formulation_of(system).layout_of(system).bristle_index(), int(system.stops.law.shape[0])
+        formulation_of(system).layout_of(system).bristle_index(), stop_event_count(system.stops)
     )
 
 

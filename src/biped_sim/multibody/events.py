@@ -9,7 +9,9 @@ the slope (the scuffing guard arms a foot once it is ahead). At an event the int
 it reads a formulation only through ``system_foot_contact`` (penetration, approach velocity,
 contact point), so a new formulation gets its events for free. A joint stop (:mod:`biped_sim.contact.stop`)
 adds one event function, its penetration (the joint angle past its limit), after the feet's; its mode is a
-row of the mode table after the feet's, updated with theirs.
+row of the mode table after the feet's, updated with theirs (first: a latching stop's release reads its leg's
+foot's mode before the feet's update); a latching stop adds one more, the other leg's foot's approach
+velocity, whose zero ends that foot's strike and releases the latch.
 """
 
 from __future__ import annotations
@@ -17,14 +19,14 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.contact.response import RECONTACT_TIME, ContactBuffers, update_contact_modes
-from biped_sim.contact.stop import stop_penetration, update_stop_modes
+from biped_sim.contact.stop import FOOT, NOT_LATCHING, PARTNER, stop_event_count, stop_penetration, update_stop_modes
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_foot_contact
 
 
 def event_count(system: tuple) -> int:
-    """Number of event functions of ``system``: two per foot, one per joint stop."""
-    return 2 * int(system.foot_body.shape[0]) + int(system.stops.law.shape[0])
+    """Number of event functions of ``system``: two per foot, one per joint stop, one per latching stop."""
+    return 2 * int(system.foot_body.shape[0]) + stop_event_count(system.stops)
 
 
 def contact_count(system: tuple) -> int:
@@ -35,15 +37,20 @@ def contact_count(system: tuple) -> int:
 @kernel
 def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
     """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner);
-    g[2 nf + s] = penetration of joint stop s."""
-    nf = system.foot_body.shape[0]
+    g[2 nf + s] = penetration of joint stop s; then, per latching stop, the approach velocity of the foot whose
+    strike its release waits for (:mod:`biped_sim.contact.stop`)."""
+    nf, stops = system.foot_body.shape[0], system.stops
     for i in range(nf):
         delta, _, x_i = system_foot_contact(y, system, i)
         g[2 * i] = delta
         partner = system.foot_partner[i]
         g[2 * i + 1] = x_i - system_foot_contact(y, system, partner)[2] if partner >= 0 else 1.0
-    for s in range(system.stops.law.shape[0]):
-        g[2 * nf + s] = stop_penetration(y, system.stops, s)[0]
+    k = 2 * nf + stops.law.shape[0]
+    for s in range(stops.law.shape[0]):
+        g[2 * nf + s] = stop_penetration(y, stops, s)[0]
+        if stops.latch[s, FOOT] != NOT_LATCHING:
+            g[k] = system_foot_contact(y, system, stops.latch[s, PARTNER])[1]
+            k += 1
 
 
 @kernel
@@ -72,8 +79,9 @@ def system_update_modes(t: float, y: np.ndarray, system: tuple, modes: np.ndarra
     nf = system.foot_body.shape[0]
     for i in range(nf):
         contact.approach[i] = system_approach_velocity(y, system, i)
+    stops_changed = False
+    if system.stops.law.shape[0] > 0:  # first: a latch's release reads its foot's mode before the feet's update
+        recontact = system.limits[RECONTACT_TIME]
+        stops_changed = update_stop_modes(t, y, system.stops, modes, nf, recontact, contact.gates, contact.approach)
     changed = update_contact_modes(t, y, system, modes, contact)
-    if system.stops.law.shape[0] == 0:
-        return changed
-    stops_changed = update_stop_modes(t, y, system.stops, modes, nf, system.limits[RECONTACT_TIME])
     return changed or stops_changed

@@ -267,7 +267,7 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = _foot_arc(y, system, i)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic + stops_energy(y, system.stops)
+    return kinetic, potential, elastic + stops_energy(y, system.stops, modes, system.foot_body.shape[0])
 
 
 @kernel

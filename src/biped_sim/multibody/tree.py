@@ -216,7 +216,7 @@ def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree)
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = foot_motion(y, system, i)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic + stops_energy(y, system.stops)
+    return kinetic, potential, elastic + stops_energy(y, system.stops, modes, system.foot_body.shape[0])
 
 
 def tree_origins(planar: PlanarSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -27,6 +27,7 @@ CONVERGE_LEVELS = 5
 LEVELS = range(2, 8)  # contact settings a study may take: the stiffest (x10^6) is near the limit of dop853 steps
 CONVERGE_STEPS = 20
 MU_KINETIC, MU_STATIC = 1.0, 1.2  # the study's LuGre friction coefficients
+STOP_STIFFENING = 100.0  # a joint stop's stiffness factor per level: the square of the feet's (see stops_level)
 BRISTLE_DAMPING = 20.0  # LuGre sigma1 [s/m per N of normal load], the same at every level (see converge)
 
 
@@ -84,14 +85,20 @@ def check_converge(config: Config, levels: int, mu_kinetic: float, mu_static: fl
 
 
 def stops_level(config: Config, k: int) -> dict[str, Any]:
-    """A described walker's joint stops at level k of :func:`converge`: stiffness 10^k times its own, restitution
-    its own over sqrt(10)^k (as the feet's contact); nothing for a walker without a description."""
+    """A described walker's joint stops at level k of :func:`converge`: stiffness 100^k times its own (the square
+    of the feet's factor), restitution its own over sqrt(10)^k (as the feet's contact); nothing for a walker
+    without a description.
+
+    The rigid heel strike holds both knees rigid through its impulse: the limit of a knee stop (latch) much
+    stiffer than the foot contact, whose time scale (I / K_stop)^(2/5) against the foot's (m / K_foot)^(2/5)
+    (both laws of exponent 3/2) then falls as 10^(-2k/5). Stiffened as the feet are, the ratio would stay fixed
+    and the impulse would flex the knees by the same amount at every level."""
     if config.walker.description is None:
         return {}
     description = config.walker.description.model_dump(mode="json")
     for joint in description["joints"]:
         for stop in joint["stops"]:
-            stop["stiffness"] *= 10.0**k
+            stop["stiffness"] *= STOP_STIFFENING**k
             stop["restitution"] /= math.sqrt(10.0) ** k
     return {"walker.description": description}
 
@@ -137,7 +144,7 @@ def converge(
     limit is the rigid strike only where :func:`rigid_strike_check` finds no violation (a leading foot that
     lands slipping backwards pushes the trailing one into the ground through friction when mu_k is large).
     ``mu_kinetic``, ``mu_static`` None: ``MU_KINETIC``, ``MU_STATIC``. Bad arguments are refused first
-    (:func:`check_converge`). A described walker's joint stops stiffen with the feet (:func:`stops_level`), and
+    (:func:`check_converge`). A described walker's joint stops stiffen faster than the feet (:func:`stops_level`), and
     its touchdown state is every body of both legs (:func:`touchdown_states`) against the rigid walker's.
     """
     mu_kinetic = MU_KINETIC if mu_kinetic is None else mu_kinetic

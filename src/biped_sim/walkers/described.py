@@ -6,8 +6,9 @@ frame, one-sided joint stops, feet on bodies and the legs. :func:`resolve_tree` 
 their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first;
 :func:`build_described` makes the planar absolute-coordinate system of it (each body at its centre of mass,
 a revolute joint per child, the hip joint first, each stop a compliant contact of
-:mod:`biped_sim.contact.stop` with the law, stiffness and restitution it names and ``contact.exponent``)
-and starts it rolling on its stance leg's foot (:func:`tree_start`). ``formulation.kind: minimal`` converts
+:mod:`biped_sim.contact.stop` with the law, stiffness and restitution it names and ``contact.exponent``, a
+latching stop released by its leg's foot) and starts it rolling on its stance leg's foot (:func:`tree_start`),
+the stance leg's latches engaged as the rigid model's stance knee is locked. ``formulation.kind: minimal`` converts
 that system (:func:`~biped_sim.walkers.model.minimal_model`), so both formulations describe one walker.
 """
 
@@ -23,7 +24,8 @@ from biped_sim.config import Config, InitialState
 from biped_sim.config.description import WalkerDescription
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.profile import profile_ground
-from biped_sim.contact.stop import Stops, make_stops
+from biped_sim.contact.response import IMPACT_SPEED, TOUCHING
+from biped_sim.contact.stop import FOOT, HELD, LATCHED, NOT_LATCHING, Stops, make_stops
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.walkers.model import (
@@ -46,7 +48,7 @@ class Tree:
     mass: np.ndarray  # (nb,) with its point masses
     com: np.ndarray  # (nb, 2) centre of mass in the body frame (from the origin)
     inertia: np.ndarray  # (nb,) about the centre of mass
-    stops: list[tuple[int, int, str, float, str, float, float]]  # parent, child, side, angle, law, K, e
+    stops: list[tuple[int, int, str, float, str, float, float, bool]]  # parent, child, side, angle, law, K, e, latch
     foot_body: np.ndarray  # (nf,) int
     foot_centre: np.ndarray  # (nf, 2) in the body frame
     foot_radius: np.ndarray  # (nf,)
@@ -87,7 +89,7 @@ def resolve_tree(description: WalkerDescription) -> Tree:
     for joint in description.joints:
         c = index[joint.child]
         parent[c], joint_at[c] = index[joint.parent], joint.at
-        stops += [(parent[c], c, s.side, s.angle, s.model, s.stiffness, s.restitution) for s in joint.stops]
+        stops += [(parent[c], c, s.side, s.angle, s.model, s.stiffness, s.restitution, s.latch) for s in joint.stops]
     folded = [_fold(description, name) for name in names]
     feet = description.feet
     return Tree(
@@ -143,7 +145,7 @@ def foot_partners(tree: Tree) -> np.ndarray:
 def planar_stops(tree: Tree, config: Config, length: float) -> Stops:
     """The joint stops as compliant contacts: indices of the bodies' angles and rates in the planar state, side,
     limit and rate floor (``contact.impact_velocity_floor`` over the leg length), law and parameters
-    (``contact.exponent``; Kelvin-Voigt's damping from the child's inertia about the joint)."""
+    (``contact.exponent``; Kelvin-Voigt's damping from the child's inertia about the joint), latches."""
     nb = len(tree.names)
     rows = [[3 * c + 2, 3 * p + 2, 3 * nb + 3 * c + 2, 3 * nb + 3 * p + 2] for p, c, *_ in tree.stops]
     floor = config.contact.impact_velocity_floor / length
@@ -152,10 +154,34 @@ def planar_stops(tree: Tree, config: Config, length: float) -> Stops:
         normal_parameters(
             law, k, config.contact.exponent, e, None, tree.inertia[c] + tree.mass[c] * tree.com[c] @ tree.com[c]
         )
-        for _, c, _, _, law, k, e in tree.stops
+        for _, c, _, _, law, k, e, _ in tree.stops
     ]
-    laws = [NORMAL_LAWS[law].index for *_, law, _, _ in tree.stops]
-    return make_stops(np.array(rows), np.array(limits), np.array(laws), np.array(params))
+    laws = [NORMAL_LAWS[law].index for *_, law, _, _, _ in tree.stops]
+    return make_stops(np.array(rows), np.array(limits), np.array(laws), np.array(params), latch_feet(tree))
+
+
+def latch_feet(tree: Tree) -> np.ndarray:
+    """(ns, 2): each latching stop's FOOT, the first of the leg holding its joint (whose toe-off begins the
+    release), and PARTNER, the other leg's first foot (whose strike the release waits out); NOT_LATCHING for a
+    plain stop (the description checks that a latching stop's leg has a foot, and that there are two legs)."""
+    feet = _leg_feet(tree)
+    leg_of = {b: k for k, leg in enumerate(tree.legs) for b in leg}
+    rows = [
+        [feet[leg_of[c]][0], feet[1 - leg_of[c]][0]] if latch else [NOT_LATCHING, NOT_LATCHING]
+        for _, c, *_, latch in tree.stops
+    ]
+    return np.array(rows, dtype=np.int64).reshape(-1, 2)
+
+
+def latch_stance(system: PlanarSystem, tree: Tree, modes0: np.ndarray, rate: float) -> None:
+    """Hold the stance leg's latches in ``modes0`` (the rigid model's straight stance knee at the start),
+    remembering ``rate`` [rad/s] as their approach rate."""
+    nf = system.foot_body.shape[0]
+    stance_feet = _leg_feet(tree)[0]
+    for s, foot in enumerate(system.stops.latch[:, FOOT]):
+        if foot in stance_feet:
+            modes0[nf + s, LATCHED], modes0[nf + s, TOUCHING] = HELD, 1.0
+            modes0[nf + s, IMPACT_SPEED] = rate
 
 
 def planar_tree_system(tree: Tree, config: Config, stiffness: float, length: float) -> PlanarSystem:
@@ -255,7 +281,8 @@ def _perp(v: np.ndarray) -> np.ndarray:
 
 
 def build_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
-    """Bodies, joints, stops and feet of ``walker.description``, started rolling on its stance foot."""
+    """Bodies, joints, stops and feet of ``walker.description``, started rolling on its stance foot, the stance
+    leg's latches engaged (their approach rate the stance foot's remembered impact speed over the leg length)."""
     description = config.walker.description
     if description is None:
         raise ConfigError("walker.description", "walker.kind: description needs walker.description")
@@ -270,6 +297,7 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     coords, rates, hip_speed, foot = tree_start(tree, angles, static_penetration, config, length)
     impact = max(hip_speed, config.contact.impact_velocity_floor)
     y0, modes0 = standing_start(system, coords, rates, (foot,), impact)
+    latch_stance(system, tree, modes0, impact / length)
     return BuiltModel(
         system=system,
         y0=y0,
