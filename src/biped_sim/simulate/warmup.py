@@ -68,7 +68,8 @@ def group_of(config: Config) -> tuple[str, str, str]:
 def warm_up(config: Config) -> WarmUp | None:
     """Run ``config`` for a millisecond, once per process and (formulation, integrator family).
 
-    Returns what it took, or None when there was nothing to do: a rigid run (no compiled code) or a
+    Returns what it took, or None when there was nothing to do: a rigid run (its step map compiles, or loads
+    from the cache, at its first step; not warmed here) or a
     group already warmed in this process.
     """
     if config.dynamics == "rigid":
