@@ -71,7 +71,8 @@ FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a f
 @kernel
 def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> tuple[float, float]:
     """Write the Jacobian columns of the point whose w vectors start at p[base] to p[jw:] (2 n floats) and return
-    its bias acceleration (:func:`bias`, from the same turned vectors: one pass, cached angles)."""
+    its bias acceleration Jdot qd = -sum_k Rot(theta_k) w_k thetadot_k^2 (from the same turned vectors: one pass,
+    cached angles)."""
     bx = by = 0.0
     roll = rolling(p, t)
     for k in range(coords(p)):

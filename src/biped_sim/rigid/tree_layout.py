@@ -164,15 +164,3 @@ def point_velocity(p: np.ndarray, t: int, i: int, q: np.ndarray, qd: np.ndarray)
     """Velocity of row i of table t."""
     fill_trig(p, q)
     return velocity_at(p, t, w_offset(p, t, i), qd)
-
-
-@kernel
-def bias(p: np.ndarray, base: int, qd: np.ndarray) -> tuple[float, float]:
-    """Jdot qd of the point whose w vectors start at p[base]: -sum_k Rot(theta_k) w_k thetadot_k^2 (cached angles)."""
-    bx = by = 0.0
-    for k in range(coords(p)):
-        jx, jy = turned(p, base, k)
-        r2 = qd[k] * qd[k]
-        bx -= jy * r2
-        by += jx * r2
-    return bx, by
