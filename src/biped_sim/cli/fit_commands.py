@@ -108,7 +108,9 @@ def fit_command(
     set_: SetOption = None,
     skip: Annotated[int, typer.Option("--skip-steps", help="Model steps before reference step 1.")] = 0,
     quantity: Annotated[list[str] | None, typer.Option("--quantity", help="Fit only these quantities.")] = None,
-    global_method: Annotated[str, typer.Option("--global", help="Global stage: cma or de.")] = "cma",
+    global_method: Annotated[
+        str, typer.Option("--global", help="Global stage: multistart (Sobol, polishes, IPOP), cma or de.")
+    ] = "multistart",
     posterior: Annotated[int, typer.Option("--posterior", help="Posterior draws (emcee), 0: none.")] = 0,
     walkers: Annotated[int | None, typer.Option("--walkers", help="emcee walkers (default max(16, 4 p)).")] = None,
     prior: Annotated[list[str] | None, typer.Option("--prior", help="KEY=normal:MEAN:SD (default: bounds).")] = None,

@@ -105,7 +105,7 @@ def calibrate(
     *,
     checkpoint: Path | None = None,
     progress: Callable[[Evaluator], None] | None = None,
-    global_method: str = "cma",
+    global_method: str = "multistart",
     seed: int = SEED,
     draws: int = 0,
     walkers: int | None = None,
