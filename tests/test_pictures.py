@@ -10,6 +10,8 @@ import yaml
 from PIL import Image
 
 from biped_sim import load_config, simulate
+from biped_sim.contact.ground import ground_height_at
+from biped_sim.contact.profile import profile_arrays
 from biped_sim.io.trajectory import RunData, load_run
 from biped_sim.measure.pose import Poses, run_poses
 from biped_sim.picture import OFF_LEG_COLOUR, body_colour
@@ -127,3 +129,17 @@ def test_a_body_off_the_legs_is_drawn_from_the_hip_to_its_centre_of_mass(tmp_pat
         np.testing.assert_array_equal(segment[0], pose.hip)
         angle = pose.angles[torso]
         np.testing.assert_allclose(segment[1] - pose.hip, 0.2 * np.array([-np.sin(angle), np.cos(angle)]), atol=1e-15)
+
+
+def test_a_rigid_walker_stands_on_a_ground_profile(tmp_path: Path) -> None:
+    """Down a 5 mm step, one foot is on the profile at every sample (the hip carries the stance level)."""
+    step_down = "ground.profile={kind: steps, steps: [{at: 0.2, height: -0.005}]}"
+    config = CONFIGS / "round_foot_walker.yaml"
+    run = load_run(short_run_directory(config, tmp_path / "run", "dynamics=rigid", step_down))
+    assert len(run.steps["strike_time"]) >= 2 and run.hip[-1, 1] < run.hip[0, 1]  # strikes: the step was taken
+    poses = run_poses(run)
+    centres = np.array([poses.at(i).foot_centres for i in range(len(run.time))])
+    vertices, ends = profile_arrays(run.config.ground.profile, run.config.ground.slope)
+    ground = ground_height_at(centres[:, :, 0].ravel(), vertices, ends).reshape(centres.shape[:2])
+    gap = centres[:, :, 1] - poses.skeleton.foot_radius - ground
+    np.testing.assert_allclose(np.abs(gap).min(axis=1), 0.0, atol=1e-12)
