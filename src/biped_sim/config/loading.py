@@ -68,16 +68,57 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
 
 
 def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
-    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed."""
-    node = data
+    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed.
+
+    A list of named items (a description's bodies, joints, feet) is entered by an item's name
+    (``walker.description.bodies.thigh_1.mass``) or its index; an unknown name or an index out of range is a
+    one-line ConfigError naming the list and its names.
+    """
     parts = key.split(".")
-    for part in parts[:-1]:
-        child = node.get(part)
-        if not isinstance(child, dict):
+    node: Any = data
+    for depth, part in enumerate(parts[:-1]):
+        if isinstance(node, list):
+            node = node[_list_index(node, parts, depth)]
+            continue
+        child = node.get(part) if isinstance(node, dict) else None
+        if not isinstance(child, dict | list):
             child = {}
             node[part] = child
         node = child
-    node[parts[-1]] = value
+    if isinstance(node, list):
+        node[_list_index(node, parts, len(parts) - 1)] = value
+    else:
+        node[parts[-1]] = value
+
+
+def get_dotted(data: Any, key: str) -> Any:
+    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`) of plain config data;
+    ConfigError naming the key when a section or field on the way is missing."""
+    parts = key.split(".")
+    node = data
+    for depth, part in enumerate(parts):
+        if isinstance(node, list):
+            node = node[_list_index(node, parts, depth)]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            raise ConfigError(key, "unknown config key")
+    return node
+
+
+def _list_index(items: list[Any], parts: list[str], depth: int) -> int:
+    """The position in ``items`` (the list at ``parts[:depth]``) of the item ``parts[depth]`` names: an item's
+    ``name`` or an index; ConfigError naming the list (and its names) when there is no such item."""
+    part, where = parts[depth], ".".join(parts[:depth])
+    names = [item.get("name") if isinstance(item, dict) else None for item in items]
+    if part in names:
+        return names.index(part)
+    if part.lstrip("-").isdigit():
+        if -len(items) <= int(part) < len(items):
+            return int(part)
+        raise ConfigError(where, f"no item {part} (the list has {len(items)})")
+    listed = ", ".join(str(n) for n in names if n is not None)
+    raise ConfigError(where, f"no item named {quote(part)}" + (f"; the names are {listed}" if listed else ""))
 
 
 _UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\])$")

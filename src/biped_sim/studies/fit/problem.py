@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from biped_sim.config import Config, derive
+from biped_sim.config import Config, derive, set_dotted
 from biped_sim.errors import ConfigError
 from biped_sim.io.references import MEASURED_UNITS, Reference
 from biped_sim.multibody.dispatch import system_foot_contact
@@ -240,11 +240,7 @@ class FitProblem:
             "formulation.kind": self.evaluation_formulation,
         }
         for key, value in values.items():
-            node = data
-            *sections, last = key.split(".")
-            for part in sections:
-                node = node[part]
-            node[last] = value
+            set_dotted(data, key, value)
         return data
 
     def model_values(self, outcome: Outcome) -> np.ndarray:
