@@ -254,7 +254,7 @@ def compliant_limit_cycle(
     if found is None:
         raise ConfigError("simulation.initial", "no compliant limit cycle: the walker falls from every start")
     z, converged, iterations, residual = found
-    tried = f"the touchdowns of a run from {'the guess' if guess is not None else 'the config initial state'}"
+    tried = "the touchdowns of a run from " + ("the guess" if guess is not None else "the config's initial state")
     tried += f" (after {settle_steps} steps and its first)" if settle_steps else ""
     step = section.step(z)
     jacobian = map_jacobian(step_map, z, COMPLIANT_FD_STEP)
