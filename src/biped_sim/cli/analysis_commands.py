@@ -132,7 +132,8 @@ def bifurcation_command(
     out: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results/bifurcation"),
 ) -> None:
     """Continuation of the rigid period-1 gait and brute-force steady states against the slope (CSV, PNG, SVG)."""
-    from biped_sim.plots import bifurcation_figure, save_figure
+    from biped_sim.plots import save_figure
+    from biped_sim.report.bifurcation import bifurcation_figure
     from biped_sim.studies.bifurcation import bifurcation_diagram, check_bifurcation, write_bifurcation
 
     config = load(config_path, set_)

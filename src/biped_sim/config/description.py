@@ -12,6 +12,7 @@ from biped_sim.config.base import NormalModelName, Strict
 
 Vector2 = tuple[float, float]
 SIDES = ("stance", "swing")
+MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
 
 
 def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
@@ -114,16 +115,30 @@ class WalkerDescription(Strict):
     (:meth:`state_keys`).
     """
 
-    bodies: list[BodySpec] = Field(..., min_length=1, description="The bodies; the first is the root.")
-    point_masses: list[PointMassSpec] = Field(default_factory=list, description="Point masses on bodies.")
-    joints: list[JointSpec] = Field(default_factory=list, description="Revolute joints, one per non-root body.")
-    feet: list[FootSpec] = Field(..., min_length=1, description="Feet (arcs or points on bodies).")
-    legs: list[list[str]] = Field(..., min_length=1, description="Each leg's bodies, hip first; legs alike.")
+    bodies: list[BodySpec] = Field(
+        ..., min_length=1, max_length=MAX_PARTS, description="The bodies; the first is the root."
+    )
+    point_masses: list[PointMassSpec] = Field(
+        default_factory=list, max_length=MAX_PARTS, description="Point masses on bodies."
+    )
+    joints: list[JointSpec] = Field(
+        default_factory=list, max_length=MAX_PARTS, description="Revolute joints, one per non-root body."
+    )
+    feet: list[FootSpec] = Field(..., min_length=1, max_length=MAX_PARTS, description="Feet (arcs or points).")
+    legs: list[list[str]] = Field(
+        ..., min_length=1, max_length=MAX_PARTS, description="Each leg's bodies, hip first; legs alike."
+    )
 
     @model_validator(mode="after")
     def _a_tree(self) -> WalkerDescription:
         names = [b.name for b in self.bodies]
-        for field_name, items in (("bodies", self.bodies), ("joints", self.joints), ("feet", self.feet)):
+        named = (
+            ("bodies", self.bodies),
+            ("point_masses", self.point_masses),
+            ("joints", self.joints),
+            ("feet", self.feet),
+        )
+        for field_name, items in named:
             labels = [item.name for item in items]
             if len(set(labels)) != len(labels):
                 raise ValueError(f"{field_name}: names must be unique")
@@ -170,6 +185,12 @@ class WalkerDescription(Strict):
             raise ValueError("legs: every leg needs the same number of bodies")
         if len(self.legs[0]) > 1 and len(set(self.roles())) != len(self.legs[0]):
             raise ValueError("legs: the bodies of a leg need distinct roles (names like thigh_1, shank_1)")
+
+    def massless_bodies(self) -> list[str]:
+        """The bodies with no mass of their own nor a point mass on them (a compliant or a described rigid walker
+        cannot move them: their mass matrix rows are zero)."""
+        carried = {p.body for p in self.point_masses if p.mass > 0.0}
+        return [b.name for b in self.bodies if b.mass <= 0.0 and b.name not in carried]
 
     def roles(self) -> list[str]:
         """The body roles of a leg, hip down: a body's name without its trailing '_<leg>' (thigh_1 -> thigh)."""
