@@ -17,7 +17,7 @@ from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.simulate import simulate
-from biped_sim.studies.limit_cycle import parse_guess
+from biped_sim.studies.limit_cycle import guess_keys, parse_guess
 from biped_sim.walkers.described import resolve_tree
 
 from .conftest import CONFIGS, invoke, one_line_error
@@ -28,6 +28,7 @@ KNEED_KEYS = (
     "stance_thigh_angle", "stance_thigh_rate", "stance_shank_angle", "stance_shank_rate",
     "swing_thigh_angle", "swing_thigh_rate", "swing_shank_angle", "swing_shank_rate",
 )  # fmt: skip
+SECTION = ("stance_thigh_angle", "stance_thigh_rate", "swing_thigh_rate")  # just after the heel strike
 BENT = 0.2  # [rad] a knee stop off the straight leg
 THIGH = 0.5  # [m] Chen's thigh: the knee 0.5 m below the hip
 
@@ -41,16 +42,23 @@ def kneed_yaml(tmp_path: Path, stop: str, name: str = "kneed.yaml", first_stop: 
     return path
 
 
-def test_a_guess_is_the_walkers_own_keys_in_order_or_by_name() -> None:
-    fixed = rigid_limit_cycle(load_config(KNEED)).fixed_point
+def test_a_guess_is_the_walkers_own_keys_or_its_sections_in_order_or_by_name() -> None:
+    config = load_config(KNEED)
+    cycle = rigid_limit_cycle(config)
+    fixed, keys = cycle.fixed_point, guess_keys(config)
+    assert keys == (KNEED_KEYS, SECTION)
     values = [fixed[k] for k in KNEED_KEYS]
-    assert parse_guess(json.dumps(values), KNEED_KEYS) == parse_guess(json.dumps(fixed), KNEED_KEYS) == fixed
-    out = invoke("limit-cycle", str(KNEED), "--guess", json.dumps(values), "--settle-steps", "0", "--json")
-    doc = json.loads(out.stdout)
-    assert out.exit_code == 0 and doc["converged"] and doc["start"] == "the guess" and doc["iterations"] <= 1
+    assert parse_guess(json.dumps(values), *keys) == parse_guess(json.dumps(fixed), *keys) == fixed
+    section = dict(zip(SECTION, cycle.section_point.tolist(), strict=True))
+    assert parse_guess(json.dumps(list(section.values())), *keys) == parse_guess(json.dumps(section), *keys) == section
+    for guess in (values, list(section.values())):
+        out = invoke("limit-cycle", str(KNEED), "--guess", json.dumps(guess), "--settle-steps", "0", "--json")
+        doc = json.loads(out.stdout)
+        assert out.exit_code == 0 and doc["converged"] and doc["start"] == "the guess" and doc["iterations"] <= 1
     bad = invoke("limit-cycle", str(KNEED), "--guess", "[0.24,-1.1,-0.24,-0.06]")  # the compass's four: a traceback
     assert bad.exit_code == 2 and one_line_error(bad.stderr) == (
-        "error: --guess: expected the 8 keys " + ", ".join(KNEED_KEYS) + " (or 8 numbers in that order)"
+        f"error: --guess: expected the 8 keys {', '.join(KNEED_KEYS)} (or 8 numbers in that order), or the section's "
+        f"3: {', '.join(SECTION)}"
     )
     unknown = invoke("limit-cycle", str(KNEED), "--guess", "{stance_angle: 0.2, stance_rate: -1, swing_angle: -0.2}")
     assert unknown.exit_code == 2 and ", ".join(KNEED_KEYS) in one_line_error(unknown.stderr)

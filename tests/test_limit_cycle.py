@@ -81,7 +81,7 @@ def test_limit_cycle_cli_json_and_bad_guess() -> None:
     ):
         assert key in doc
     assert doc["multipliers"][0][0] == pytest.approx(0.5, abs=1e-6)
-    bad = runner.invoke(app, ["limit-cycle", str(SIMPLEST), "--guess", "[1, 2]"])
+    bad = runner.invoke(app, ["limit-cycle", str(SIMPLEST), "--guess", "[1, 2, 3]"])  # 4 keys or the section's 2
     assert bad.exit_code == 2 and "--guess" in bad.output
 
 

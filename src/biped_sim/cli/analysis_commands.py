@@ -26,7 +26,7 @@ def limit_cycle_command(
         typer.Option(
             "--guess",
             help="Initial guess: the walker's initial-state keys as a mapping, or their values in order "
-            "('[stance_angle, stance_rate, swing_angle, swing_rate]' for the compass).",
+            "('[stance_angle, stance_rate, swing_angle, swing_rate]' for the compass); rigid: or its section's.",
         ),
     ] = None,
     settle_steps: Annotated[
@@ -41,10 +41,10 @@ def limit_cycle_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
-    from biped_sim.studies.limit_cycle import limit_cycle, parse_guess
+    from biped_sim.studies.limit_cycle import guess_keys, limit_cycle, parse_guess
 
     config = load(config_path, set_)
-    cycle = limit_cycle(config, parse_guess(guess, config.initial_keys()), settle_steps)
+    cycle = limit_cycle(config, parse_guess(guess, *guess_keys(config)) if guess is not None else None, settle_steps)
     doc = cycle.to_json()
     if as_json:
         typer.echo(json.dumps(doc, indent=2))

@@ -251,7 +251,8 @@ def rigid_limit_cycle(
 ) -> LimitCycle:
     """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
 
-    The initial guess is ``guess`` (the four README keys), else the config's initial state, else (for the
+    The initial guess is ``guess`` (the walker's initial-state keys, or its section's: :meth:`RigidWalker.guess_state`),
+    else the config's initial state, else (for the
     rigid_limit_cycle start) generic post-impact states. The guess first walks ``settle_steps`` steps, so
     that Newton starts near the stable cycle when there is one, then Newton starts from the guess itself;
     when neither converges (the walker falls from the guess), the same two tries run from each point of
@@ -261,7 +262,7 @@ def rigid_limit_cycle(
     rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
     walker = rigid_walker(rigid)
     if guess is not None:
-        starts = [("the guess", walker.state_from_legs(guess))]
+        starts = [("the guess", walker.guess_state(guess))]
     elif config.simulation.initial == "rigid_limit_cycle":
         starts = [(f"generic start {i + 1}", start) for i, start in enumerate(_generic_starts(walker))]
     else:

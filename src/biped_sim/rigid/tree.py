@@ -277,6 +277,13 @@ class RigidWalker:
         perm = self.params[o : o + n].astype(int)
         return np.concatenate([x_minus[:n][perm] + self.params[o + n : o + 2 * n], x_minus[n:][perm]])
 
+    def guess_state(self, guess: dict[str, float]) -> np.ndarray:
+        """The post-impact state of a guess: its section coordinates (:attr:`section_names`) or its initial-state
+        keys (:meth:`state_from_legs`)."""
+        if set(guess) == set(self.section_names):
+            return self.from_section(np.array([guess[name] for name in self.section_names]))
+        return self.state_from_legs(guess)
+
     def legs_state(self, x: np.ndarray) -> dict[str, float]:
         """The initial-state keys of a state (the wheel's 'swing' spoke: the one just behind its stance spoke)."""
         legs = {name: float(x[i]) for i, name in enumerate(self.state_names)}

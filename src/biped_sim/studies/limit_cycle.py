@@ -306,28 +306,38 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
     )
 
 
-def parse_guess(text: str | None, keys: tuple[str, ...]) -> dict[str, float] | None:
-    """A guess of the gait from text: a YAML/JSON mapping of the walker's initial-state ``keys``
-    (:meth:`~biped_sim.config.Config.initial_keys`; the compass's four README keys, a kneed walker's eight), or as
-    many numbers in that order (None for None); ArgumentError naming ``guess`` and listing the keys otherwise."""
+def guess_keys(config: Config) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The keys a guess of ``config``'s gait may take: its initial-state keys (:meth:`Config.initial_keys`) and, in
+    rigid dynamics, its Poincare section's coordinates (the compliant search starts from a run: the state only)."""
+    section = rigid_walker(config).section_names if config.dynamics == "rigid" else ()
+    return config.initial_keys(), section
+
+
+def parse_guess(text: str | None, keys: tuple[str, ...], section: tuple[str, ...] = ()) -> dict[str, float] | None:
+    """A guess of the gait from text: a YAML/JSON mapping of the walker's initial-state ``keys`` (the compass's four
+    README keys, a kneed walker's eight) or of its ``section`` coordinates, or as many numbers in either's order
+    (None for None); ArgumentError naming ``guess`` and listing the keys otherwise."""
     if text is None:
         return None
     try:
         value = parse_yaml(text, source="guess")
     except ConfigError as exc:
         raise ArgumentError("guess", exc.reason) from None
-    if isinstance(value, list) and len(value) == len(keys):
-        value = dict(zip(keys, value, strict=True))
-    if not isinstance(value, dict) or set(value) != set(keys):
-        raise ArgumentError(
-            "guess", f"expected the {len(keys)} keys {', '.join(keys)} (or {len(keys)} numbers in that order)"
-        )
-    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in keys):
+    if isinstance(value, list):
+        names = next((names for names in (keys, section) if names and len(value) == len(names)), ())
+        value = dict(zip(names, value, strict=True)) if names else None
+    if not isinstance(value, dict) or set(value) not in [set(keys)] + ([set(section)] if section else []):
+        expected = f"expected the {len(keys)} keys {', '.join(keys)} (or {len(keys)} numbers in that order)"
+        if section:
+            expected += f", or the section's {len(section)}: {', '.join(section)}"
+        raise ArgumentError("guess", expected)
+    names = tuple(value)
+    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in names):
         raise ArgumentError("guess", "values must be numbers")
-    bad = [k for k in keys if not math.isfinite(value[k])]
+    bad = [k for k in names if not math.isfinite(value[k])]
     if bad:
         raise ArgumentError("guess", f"{bad[0]} must be a finite number")
-    return {k: float(value[k]) for k in keys}
+    return {k: float(value[k]) for k in names}
 
 
 def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_steps: int | None = None) -> LimitCycle:
