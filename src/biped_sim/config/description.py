@@ -38,8 +38,26 @@ class BodySpec(Strict):
 
     name: str = Field(..., min_length=1, description="Unique body name.")
     mass: float = Field(..., ge=0, description="Mass [kg].")
-    inertia: float = Field(0.0, ge=0, description="Moment of inertia about its centre of mass [kg m^2].")
+    inertia: float | None = Field(
+        None, ge=0, description="Moment of inertia about its centre of mass [kg m^2] (none given: 0)."
+    )
+    radius_of_gyration: float | None = Field(
+        None, ge=0, description="Or its radius of gyration about the centre of mass [m]: inertia = mass r^2."
+    )
     com: Vector2 = Field((0.0, 0.0), description="Centre of mass in the body frame [m]: (across + downhill, along).")
+
+    @model_validator(mode="after")
+    def _one_inertia(self) -> BodySpec:
+        if self.inertia is not None and self.radius_of_gyration is not None:
+            raise ValueError("radius_of_gyration: give inertia or radius_of_gyration, not both")
+        return self
+
+    @property
+    def moment_of_inertia(self) -> float:
+        """The moment of inertia about the centre of mass [kg m^2]: ``inertia``, or mass r^2, or 0."""
+        if self.radius_of_gyration is not None:
+            return self.mass * self.radius_of_gyration**2
+        return self.inertia or 0.0
 
 
 class PointMassSpec(Strict):
@@ -68,6 +86,12 @@ class StopSpec(Strict):
         "leg) and holds the joint at its limit from both sides with the stop's law until the leg's foot leaves the "
         "ground behind the other leg's; only for a joint within one leg (a knee) of a two-legged walker whose leg "
         "has a foot. Rigid dynamics locks a struck stop until its leg swings again, latch or not.",
+    )
+    release_at_heel_strike: bool = Field(
+        False,
+        description="Rigid dynamics: the trailing leg's stop lets go at the heel strike, its joint free through the "
+        "strike's impulse (McGeer's free trailing knee; the section gains the new swing leg's rates below its hip "
+        "body); default: held through the strike. Set it on both legs' stops alike.",
     )
 
 
