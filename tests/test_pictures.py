@@ -6,11 +6,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from PIL import Image
 
 from biped_sim import load_config, simulate
+from biped_sim.contact.ground import ground_height_at
+from biped_sim.contact.profile import profile_arrays
 from biped_sim.io.trajectory import RunData, load_run
 from biped_sim.measure.pose import Poses, run_poses
+from biped_sim.picture import OFF_LEG_COLOUR, body_colour
 from biped_sim.plots import RIGID_RUN_FIGURES, walker_figure
 
 from .conftest import CONFIGS, invoke
@@ -105,3 +109,37 @@ def test_a_wheel_is_drawn_as_spokes_from_its_hub(tmp_path: Path) -> None:
     np.testing.assert_array_equal(spokes[0::2], np.repeat(pose.hip[None], len(spokes) // 2, axis=0))
     np.testing.assert_allclose(spokes[1::2], pose.foot_centres, atol=1e-15)
     np.testing.assert_allclose(np.hypot(*(spokes[1::2] - pose.hip).T), run.config.walker.leg_length, rtol=1e-12)
+
+
+def test_a_body_off_the_legs_is_drawn_from_the_hip_to_its_centre_of_mass(tmp_path: Path) -> None:
+    """A torso (a third body on the hip, no legs of its own) in compliant dynamics: grey, up to its mass."""
+    config = yaml.safe_load((CONFIGS / "kneed_walker_compliant.yaml").read_text())
+    description = config["walker"]["description"]
+    description["bodies"].append({"name": "torso", "mass": 0.3, "inertia": 1e-3, "com": [0.0, 0.2]})
+    description["joints"].append({"name": "waist", "parent": "thigh_1", "child": "torso"})
+    path = tmp_path / "torso.yaml"
+    path.write_text(yaml.safe_dump(config))
+    run = load_run(short_run_directory(path, tmp_path / "run", "simulation.t_end=0.2"))
+    poses = run_poses(run)
+    torso = poses.skeleton.names.index("torso")
+    assert poses.skeleton.leg_of[torso] == -1 and body_colour(poses.skeleton, torso) == OFF_LEG_COLOUR
+    for i in (0, len(run.time) - 1):
+        pose = poses.at(i)
+        segment = pose.segments[torso]
+        np.testing.assert_array_equal(segment[0], pose.hip)
+        angle = pose.angles[torso]
+        np.testing.assert_allclose(segment[1] - pose.hip, 0.2 * np.array([-np.sin(angle), np.cos(angle)]), atol=1e-15)
+
+
+def test_a_rigid_walker_stands_on_a_ground_profile(tmp_path: Path) -> None:
+    """Down a 5 mm step, one foot is on the profile at every sample (the hip carries the stance level)."""
+    step_down = "ground.profile={kind: steps, steps: [{at: 0.2, height: -0.005}]}"
+    config = CONFIGS / "round_foot_walker.yaml"
+    run = load_run(short_run_directory(config, tmp_path / "run", "dynamics=rigid", step_down))
+    assert len(run.steps["strike_time"]) >= 2 and run.hip[-1, 1] < run.hip[0, 1]  # strikes: the step was taken
+    poses = run_poses(run)
+    centres = np.array([poses.at(i).foot_centres for i in range(len(run.time))])
+    vertices, ends = profile_arrays(run.config.ground.profile, run.config.ground.slope)
+    ground = ground_height_at(centres[:, :, 0].ravel(), vertices, ends).reshape(centres.shape[:2])
+    gap = centres[:, :, 1] - poses.skeleton.foot_radius - ground
+    np.testing.assert_allclose(np.abs(gap).min(axis=1), 0.0, atol=1e-12)

@@ -15,6 +15,8 @@ from pydantic import ValidationError
 from biped_sim.config.schema import Config
 from biped_sim.errors import ArgumentError, ConfigError, quote
 
+MAX_FILE_BYTES = 256 * 1024  # a config, sweep, reference or uncertainty file: the largest bundled one is 4 KiB
+
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that reads ``1e7`` as a float (YAML 1.2) and ``on``/``off`` as strings."""
@@ -174,13 +176,16 @@ def derive(config: Config, values: Mapping[str, Any]) -> Config:
 
 
 def read_text_file(path: str | Path, what: str = "config file") -> str:
-    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory or not text."""
+    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory, not text or larger
+    than :data:`MAX_FILE_BYTES` (a file that size is generated, and reading it would take minutes)."""
     path = Path(path)
     if path.is_dir():
         raise ConfigError(str(path), f"is a directory, not a {what}")
     if not path.is_file():
         raise ConfigError(str(path), f"no such {what}")
     try:
+        if (size := path.stat().st_size) > MAX_FILE_BYTES:
+            raise ConfigError(str(path), f"{size:,} bytes, larger than a {what} may be ({MAX_FILE_BYTES // 1024} KiB)")
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(str(path), f"not a UTF-8 text file (byte {exc.start}): is it a {what}?") from None

@@ -18,7 +18,7 @@ import numpy as np
 
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import MISFIT_P_VALUE, FitRun, misfit_p_value
-from biped_sim.studies.fit.problem import FitProblem, simulate_outcome
+from biped_sim.studies.fit.problem import FitProblem, Outcome, simulate_outcome
 
 PROFILE_POINTS = 3
 PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in conditional standard errors
@@ -143,16 +143,27 @@ def numbering_check(problem: FitProblem, start: np.ndarray) -> str | None:
     )
 
 
-def verdict(run: FitRun, profiles: list[Profile], reached: bool) -> list[str]:
-    """Why the fit is not converged (empty: it is)."""
+def unreached_text(steps: list[int], outcome: Outcome) -> str | None:
+    """Which reference steps the fitted walker never reached and how its run ended (None: it reached them all)."""
+    if not steps:
+        return None
+    named = ", ".join(map(str, sorted(set(steps))[:10])) + (", ..." if len(set(steps)) > 10 else "")
+    return (
+        f"the fitted walker never reaches reference step {named} (its run ended {outcome.status} after "
+        f"{outcome.strikes} model steps)"
+    )
+
+
+def verdict(run: FitRun, profiles: list[Profile], unreached: str | None) -> list[str]:
+    """Why the fit is not converged (empty: it is); ``unreached``: :func:`unreached_text`."""
     reasons = []
     if not run.polish.success:
         reasons.append(f"the polish met no tolerance ({run.polish.message})")
     for parameter, u in zip(run.problem.parameters, run.u, strict=True):
         if u <= AT_BOUND or u >= 1 - AT_BOUND:
             reasons.append(f"{parameter.key} is on a bound")
-    if not reached:
-        reasons.append("the fitted walker does not reach every reference step")
+    if unreached:
+        reasons.append(unreached)
     for profile in profiles:
         if profile.jump is not None:
             reasons.append(f"the objective is not smooth along {profile.key} ({profile.jump})")

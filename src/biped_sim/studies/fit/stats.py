@@ -21,7 +21,15 @@ from biped_sim.config import Config
 from biped_sim.io.references import Reference
 from biped_sim.studies.compare import Comparison, compare_periods
 from biped_sim.studies.fit.alternatives import Alternative, alternatives
-from biped_sim.studies.fit.diagnose import AT_BOUND, Profile, misfit, numbering_check, profile_scans, verdict
+from biped_sim.studies.fit.diagnose import (
+    AT_BOUND,
+    Profile,
+    misfit,
+    numbering_check,
+    profile_scans,
+    unreached_text,
+    verdict,
+)
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import FitRun
 from biped_sim.studies.fit.problem import Outcome, simulate_outcome
@@ -189,12 +197,14 @@ def summarize(run: FitRun, evaluator: Evaluator) -> FitResult:
     after_data = problem.evaluation_data(run.u)
     after_data["formulation"]["kind"] = problem.config.formulation.kind  # the fitted config as the user runs it
     after = simulate_outcome(after_data)
-    reached = bool(np.all(np.isfinite(problem.model_values(after))))
+    unreached = [
+        t.step for t, value in zip(problem.targets, problem.model_values(after), strict=True) if math.isnan(value)
+    ]
     evaluator.save()
     others = alternatives(run, s2 if math.isfinite(s2) else 1.0, cov)
     totals = {"simulations": evaluator.evaluations, "replayed": evaluator.replayed, "alternatives": others}
     missed = misfit(run)  # another minimum or a model error: never a converged fit
-    reasons = verdict(run, profiles, reached) + ([missed] if missed else [])
+    reasons = verdict(run, profiles, unreached_text(unreached, after)) + ([missed] if missed else [])
     return FitResult(
         run, estimates, ident, s2, source, profiles, reasons,
         _periods(problem.reference, run.start_outcome, problem.skip, "start"),
