@@ -125,6 +125,11 @@ class StepFailedError(RuntimeError):
     """The walker fell or stalled during a step of the map."""
 
 
+class SearchFellError(ConfigError):
+    """The walker fell from every start of a gait search: a config's start is unusable (a run on
+    ``rigid_limit_cycle``), and the limit-cycle command's search failed (exit 1)."""
+
+
 # --- rigid ---------------------------------------------------------------------------------------------------
 
 
@@ -282,18 +287,14 @@ def rigid_limit_cycle(
     if settle_steps and (solved is None or not solved[0][1]):
         # the scan: every point walked first (stable gaits), then every point as it is (any gait)
         scan = scan_starts(walker)
-        tried += f", then the {len(scan)} points of the scan (each walked, then as it is)"
+        tried += f", then the {len(scan)} points of a scan (each walked, then as it is)"
         scanned = _solve_from(
             step_map, [(label, z, settle_steps) for label, z in scan] + [(label, z, 0) for label, z in scan]
         )
         if scanned is not None and (solved is None or scanned[0][1]):
             solved = scanned
     if solved is None:
-        raise ConfigError(
-            "simulation.initial",
-            f"no rigid limit cycle: the rigid {walker.name} falls from the guess"
-            + (" and from every start of the scan" if settle_steps else ""),
-        )
+        raise SearchFellError("simulation.initial", f"no rigid limit cycle: the walker falls from {tried}")
     (z, converged, iterations, residual), how = solved
     _, step = rigid_map(walker, z, compiled)
     jac = map_jacobian(step_map, z)
