@@ -27,7 +27,8 @@ STEPS, STD_S, DRAWS, WORKERS = 7, 1e-5, 4000, 2
 TARGETS_S = {"global_fit": 60.0, "posterior": 600.0}
 
 
-def _problem() -> Any:
+def fit_problem() -> Any:
+    """The global fit's problem: the default walker's two parameters against its own synthetic step periods."""
     base = load_config(CONFIG, ["simulation.t_end=3.5"])
     data = synthetic_reference_data(derive(base, HIDDEN), STEPS, 0.0, 0, decimals=5)
     data["std"] = [STD_S] * STEPS
@@ -37,7 +38,7 @@ def _problem() -> Any:
 
 def fit_bench(posterior: bool = True) -> dict[str, Any]:
     """The bench.json section ``fit``: wall times, evaluations and what was recovered."""
-    problem = _problem()
+    problem = fit_problem()
     out: dict[str, Any] = {"hidden": HIDDEN, "steps": STEPS, "workers": WORKERS}
     with tempfile.TemporaryDirectory(prefix="biped-sim-bench-fit-") as tmp:
         checkpoint = Path(tmp) / "fit.checkpoint.json"
