@@ -15,7 +15,11 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
+import tracemalloc
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar
 
 import pytest
 from click.testing import Result
@@ -31,6 +35,9 @@ ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"
 DEFAULT_CONFIG = CONFIGS / "round_foot_walker.yaml"
 CLI = [sys.executable, "-m", "biped_sim.cli"]
+T = TypeVar("T")
+# what refusing a huge input may allocate (:func:`allocation_peak`): building it would take gigabytes
+MEMORY_BOUND = 64 * 2**20
 
 
 def child_env() -> dict[str, str]:
@@ -102,3 +109,44 @@ def tiny_sweep_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     # not a terminal: no live display but one progress line per run
     assert sum(line.startswith("[") for line in result.stdout.splitlines()) == 8
     return root / "sweep"
+
+
+FREEZE_HOOK = Path(__file__).resolve().parent / "freeze"
+
+
+def freezing_env(markers: Path, *points: str) -> dict[str, str]:
+    """:func:`child_env` with the freeze hook (tests/freeze/sitecustomize.py) armed at ``points`` ('NAME@N').
+
+    The first process (the CLI or a worker it starts) to reach a point stops there for good, before the N-th
+    rename onto a file named NAME, and writes its pid to ``markers/NAME``: a kill then lands at a known point.
+    """
+    markers.mkdir(parents=True, exist_ok=True)
+    env = child_env()
+    env["PYTHONPATH"] = os.pathsep.join([str(FREEZE_HOOK), env["PYTHONPATH"]])
+    env["BIPED_SIM_TEST_FREEZE"] = "|".join([str(markers), *points])
+    return env
+
+
+def wait_frozen(process: subprocess.Popen[Any], markers: Path, *names: str, timeout: float = 180) -> dict[str, int]:
+    """The pids of the processes frozen at ``names`` (:func:`freezing_env`), once all are; fails if ``process`` ends."""
+    deadline = time.monotonic() + timeout
+    while not all((markers / name).exists() for name in names):
+        assert process.poll() is None, f"the process ended (exit code {process.returncode}) before freezing"
+        assert time.monotonic() < deadline, f"nothing froze at {names} within {timeout} s"
+        time.sleep(0.02)
+    return {name: int((markers / name).read_text()) for name in names}
+
+
+def allocation_peak(call: Callable[[], T]) -> tuple[T, int]:
+    """``call()`` and the most memory (bytes) Python and numpy held at once for it, as tracemalloc counts.
+
+    A bound on it checks that a huge input was refused before anything was built from it, whatever the
+    machine's speed or load (a bound on the time taken would not).
+    """
+    tracemalloc.start()
+    try:
+        result = call()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return result, peak

@@ -153,6 +153,21 @@ def test_bench_markdown_has_a_row_per_case_targets_and_the_summary_line_last() -
     assert "Targets: " in "\n".join(lines)
 
 
+def test_bench_markdown_reports_the_cold_compile_of_each_group() -> None:
+    result = made_up_result()
+    cold = {
+        "wall_s": 40.0, "cpu_s": 26.4, "functions": 76, "lowering_cpu_s": 16.8, "front_end_cpu_s": 7.5,
+        "top": [{"function": "biped_sim.integrate.explicit.advance_python_entry", "cpu_s": 10.2}],
+    }  # fmt: skip
+    cached = {**cold, "wall_s": 2.5, "cpu_s": 2.4, "functions": 0, "top": []}
+    result["compile"] = [{"group": "planar explicit flat", "cold": cold, "cached": cached}]
+    text = markdown(result)
+    assert (
+        "Cold compile, planar explicit flat: 76 functions, 26.4 CPU s (40.0 s wall; lowering 16.8, numba's front "
+        "end 7.5; costliest: advance_python_entry 10.2); cached 2.4 CPU s (2.5 s wall, 0 compiled)."
+    ) in text
+
+
 def test_bench_markdown_reports_the_rigid_map_rows_and_the_basin_targets() -> None:
     result = made_up_result()
     result["rigid_map"] = {

@@ -53,17 +53,19 @@ def test_walker_drawing_puts_the_stance_foot_on_the_ground(short_run_dir: Path) 
     drawing = WalkerDrawing(data, fig)
     drawing.draw(0)
     # back to the slope frame: the stance foot's lowest arc point is at the ground (to within the penetration)
-    to_slope = drawing.to_world.T
-    lowest = min(float((to_slope @ np.vstack(line.get_data()))[1].min()) for line in drawing.feet)
+    to_slope = drawing.walker.world.T
+    lowest = min(float((to_slope @ np.vstack(line.get_data()))[1].min()) for line in drawing.walker.feet)
     assert abs(lowest) < 2e-3
-    hip = to_slope @ np.array([drawing.hip.get_xdata()[0], drawing.hip.get_ydata()[0]])
+    hip = to_slope @ np.array([drawing.walker.hip.get_xdata()[0], drawing.walker.hip.get_ydata()[0]])
     np.testing.assert_allclose(hip, data.hip[0], atol=1e-12)
-    for line in drawing.legs:  # each leg reaches from the hip
+    walker = data.config.walker
+    for line in drawing.walker.bodies:  # each leg reaches from the hip to its foot's centre
         leg = to_slope @ np.vstack(line.get_data())
         np.testing.assert_allclose(leg[:, 0], data.hip[0], atol=1e-9)
-        assert np.hypot(*(leg[:, 1] - leg[:, 0])) == pytest.approx(data.config.walker.leg_length, rel=1e-9)
+        assert np.hypot(*(leg[:, 1] - leg[:, 0])) == pytest.approx(walker.leg_length - walker.foot_radius, rel=1e-9)
     arrows = drawing.arrows.U, drawing.arrows.V
     assert np.hypot(*arrows).max() > 0  # the stance foot carries a force
+    assert drawing.stamp.get_text() == "t =  0.000 s"
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,6 @@ import json
 import os
 import signal
 import subprocess
-import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -20,7 +19,7 @@ from biped_sim.sweep import runner as sweep_runner
 from biped_sim.sweep.rows import METRIC_COLUMNS, SETTING_COLUMNS
 from biped_sim.testing import TINY_SWEEP_METHODS, TINY_SWEEP_RUNS, TINY_SWEEP_SLOPES, write_sweep
 
-from .conftest import CLI, child_env, invoke, one_line_error
+from .conftest import CLI, freezing_env, invoke, one_line_error, wait_frozen
 
 # Columns that legitimately differ between two executions of the same run.
 TIMING_COLUMNS = ["wall_time_s"]
@@ -116,54 +115,52 @@ def test_summary_of_another_config_is_not_a_finished_run(tmp_path: Path) -> None
 
 
 def test_resume_after_kill_skips_finished_runs_and_ignores_partial_files(tmp_path: Path) -> None:
-    """kill -9 the whole sweep (a real process group) mid-way; the restart reruns exactly the unfinished runs."""
-    n_runs = 6  # 0.1 s each: the kill, 20-40 ms after the first finished, comes well before the last
+    """kill -9 the whole sweep (a real process group) at a known point: the sweep frozen while writing its table
+    after the first run, its worker while finishing the second; the restart reruns exactly the unfinished runs and
+    leaves no temporary file of the killed sweep."""
+    n_runs = 4
     path = write_sweep(
         tmp_path,
         "killed",
-        set_={"simulation.t_end": 1.0},
+        set_={"simulation.t_end": 0.5},
         grid={"ground.slope": {"from": 0.010, "to": 0.020, "num": n_runs}},
     )
-    out = tmp_path / "out"
+    out, markers = tmp_path / "out", tmp_path / "markers"
     process = subprocess.Popen(
         [*CLI, "sweep", str(path), "--jobs", "1", "--out", str(out), "-q"],
         cwd=tmp_path,
-        env=child_env(),
+        env=freezing_env(markers, "sweep.csv@2", "summary.json@2"),
         stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
         start_new_session=True,  # its own process group: the kill takes the workers too
     )
-    deadline = time.monotonic() + 180
-    while not list(out.glob("runs/*/summary.json")):
-        assert process.poll() is None, process.stderr.read().decode() if process.stderr else ""
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    wait_frozen(process, markers, "sweep.csv", "summary.json")
     os.killpg(process.pid, signal.SIGKILL)
     process.wait()
-    if process.stderr:
-        process.stderr.close()
-    finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("runs/*/summary.json")}
-    assert 0 < len(finished) < n_runs, "the kill came too late to test anything"
-
-    # what a kill can leave in an unfinished run: a torn HDF5 file and a temp file, but no summary.json
     manifest = json.loads((out / "sweep.json").read_text())
-    unfinished = next(run for run in manifest["runs"] if run["name"] not in finished)
-    torn = out / "runs" / unfinished["name"]
-    torn.mkdir(parents=True, exist_ok=True)
-    (torn / "trajectory.h5").write_bytes(b"\x89HDF\r\n\x1a\n truncated")
-    (torn / ".summary.json.x1y2.tmp").write_text('{"status": "walk')
-    table = pd.read_csv(out / "sweep.csv")
-    assert set(table.loc[~table["run"].isin(finished), "status"]) <= {"pending"}
+    first, second, third = (out / run["dir"] for run in manifest["runs"][:3])
+    finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("runs/*/summary.json")}
+    assert list(finished) == [first.name]
+    # what the kill left: the table's temporary file, the second run's files but its summary (written, not renamed)
+    assert len(list(out.glob(".sweep.csv.*.tmp"))) == 1
+    assert sorted(p.name for p in second.iterdir() if not p.name.startswith(".")) == [
+        "config.yaml",
+        "steps.csv",
+        "trajectory.h5",
+    ]
+    assert len(list(second.glob(".summary.json.*.tmp"))) == 1
+    assert set(pd.read_csv(out / "sweep.csv")["status"]) == {"pending"}  # the table as before the first run's row
+    third.mkdir(parents=True)  # and what a kill in the middle of a write leaves: a torn HDF5 file
+    (third / "trajectory.h5").write_bytes(b"\x89HDF\r\n\x1a\n truncated")
 
     with ThreadPoolExecutor(max_workers=1) as executor:  # the restart needs no process of its own
         outcome = run_sweep(load_sweep(path), out, executor)
-    assert (outcome.progress.skipped, outcome.progress.done) == (len(finished), n_runs - len(finished))
-    for name, mtime in finished.items():
-        assert (out / "runs" / name / "summary.json").stat().st_mtime_ns == mtime, f"{name} was run again"
+    assert (outcome.progress.skipped, outcome.progress.done) == (1, n_runs - 1)
+    assert (first / "summary.json").stat().st_mtime_ns == finished[first.name], "the finished run was run again"
     table = pd.read_csv(out / "sweep.csv")
     assert list(table["status"]) == ["walking"] * n_runs
-    summary = json.loads((torn / "summary.json").read_text())
-    assert summary["config_hash"] == unfinished["config_hash"]
+    for run in manifest["runs"]:
+        assert json.loads((out / run["dir"] / "summary.json").read_text())["config_hash"] == run["config_hash"]
     assert not list(out.rglob("*.tmp"))
 
 

@@ -26,7 +26,8 @@ from matplotlib.figure import Figure
 from biped_sim.io.atomic import write_with
 from biped_sim.io.output import OutputKind, staged_directory
 from biped_sim.io.trajectory import RunData
-from biped_sim.studies.bifurcation import BifurcationDiagram
+from biped_sim.measure.pose import run_poses
+from biped_sim.picture import WalkerPicture, draw_ground
 from biped_sim.studies.compare import Comparison
 
 COLUMN_WIDTH_IN = 3.5
@@ -34,6 +35,7 @@ PANEL_HEIGHT_IN = 2.1
 PNG_DPI = 200
 LEGEND_INSIDE_MAX = 3
 STRIKE_WINDOW = (0.02, 0.12)  # fractions of the step period shown before and after a heel strike
+WALKER_POSES = 6  # poses of the walker figure, over one step
 
 STYLE = {
     "font.size": 8,
@@ -222,24 +224,27 @@ def contact_forces_figure(series: Series) -> Figure:
     return fig
 
 
+ENERGY_TERMS = (
+    ("kinetic", "kinetic"),
+    ("potential", "potential"),
+    ("elastic", "elastic (contact)"),
+    ("dissipated_normal", "dissipated, normal"),
+    ("dissipated_friction", "dissipated, friction"),
+    ("dissipated_impact", "dissipated, impacts"),  # a rigid run's
+)
+
+
 @styled
 def energy_terms_figure(run: RunData) -> Figure:
     """One run: energy terms against time (changes from t = 0), and the balance residual below."""
     fig, (top, bottom) = new_figure(2)
     e = run.energy
-    for i, (name, label) in enumerate(
-        (
-            ("kinetic", "kinetic"),
-            ("potential", "potential"),
-            ("elastic", "elastic (contact)"),
-            ("dissipated_normal", "dissipated, normal"),
-            ("dissipated_friction", "dissipated, friction"),
-        )
-    ):
+    for i, (name, label) in enumerate((name, label) for name, label in ENERGY_TERMS if name in e):
         top.plot(run.time, e[name] - e[name][0], label=label, **style_of(i))
     bottom.plot(run.time, e["residual"], **style_of(0))
-    top.set_ylabel("energy change [J]")
-    bottom.set_ylabel(r"$E - E_0 + W_\mathrm{diss}$ [J]")
+    unit = run.summary.get("units", {}).get("energy", "J")  # a rigid run's may be per kg or nondimensional
+    top.set_ylabel(f"energy change [{unit}]")
+    bottom.set_ylabel(rf"$E - E_0 + W_\mathrm{{diss}}$ [{unit}]")
     bottom.set_xlabel("time [s]")
     handles, labels = top.get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper center", ncol=2, frameon=False)
@@ -289,40 +294,50 @@ def phase_portrait_figure(series: Series) -> Figure:
     return fig
 
 
-RUN_FIGURES = (
-    "step_period",
-    "constraint_violation",
-    "contact_forces",
-    "energy",
-    "slip",
-    "phase_portrait",
-)
+@styled
+def walker_figure(run: RunData) -> Figure:
+    """The walker at :data:`WALKER_POSES` instants of a step in the middle of the run (the earlier paler) over its
+    ground (the whole run if it has no complete step), drawn from its description (:mod:`biped_sim.picture`)."""
+    poses = run_poses(run)
+    strikes, k = run.steps["strike_time"], middle_strike(run)
+    t0, t1 = (strikes[k], strikes[k + 1]) if k is not None and k + 1 < len(strikes) else (run.time[0], run.time[-1])
+    samples = np.unique(np.searchsorted(run.time, np.linspace(t0, t1, WALKER_POSES)).clip(0, len(run.time) - 1))
+    fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.2), layout="constrained")
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    ax.axis("off")
+    for i, alpha in zip(samples, np.linspace(0.3, 1.0, len(samples)), strict=True):
+        WalkerPicture(ax, poses.skeleton, run.config.ground.slope, float(alpha), 1.2).place(poses.at(int(i)))
+    reach = max(float(np.max(poses.hip[samples, 1])), 1e-3)
+    x = poses.hip[samples, 0]
+    draw_ground(ax, run.config, float(x.min()) - 0.6 * reach, float(x.max()) + 0.6 * reach, 0.15 * reach)
+    ax.relim()  # the walker's lines were placed after they were made
+    ax.autoscale_view()
+    return fig
+
+
+RUN_FIGURES = ("step_period", "constraint_violation", "contact_forces", "energy", "slip", "phase_portrait", "walker")
+RIGID_RUN_FIGURES = ("step_period", "energy", "phase_portrait", "walker")  # no contact, slip or constraint drift
 PLOT_OUTPUT = OutputKind("plot", tuple(f"{name}.{fmt}" for name in RUN_FIGURES for fmt in ("png", "svg")))
+FIGURES: dict[str, Callable[[RunData], Figure]] = {
+    "step_period": lambda run: step_period_figure([(run.label, run)]),
+    "constraint_violation": lambda run: constraint_violation_figure([(run.label, run)]),
+    "contact_forces": lambda run: contact_forces_figure([(run.label, run)]),
+    "energy": energy_terms_figure,
+    "slip": lambda run: slip_figure([(run.label, run)]),
+    "phase_portrait": lambda run: phase_portrait_figure([(run.label, run)]),
+    "walker": walker_figure,
+}
 
 
 def plot_run(run: RunData, out_dir: Path) -> list[Path]:
-    """Every single-run figure of ``run`` into ``out_dir`` (PNG + SVG each), which is replaced as a whole once all
-    are drawn: a failure leaves the old figures as they were, and no old figure stays beside new ones."""
+    """Every single-run figure of ``run`` (a rigid run's :data:`RIGID_RUN_FIGURES`) into ``out_dir`` (PNG + SVG
+    each), which is replaced as a whole once all are drawn: a failure leaves the old figures as they were, and no
+    old figure stays beside new ones."""
+    names = RIGID_RUN_FIGURES if run.dynamics == "rigid" else RUN_FIGURES
     with staged_directory(out_dir, PLOT_OUTPUT) as stage:
-        paths = _draw_run(run, stage)
+        paths = [path for name in names for path in save_figure(FIGURES[name](run), stage, name)]
     return [out_dir / path.name for path in paths]
-
-
-def _draw_run(run: RunData, out_dir: Path) -> list[Path]:
-    """Draw and save the single-run figures into ``out_dir``."""
-    series = [(run.label, run)]
-    figures = {
-        "step_period": step_period_figure(series),
-        "constraint_violation": constraint_violation_figure(series),
-        "contact_forces": contact_forces_figure(series),
-        "energy": energy_terms_figure(run),
-        "slip": slip_figure(series),
-        "phase_portrait": phase_portrait_figure(series),
-    }
-    paths: list[Path] = []
-    for name in RUN_FIGURES:
-        paths += save_figure(figures[name], out_dir, name)
-    return paths
 
 
 @styled
@@ -416,26 +431,3 @@ def comparisons_figure(comparisons: Sequence[Comparison]) -> Figure:
         [(c.label, c.model_periods, c.relative_errors) for c in comparisons],
         comparisons[0].published,
     )
-
-
-@styled
-def bifurcation_figure(diagram: BifurcationDiagram) -> Figure:
-    """Steady step periods (brute force) and the period-1 branch (stable, unstable) against the slope."""
-    fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6))
-    ax = fig.add_subplot()
-    xs = [s for s, periods in diagram.brute for _ in periods]
-    ys = [p for _, periods in diagram.brute for p in periods]
-    ax.plot(xs, ys, ".", color="0.3", markersize=1.5, label="steady state (brute force)")
-    stable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and c.stable]
-    unstable = [(c.slope, c.step_period) for c in diagram.cycles if c is not None and not c.stable]
-    if stable:
-        ax.plot(*zip(*stable, strict=True), "-", color="C0", label="period 1, stable")
-    if unstable:
-        ax.plot(*zip(*unstable, strict=True), "--", color="C3", label="period 1, unstable")
-    if diagram.period_doubling_slope is not None:
-        ax.axvline(diagram.period_doubling_slope, color="0.5", linewidth=0.6)
-    ax.set_xlabel("slope [rad]")
-    ax.set_ylabel("step period")
-    ax.legend(loc="best")
-    fig.tight_layout()
-    return fig

@@ -173,7 +173,8 @@ def plot_command(
     run_dir: Annotated[Path, typer.Argument(help="Run directory (holds trajectory.h5 and summary.json).")],
     out: Annotated[Path | None, typer.Option("--out", help="Figure directory (default: RUN_DIR/figures).")] = None,
 ) -> None:
-    """The single-run figures: step period, constraint violation, contact forces, energy, slip, phase portrait."""
+    """The single-run figures: step period, constraint violation, contact forces, energy, slip, phase portrait and
+    the walker over a step (a rigid run: step period, energy, phase portrait and the walker)."""
     from biped_sim.io.trajectory import load_run
     from biped_sim.plots import PLOT_OUTPUT, plot_run
 
@@ -197,7 +198,7 @@ def animate_command(
     t_start: Annotated[float, typer.Option("--start", help="First simulated time shown [s].")] = 0.0,
     t_end: Annotated[float | None, typer.Option("--end", help="Last simulated time shown [s].")] = None,
 ) -> None:
-    """Draw the walker walking, with contact force arrows and a time stamp."""
+    """Draw the walker walking (any walker, compliant or rigid run), with contact force arrows and a time stamp."""
     from biped_sim.animate import animate_run, check_output, check_playback
     from biped_sim.io.trajectory import load_run
 

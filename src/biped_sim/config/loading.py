@@ -15,6 +15,8 @@ from pydantic import ValidationError
 from biped_sim.config.schema import Config
 from biped_sim.errors import ArgumentError, ConfigError, quote
 
+MAX_FILE_BYTES = 256 * 1024  # a config, sweep, reference or uncertainty file: the largest bundled one is 4 KiB
+
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that reads ``1e7`` as a float (YAML 1.2) and ``on``/``off`` as strings."""
@@ -68,16 +70,57 @@ def apply_override(data: dict[str, Any], assignment: str) -> None:
 
 
 def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
-    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed."""
-    node = data
+    """Set ``data[a][b][c] = value`` for ``key = 'a.b.c'``, creating sections as needed.
+
+    A list of named items (a description's bodies, joints, feet) is entered by an item's name
+    (``walker.description.bodies.thigh_1.mass``) or its index; an unknown name or an index out of range is a
+    one-line ConfigError naming the list and its names.
+    """
     parts = key.split(".")
-    for part in parts[:-1]:
-        child = node.get(part)
-        if not isinstance(child, dict):
+    node: Any = data
+    for depth, part in enumerate(parts[:-1]):
+        if isinstance(node, list):
+            node = node[_list_index(node, parts, depth)]
+            continue
+        child = node.get(part) if isinstance(node, dict) else None
+        if not isinstance(child, dict | list):
             child = {}
             node[part] = child
         node = child
-    node[parts[-1]] = value
+    if isinstance(node, list):
+        node[_list_index(node, parts, len(parts) - 1)] = value
+    else:
+        node[parts[-1]] = value
+
+
+def get_dotted(data: Any, key: str) -> Any:
+    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`) of plain config data;
+    ConfigError naming the key when a section or field on the way is missing."""
+    parts = key.split(".")
+    node = data
+    for depth, part in enumerate(parts):
+        if isinstance(node, list):
+            node = node[_list_index(node, parts, depth)]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            raise ConfigError(key, "unknown config key")
+    return node
+
+
+def _list_index(items: list[Any], parts: list[str], depth: int) -> int:
+    """The position in ``items`` (the list at ``parts[:depth]``) of the item ``parts[depth]`` names: an item's
+    ``name`` or an index; ConfigError naming the list (and its names) when there is no such item."""
+    part, where = parts[depth], ".".join(parts[:depth])
+    names = [item.get("name") if isinstance(item, dict) else None for item in items]
+    if part in names:
+        return names.index(part)
+    if part.lstrip("-").isdigit():
+        if -len(items) <= int(part) < len(items):
+            return int(part)
+        raise ConfigError(where, f"no item {part} (the list has {len(items)})")
+    listed = ", ".join(str(n) for n in names if n is not None)
+    raise ConfigError(where, f"no item named {quote(part)}" + (f"; the names are {listed}" if listed else ""))
 
 
 _UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\])$")
@@ -133,13 +176,16 @@ def derive(config: Config, values: Mapping[str, Any]) -> Config:
 
 
 def read_text_file(path: str | Path, what: str = "config file") -> str:
-    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory or not text."""
+    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory, not text or larger
+    than :data:`MAX_FILE_BYTES` (a file that size is generated, and reading it would take minutes)."""
     path = Path(path)
     if path.is_dir():
         raise ConfigError(str(path), f"is a directory, not a {what}")
     if not path.is_file():
         raise ConfigError(str(path), f"no such {what}")
     try:
+        if (size := path.stat().st_size) > MAX_FILE_BYTES:
+            raise ConfigError(str(path), f"{size:,} bytes, larger than a {what} may be ({MAX_FILE_BYTES // 1024} KiB)")
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(str(path), f"not a UTF-8 text file (byte {exc.start}): is it a {what}?") from None

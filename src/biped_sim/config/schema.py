@@ -309,6 +309,7 @@ class Config(Strict):
             raise ValueError(f"ground.profile: {reason}")
         if self.contact.stiffness is None and self.walker.foot_radius == 0:
             raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
+        self._described_walker_checks()
         if self.friction.model != "none" and math.tan(abs(self.ground.slope)) > max(
             self.friction.mu_static, self.friction.mu_kinetic
         ):
@@ -317,6 +318,19 @@ class Config(Strict):
                 "the stance foot cannot hold"
             )
         return self
+
+    def _described_walker_checks(self) -> None:
+        """A described walker's bodies all carry mass, and Hertz's stiffness has a round foot to work with."""
+        described = self.walker.description
+        if described is None:
+            return
+        if massless := described.massless_bodies():
+            raise ValueError(
+                f"walker.description.bodies.{massless[0]}.mass: a body needs mass (its own or a point mass)"
+            )
+        hertz = self.contact.materials is not None or self.dynamics == "compliant"
+        if self.contact.stiffness is None and hertz and max(foot.radius for foot in described.feet) == 0.0:
+            raise ValueError("contact.stiffness: required for point feet (every foot's radius is 0), Hertz needs R > 0")
 
     def _initial_keys_match(self) -> None:
         initial = self.simulation.initial

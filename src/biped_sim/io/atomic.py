@@ -10,12 +10,13 @@ the renamed file is as readable as any other the user writes.
 from __future__ import annotations
 
 import contextlib
+import glob
 import json
 import math
 import os
 import secrets
 import shutil
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -39,13 +40,28 @@ def temporary_sibling(target: Path, *, directory: bool = False) -> Path:
     raise FileExistsError(f"no free temporary name beside {target}")
 
 
+def _remove_temporary(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
 def remove_stale_temporaries(directory: Path) -> None:
     """Remove the temporary entries a killed write left in ``directory`` (files and staged directories)."""
     for path in directory.glob(TEMPORARY_GLOB):
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path, ignore_errors=True)
-        else:
-            path.unlink(missing_ok=True)
+        _remove_temporary(path)
+
+
+def remove_temporaries_of(directory: Path, names: Iterable[str]) -> None:
+    """Remove the temporary entries of the targets ``names`` in ``directory`` (``.<name>.<random>.tmp``).
+
+    For a writer that owns those targets (e.g. under a lock): whatever temporaries of them exist were left by
+    a writer that died, while the directory's other temporaries may belong to other writers, alive.
+    """
+    for name in names:
+        for path in directory.glob(f".{glob.escape(name)}.*.tmp"):
+            _remove_temporary(path)
 
 
 @contextlib.contextmanager

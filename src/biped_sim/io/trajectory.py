@@ -1,9 +1,9 @@
 """Reading a finished run directory back: trajectory.h5 (layout in :mod:`biped_sim.io.run_files`) and summary.json.
 
 Figures, animations, reports and comparisons all read runs through :func:`load_run`, so a run
-directory is the one interface between simulating and presenting. A rigid run (``dynamics: rigid``) has
-none of the contact and constraint data the figures draw: :func:`load_run` refuses it in one line, while
-its summary (step times and periods, what ``compare`` uses) reads as any other through :func:`load_summary`.
+directory is the one interface between simulating and presenting. A rigid run (``dynamics: rigid``) reads as
+one too (``RunData.dynamics``): its state holds the angles and rates in role order, its energy terms are the
+rigid model's, it has no contact channels (no columns) and its constraints hold exactly (zeros).
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ class RunData:
     steps: dict[str, np.ndarray]  # strike_time, foot, period, length, slip, ...
     violation_normalization: np.ndarray | None = None  # (ns,) ||p.p - 1||, spatial runs only
     attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw [rad], pitch_rate [rad/s] (ns, nb), spatial only
+    dynamics: str = "compliant"  # or 'rigid'
 
     def column(self, name: str) -> np.ndarray:
         """One state entry over time, by name (e.g. 'phi_leg0')."""
@@ -49,21 +50,28 @@ class RunData:
             raise ConfigError(str(self.run_dir), f"trajectory.h5 has no state {name!r}") from None
 
     def leg_angles(self) -> np.ndarray:
-        """(ns, nb) sagittal leg angle of each body [rad]: phi (planar) or the pitch (spatial)."""
+        """(ns, nb) sagittal leg angle of each body [rad]: phi (planar), the pitch (spatial), or a rigid run's angle
+        of each role (stance, swing: the legs swap at each heel strike)."""
         if self.attitude is not None:
             return self.attitude["pitch"]
+        if self.dynamics == "rigid":
+            return np.column_stack([self.column(f"{role}_angle") for role in self.body_names])
         return np.column_stack([self.column(f"phi_{body}") for body in self.body_names])
 
     def leg_rates(self) -> np.ndarray:
-        """(ns, nb) sagittal leg angular rate of each body [rad/s]."""
+        """(ns, nb) sagittal leg angular rate of each body (rigid: each role) [rad/s]."""
         if self.attitude is not None:
             return self.attitude["pitch_rate"]
+        if self.dynamics == "rigid":
+            return np.column_stack([self.column(f"{role}_rate") for role in self.body_names])
         return np.column_stack([self.column(f"omega_{body}") for body in self.body_names])
 
     @property
     def body_names(self) -> list[str]:
         """Bodies in state order: from the 'phi_<body>' entries (planar, minimal), else the 'x_<body>' ones (spatial;
-        minimal-coordinate states also hold 'x_hip', which is no body)."""
+        minimal-coordinate states also hold 'x_hip', which is no body); a rigid run's roles ('<role>_angle')."""
+        if self.dynamics == "rigid":
+            return [name.removesuffix("_angle") for name in self.state_names if name.endswith("_angle")]
         planar = [name[4:] for name in self.state_names if name.startswith("phi_")]
         return planar or [name[2:] for name in self.state_names if name.startswith("x_")]
 
@@ -122,15 +130,11 @@ def load_run(run_dir: str | Path) -> RunData:
 
 
 def _read_trajectory(run_dir: Path, path: Path, summary: dict[str, Any]) -> RunData:
-    """The arrays of a compliant run's trajectory.h5 (h5py's own errors are turned into one line by the caller)."""
+    """The arrays of a run's trajectory.h5 (h5py's own errors are turned into one line by the caller)."""
     with h5py.File(path, "r") as f:
-        if f.attrs.get("dynamics") == "rigid":
-            raise ConfigError(
-                str(run_dir),
-                "a rigid run (dynamics: rigid): figures and animations draw compliant runs (contact, constraints); "
-                "its arrays are in trajectory.h5",
-            )
         config = config_from_dict(parse_yaml(f.attrs["config"], source=f"{path}:config"))
+        if f.attrs.get("dynamics") == "rigid":
+            return _rigid_run(run_dir, f, config, summary)
         return RunData(
             run_dir=run_dir,
             config=config,
@@ -149,3 +153,26 @@ def _read_trajectory(run_dir: Path, path: Path, summary: dict[str, Any]) -> RunD
             violation_normalization=f["constraints/normalization"][:] if "normalization" in f["constraints"] else None,
             attitude={name: ds[:] for name, ds in f["attitude"].items()} if "attitude" in f else None,
         )
+
+
+def _rigid_run(run_dir: Path, f: h5py.File, config: Config, summary: dict[str, Any]) -> RunData:
+    """A rigid run's arrays: no contact channels (no feet's columns), constraints exact (zeros)."""
+    time = f["time"][:]
+    no_feet, zeros = np.zeros((len(time), 0)), np.zeros(len(time))
+    return RunData(
+        run_dir=run_dir,
+        config=config,
+        summary=summary,
+        time=time,
+        state=f["state"][:],
+        state_names=list(f["state_names"].asstr()[:]),
+        normal_force=no_feet,
+        friction_force=no_feet,
+        penetration=no_feet,
+        energy={name: ds[:] for name, ds in f["energy"].items()},
+        violation_position=zeros,
+        violation_velocity=zeros,
+        hip=f["hip"][:],
+        steps={name: ds[:] for name, ds in f["steps"].items()},
+        dynamics="rigid",
+    )

@@ -16,6 +16,7 @@ from biped_sim.measure.loops import rigid_energy_loop
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.start import RigidStart, touchdown_legs
 from biped_sim.rigid.tree import RigidWalker
+from biped_sim.rigid.tree_layout import rolling
 
 
 @dataclass
@@ -78,14 +79,16 @@ def rigid_energy_and_hip(
 ) -> tuple[RigidEnergy, np.ndarray]:
     """Energy terms and hip position at the samples, in one slope frame for the whole run.
 
-    Step k's models measure positions from its own origin O_k, where its contact point would be at zero stance
-    angle: the contact point is at x = O_k - R theta. O_0 = R theta_0 (contact at x = 0 at the start). A step's
-    length is its contact point's advance from the step's start to the next one's, so
+    Step k's models measure positions from its own origin O_k, where its contact point would be at zero angle of
+    the stance foot's body (theta): the contact point is at x = O_k - R theta. O_0 = R theta_0 (contact at x = 0 at
+    the start). A step's length is its contact point's advance from the step's start to the next one's, so
     O_{k+1} - R theta_{k+1}+ = O_k - R theta_k+ + length_k. Potentials shift by -(weight) sin(gamma) O_k, and on
-    a ground profile by (weight) cos(gamma) h_k with h_k step k's stance level (the hip rises by h_k).
+    a ground profile by (weight) cos(gamma) h_k with h_k step k's stance level (the hip rises by h_k). The hip is
+    the model's own (:meth:`RigidWalker.hip`, through the stance leg's joints to its foot's centre, off the leg's
+    axis or not) moved by O_k.
     """
-    R, l = walker.foot_radius, walker.leg_length
-    step_start = np.vstack([start.state, *trace.strike_post])[:, 0]
+    R = walker.foot_radius
+    step_start = np.vstack([start.state, *trace.strike_post])[:, rolling(walker.params, 0)]
     origin = np.zeros(len(step_start))
     origin[0] = R * step_start[0]
     for k, length in enumerate(trace.step_lengths):
@@ -114,8 +117,8 @@ def rigid_energy_and_hip(
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it
     residual = kinetic + potential - energy_0 + dissipated - push_work
-    theta = states[:, 0]
-    hip = np.column_stack([sample_origin - R * theta - (l - R) * np.sin(theta), R + (l - R) * np.cos(theta)])
+    hip = np.array([walker.hip(x[: walker.n_q]) for x in states]).reshape(len(times), 2)
+    hip[:, 0] += sample_origin
     if sample_level is not None:
         hip[:, 1] += sample_level
     return RigidEnergy(kinetic, potential, dissipated, push_work, residual), hip

@@ -107,7 +107,7 @@ def bifurcation_diagram(
 
 
 def write_bifurcation(diagram: BifurcationDiagram, out_dir) -> None:  # type: ignore[no-untyped-def]
-    """bifurcation.csv (continuation) and brute_force.csv (steady periods); the figure is plots.bifurcation_figure."""
+    """bifurcation.csv (continuation) and brute_force.csv (steady periods); the figure is report.bifurcation's."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     buffer = io.StringIO()

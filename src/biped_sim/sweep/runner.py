@@ -52,6 +52,7 @@ THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
 FAILED_STATUSES = ("error", "diverged")  # a sweep holding such a run exits with 1
 EXECUTORS = ("local", "dask")
+SWEEP_FILES = ("sweep.json", "sweep.csv", "sweep.parquet")  # written by the sweep holding the lock, and no one else
 
 
 def init_worker() -> None:
@@ -411,12 +412,13 @@ def run_sweep(
     ``on_progress(progress, run_name, row)`` is called once before the first run (name None) and
     after each run. With ``resume``, runs finished intact are not run again; damaged ones are (and are
     listed in ``progress.damaged``). The sweep directory is locked for the duration (ConfigError naming
-    the holder if another sweep writes it). Interrupted (KeyboardInterrupt), the queue is cancelled, the
-    executor stopped and the table of what finished written before the interrupt propagates; so does a full
-    disk's OSError (no space left: the sweep stops at the first run that meets it).
+    the holder if another sweep writes it), and the temporaries a killed sweep left of its table and manifest
+    are removed. Interrupted (KeyboardInterrupt), the queue is cancelled, the executor stopped and the table
+    of what finished written before the interrupt propagates; so does a full disk's OSError (no space left:
+    the sweep stops at the first run that meets it).
     """
     sweep_dir.mkdir(parents=True, exist_ok=True)
-    with sweep_lock(sweep_dir):
+    with sweep_lock(sweep_dir, owned=SWEEP_FILES):
         write_json_atomic(sweep_dir / "sweep.json", manifest(sweep))
         found = survey(sweep, sweep_dir, resume)
         progress = SweepProgress(total=len(sweep.runs), skipped=len(found.finished), damaged=found.damaged)

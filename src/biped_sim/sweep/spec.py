@@ -37,7 +37,7 @@ from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.simulate import prepare_model
 from biped_sim.simulate.budget import MAX_RUNS
 
-_DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+_DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+))*$")  # a list item: name or index
 _NAME_SAFE = re.compile(r"[A-Za-z0-9.+-]+")
 STEM_MAX_LENGTH = 96
 

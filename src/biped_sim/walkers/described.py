@@ -75,7 +75,7 @@ def _fold(description: WalkerDescription, name: str) -> tuple[float, np.ndarray,
     if mass <= 0.0:
         raise ConfigError(f"walker.description.bodies.{name}.mass", "a body needs mass (its own or a point mass)")
     com = sum(m * r for m, r in parts) / mass
-    inertia = body.inertia + sum(m * float((r[0] - com[0]) ** 2 + (r[1] - com[1]) ** 2) for m, r in parts)
+    inertia = body.moment_of_inertia + sum(m * float((r[0] - com[0]) ** 2 + (r[1] - com[1]) ** 2) for m, r in parts)
     return mass, com, inertia
 
 

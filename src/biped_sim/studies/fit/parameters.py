@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
-from biped_sim.config import Config, derive
+from biped_sim.config import Config, derive, get_dotted
 from biped_sim.errors import ConfigError
 
 LOG_SPAN = 10.0  # bounds 0 < LO with HI / LO >= LOG_SPAN are fitted in log(value)
@@ -53,11 +52,7 @@ class FitParameter:
 
 def numeric_value(config: Config, key: str) -> float:
     """The real-valued entry ``key`` (dotted) of ``config``; ConfigError naming the key if unknown or not a real."""
-    node: Any = config.model_dump(mode="json")
-    for part in key.split("."):
-        if not isinstance(node, dict) or part not in node:
-            raise ConfigError(key, "unknown config key")
-        node = node[part]
+    node = get_dotted(config.model_dump(mode="json"), key)
     if node is None:
         raise ConfigError(key, "has no value in the config to start from: set one")
     if isinstance(node, bool) or not isinstance(node, float):

@@ -68,7 +68,8 @@ class Wheel:
 
 
 def chain_mfpt(wheel: Wheel, roughness: float) -> float:
-    """The mean first-passage time (strikes before the fall) from the nominal apex rate, by the Markov chain."""
+    """The mean first-passage time from the nominal apex rate, by the Markov chain: the steps to the fall, the
+    falling step counted (the strikes before it, plus one)."""
     x_star = wheel.nominal_apex_rate()
     grid = np.linspace(0.0, CHAIN_SPAN * x_star, CHAIN_STATES)
     gamma = wheel.slope + roughness * stats.norm.ppf((np.arange(CHAIN_NODES) + 0.5) / CHAIN_NODES)
