@@ -72,15 +72,17 @@ def test_attitude_is_the_per_sample_route(run: CompliantRunResult) -> None:
     _same(values, _plain(loops.attitude_loop, integration.y, model.system, values))
 
 
-def test_rigid_energy_is_the_walkers_energy() -> None:
+def test_rigid_energy_and_hip_are_the_walkers() -> None:
     result = simulate(derive(default_walker(), {"dynamics": "rigid", "simulation.t_end": 2.0}))
     assert isinstance(result, RigidRunResult) and len(result.steps.strike_time) >= 2
     walker = result.walker
-    per_sample = np.array([walker.energy(x) for x in result.state])
-    compiled = np.empty_like(per_sample)
-    loops.rigid_energy_loop(walker.params, result.state, compiled)
-    _same(compiled, per_sample)
-    assert result.energy.kinetic.tobytes() == per_sample[:, 0].tobytes()
+    energy = np.array([walker.energy(x) for x in result.state])
+    hip = np.array([walker.hip(x[: walker.n_q]) for x in result.state])
+    compiled = np.empty_like(energy), np.empty_like(hip)
+    loops.rigid_loop(walker.params, result.state, walker.n_points, *compiled)
+    _same(compiled[0], energy)
+    _same(compiled[1], hip)
+    assert result.energy.kinetic.tobytes() == energy[:, 0].tobytes()
 
 
 MEASURED = {"contact", "energy", "violation", "hip", "attitude", "summary"}  # a compliant run's lazy measures

@@ -4,7 +4,8 @@ Each loop calls the formulation's per-sample measure (``multibody.dispatch.syste
 compile time by the system's type) at every sample and writes it into an array the caller allocated, so the
 post-processing of a run costs a fraction of its integration. The per-sample functions are the right-hand
 side's equations (one source per equation); the same loops run as plain Python (``.py_func``) are the tests'
-reference, bit for bit. A rigid run's energies go through its tree's compiled ``tree_energy`` alike.
+reference, bit for bit. A rigid run's energies and hip go through its tree's compiled ``tree_energy`` and ``point``
+alike.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_attitude, system_contact, system_energy, system_hip, system_violation
 from biped_sim.rigid.tree_kernels import tree_energy
+from biped_sim.rigid.tree_layout import coords, point
 
 
 @kernel
@@ -61,7 +63,10 @@ def attitude_loop(ys: np.ndarray, system: tuple, out: np.ndarray) -> None:
 
 
 @kernel(reference_counts=False)
-def rigid_energy_loop(params: np.ndarray, states: np.ndarray, out: np.ndarray) -> None:
-    """out[i]: (kinetic, potential) energy of a rigid walker (its tree's ``params``) at sample i."""
+def rigid_loop(params: np.ndarray, states: np.ndarray, hip_row: int, energy: np.ndarray, hip: np.ndarray) -> None:
+    """energy[i]: (kinetic, potential) energy and hip[i]: the hip's position (row ``hip_row`` of the tree) of a rigid
+    walker (its tree's ``params``) at sample i, in the frame of its step (the caller moves it to the run's)."""
+    n = coords(params)
     for i in range(states.shape[0]):
-        _store(out[i], tree_energy(params, states[i]))
+        _store(energy[i], tree_energy(params, states[i]))
+        _store(hip[i], point(params, hip_row, states[i, :n]))
