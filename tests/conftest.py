@@ -70,6 +70,14 @@ def one_line_error(stderr: str) -> str:
     return lines[0]
 
 
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:
+    """Name the order the tests ran in (pytest-randomly shuffles it), even under ``-q``: a failure that depends on
+    the order is then reproduced with the same seed."""
+    seed = getattr(config.option, "randomly_seed", None)
+    if isinstance(seed, int):
+        terminalreporter.write_line(f"tests shuffled with --randomly-seed={seed} (pass it to run them in this order)")
+
+
 @pytest.fixture(scope="session")
 def default_run() -> RunResult:
     """The default walker, as `make run` simulates it (15 s, 34 steps): for the slow tier's settled-gait checks."""
