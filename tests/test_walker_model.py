@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 import biped_sim
-from biped_sim.config import config_from_dict, derive, load_config, parse_yaml
+from biped_sim.config import LEG_KEYS, config_from_dict, derive, load_config, parse_yaml
 from biped_sim.errors import ConfigError
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -177,16 +177,16 @@ def test_every_study_addresses_a_named_parameter(tmp_path: Path) -> None:
     [
         (["walker.parameters.thigh_mas=0.6"], "walker.parameters: no item named 'thigh_mas'; the names are "
          "thigh_mass, shank_mass, hip_mass, thigh_length, shank_length"),
-        (["walker.description.leg.bodies.thigh.mass=thigh_mas"], "walker.description.bodies.thigh_1.mass: unknown "
+        (["walker.description.leg.bodies.thigh.mass=thigh_mas"], "walker.description.leg.bodies.thigh.mass: unknown "
          "name 'thigh_mas' (the parameters: hip_mass, shank_length, shank_mass, thigh_length, thigh_mass) in "
          "'thigh_mas'"),
-        (["walker.description.leg.bodies.thigh.mass=__import__('os').getcwd()"], "walker.description.bodies."
-         "thigh_1.mass: only numbers, parameter names"),
-        (["walker.description.leg.bodies.thigh.mass=thigh_mass.real"], "walker.description.bodies.thigh_1.mass: "
+        (["walker.description.leg.bodies.thigh.mass=__import__('os').getcwd()"], "walker.description.leg.bodies."
+         "thigh.mass: only numbers, parameter names"),
+        (["walker.description.leg.bodies.thigh.mass=thigh_mass.real"], "walker.description.leg.bodies.thigh.mass: "
          "only numbers"),
-        (["walker.description.leg.bodies.thigh.mass=9**9**9"], "walker.description.bodies.thigh_1.mass: '9**9**9' "
+        (["walker.description.leg.bodies.thigh.mass=9**9**9"], "walker.description.leg.bodies.thigh.mass: '9**9**9' "
          "has no finite value"),
-        (["walker.description.leg.bodies.thigh.mass=1/(hip_mass - 0.5)"], "walker.description.bodies.thigh_1.mass: "
+        (["walker.description.leg.bodies.thigh.mass=1/(hip_mass - 0.5)"], "walker.description.leg.bodies.thigh.mass: "
          "'1/(hip_mass - 0.5)' has no finite value"),
         (["walker.description.leg.bodies.thigh.mass=-thigh_mass"], "walker.description.bodies.0.mass: Input should "
          "be greater than or equal to 0"),
@@ -224,3 +224,22 @@ def test_fit_recovers_a_hidden_named_parameter_from_the_walkers_own_periods() ->
     result = calibrate(problem).result
     [estimate] = result.estimates
     assert result.converged and estimate.value == pytest.approx(0.07, rel=1e-4)
+
+
+def test_a_mirrored_leg_goes_with_bodies_off_the_legs_and_the_hips_own_fields() -> None:
+    leg = {"bodies": [{"name": "leg", "mass": "m", "inertia": "m * r**2", "com": [0.0, -0.25]}],
+           "feet": [{"name": "foot", "body": "leg", "centre": [0.0, "-(l - R)"], "radius": "R"}]}  # fmt: skip
+    description = {"leg": leg, "hip": {"name": "pelvis", "stops": [{"side": "upper", "angle": 1.0}]},
+                   "bodies": [{"name": "torso", "mass": 2.0, "com": [0.0, 0.3]}],
+                   "joints": [{"name": "waist", "parent": "leg_1", "child": "torso"}]}  # fmt: skip
+    parameters = [{"name": n, "value": v} for n, v in (("m", 1.0), ("r", 0.1), ("l", 0.5), ("R", 0.15))]
+    walker = {"kind": "description", "parameters": parameters, "description": description}
+    config = config_from_dict({"walker": walker, "contact": {"stiffness": 1e7}})
+    described = config.walker.description
+    assert described is not None and [b.name for b in described.bodies] == ["leg_1", "leg_2", "torso"]
+    assert [(j.name, j.parent, j.child) for j in described.joints] == [
+        ("pelvis", "leg_1", "leg_2"), ("waist", "leg_1", "torso")]  # fmt: skip
+    assert described.joints[0].stops[0].angle == 1.0 and described.legs == [["leg_1"], ["leg_2"]]
+    assert [f.centre for f in described.feet] == [(0.0, -0.35)] * 2
+    assert described.bodies[1].inertia == pytest.approx(0.01)
+    assert config.initial_keys() == LEG_KEYS and config.walker.leg_length == 0.5

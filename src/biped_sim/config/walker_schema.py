@@ -180,11 +180,13 @@ class DescribedWalker(Strict):
             return handler(data)  # which names the parameter at fault
         names = parameter_values(parameters)
         written = data.get("description")
+        evaluated = resolve_numbers(WalkerDescription, written, names, "walker.description")
+        if isinstance(written, dict) and isinstance(written.get("leg"), dict):  # a leg's parts are a description's
+            evaluated["leg"] = resolve_numbers(WalkerDescription, written["leg"], names, "walker.description.leg")
         try:
-            mirrored = mirror_legs(written)
+            resolved = mirror_legs(evaluated)
         except ValueError as exc:
             raise ValueError(f"walker.description.{exc}") from None
-        resolved = resolve_numbers(WalkerDescription, mirrored, names, "walker.description")
         walker = handler({**data, "description": resolved})
         if resolved != written:
             walker._written = copy.deepcopy(written)
