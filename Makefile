@@ -9,43 +9,52 @@ TEST_WORKERS ?= auto
 
 .PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
 
+# installed: the package and its test extras; warmed: also the compiled code of the bundled configs' groups
+WARMED := $(VENV)/.warmed
+
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,dask]"
-	$(BIN)/biped-sim warmup
+	$(BIN)/python -m pip install --quiet --no-compile -e ".[test,dask]"
+	@# the packages' bytecode, one process per core (pip's own compile is serial: a third of the install's
+	@# time); like pip, a file that does not compile is left to compile at its import
+	-$(BIN)/python -m compileall -q -j 0 "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" > /dev/null
 	touch $(STAMP)
 
-setup: $(STAMP)            ## create .venv, install the package (editable) with test extras, compile the default walker
+$(WARMED): $(STAMP)
+	$(BIN)/biped-sim warmup
+	touch $(WARMED)
 
-setup-bench: $(STAMP)      ## also install MuJoCo for the benchmark comparison
+setup: $(WARMED)           ## create .venv, install the package (editable) with test extras, compile the bundled groups
+
+setup-bench: $(WARMED)     ## also install MuJoCo for the benchmark comparison
 	$(BIN)/python -m pip install --quiet -e ".[bench]"
 
-run: $(STAMP)              ## simulate the default walker; print its step table and where its files went
+run: $(STAMP)              ## simulate the default walker (compiling only its own group); print its step table
 	$(BIN)/biped-sim run $(CONFIG)
 
-test: $(STAMP)             ## the fast test tier (pytest's default: -m 'not slow'; about a minute on 2 cores)
+test: $(WARMED)            ## the fast test tier (pytest's default: -m 'not slow'; about a minute on 2 cores)
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
 # numpy's SIMD dispatch limited to AVX2 (numpy >= 2.4's feature names) and OpenBLAS's kernels to Haswell: the
 # arithmetic of an older x86 CPU, for the scipy/BLAS/LAPACK paths (tests must pass on any x86 CPU)
 OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CORETYPE=Haswell
 
-test-older-cpu: $(STAMP)   ## the fast tier as on an older (AVX2) CPU
+test-older-cpu: $(WARMED)  ## the fast tier as on an older (AVX2) CPU
 	$(OLDER_CPU) $(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
-validate: $(STAMP)         ## long physics checks: the validation report, then the slow test tier (-m slow)
+validate: $(WARMED)        ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
 	$(BIN)/python -m pytest -q -m slow
 
-bench: $(STAMP)            ## performance benchmark (writes results/bench/)
+bench: $(WARMED)           ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench
 
 sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its report (results/sweeps/slopes_integrators/)
 	$(BIN)/biped-sim sweep configs/sweeps/slopes_integrators.yaml
 	$(BIN)/biped-sim report results/sweeps/slopes_integrators
 
-golden: $(STAMP)           ## re-record tests/data/golden_summaries.json (after a change that moves numbers on purpose)
+golden: $(WARMED)          ## re-record tests/data/golden_summaries.json (after a change that moves numbers on purpose)
 	$(BIN)/python -m tests.record_golden
 
 lint: $(STAMP)

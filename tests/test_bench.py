@@ -153,6 +153,21 @@ def test_bench_markdown_has_a_row_per_case_targets_and_the_summary_line_last() -
     assert "Targets: " in "\n".join(lines)
 
 
+def test_bench_markdown_reports_the_cold_compile_of_each_group() -> None:
+    result = made_up_result()
+    cold = {
+        "wall_s": 40.0, "cpu_s": 26.4, "functions": 76, "lowering_cpu_s": 16.8, "front_end_cpu_s": 7.5,
+        "top": [{"function": "biped_sim.integrate.explicit.advance_python_entry", "cpu_s": 10.2}],
+    }  # fmt: skip
+    cached = {**cold, "wall_s": 2.5, "cpu_s": 2.4, "functions": 0, "top": []}
+    result["compile"] = [{"group": "planar explicit flat", "cold": cold, "cached": cached}]
+    text = markdown(result)
+    assert (
+        "Cold compile, planar explicit flat: 76 functions, 26.4 CPU s (40.0 s wall; lowering 16.8, numba's front "
+        "end 7.5; costliest: advance_python_entry 10.2); cached 2.4 CPU s (2.5 s wall, 0 compiled)."
+    ) in text
+
+
 def test_bench_markdown_reports_the_rigid_map_rows_and_the_basin_targets() -> None:
     result = made_up_result()
     result["rigid_map"] = {
@@ -209,3 +224,11 @@ def test_mujoco_walker_matches_initial_state_and_walks_one_step() -> None:
     np.testing.assert_allclose(walker.qpos0[2:], [0.25, -0.5])
     assert len(result["strikes"]) == 1
     assert result["strikes"][0] == pytest.approx(0.389, abs=0.01)  # ours: 0.38908 s
+
+
+def test_bench_markdown_reports_the_recovery_check_cost_per_fit_against_its_target() -> None:
+    result = made_up_result()
+    row = {"cases": 2, "recovered": 2, "rate": 1.0, "dishonest_misses": 0, "evaluations_per_fit": 280.0}
+    result["fit"] = {"recovery": {"inertia+restitution": row | {"wall_s_per_fit": 21.0, "target_s_per_fit": 15.0}}}
+    met = {name: (shown, ok) for name, shown, ok in targets(result)}
+    assert met["recovery check (inertia+restitution), per fit, 2 workers < 15 s"] == ("21.0 s", False)

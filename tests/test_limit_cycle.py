@@ -81,7 +81,7 @@ def test_limit_cycle_cli_json_and_bad_guess() -> None:
     ):
         assert key in doc
     assert doc["multipliers"][0][0] == pytest.approx(0.5, abs=1e-6)
-    bad = runner.invoke(app, ["limit-cycle", str(SIMPLEST), "--guess", "[1, 2]"])
+    bad = runner.invoke(app, ["limit-cycle", str(SIMPLEST), "--guess", "[1, 2, 3]"])  # 4 keys or the section's 2
     assert bad.exit_code == 2 and "--guess" in bad.output
 
 
@@ -131,6 +131,10 @@ def test_compliant_newton_converges_on_the_default_walker_gait(
     # 0.43508 s before contact.impact_memory: impact (the heel strike's rebounds now keep its impact velocity)
     assert cycle.step_period == pytest.approx(0.43949, abs=1e-5)
     assert set(cycle.to_json()["fixed_point"]) == {"stance_angle", "swing_angle", "stance_rate", "swing_rate"}
+    lines = cycle.lines["touchdown"]  # the arc centre on the leg's axis: the hip-to-foot line is the leg
+    assert (lines["stance_line_angle"], lines["swing_line_angle"]) == pytest.approx(
+        (cycle.touchdown["stance_angle"], cycle.touchdown["swing_angle"]), abs=1e-12
+    )
     # the settling run of the default walker (34 steps at rtol 1e-8) ends on the same touchdown state
     settled = default_run.heel_strike_states[-1]
     # within 2e-5 (measured 7e-6): the largest multiplier is 0.65 (0.57 under impact_memory touchdown, whose

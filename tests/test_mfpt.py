@@ -18,15 +18,15 @@ from .conftest import CONFIGS, invoke, one_line_error
 WHEEL = CONFIGS / "rimless_wheel.yaml"
 
 
-def test_uncensored_walks_give_their_mean_with_a_t_interval() -> None:
+def test_uncensored_walks_give_their_mean_first_passage_the_falling_step_counted() -> None:
     estimate = mfpt_estimate(np.array([10, 20, 30]), np.array([True, True, True]))
-    assert estimate.mfpt == 20 and estimate.ci[0] < 20 < estimate.ci[1] and estimate.censored == 0
+    assert estimate.mfpt == 21 and estimate.ci[0] < 21 < estimate.ci[1] and estimate.censored == 0
 
 
-def test_censored_walks_give_total_steps_over_falls_and_no_fall_only_a_lower_bound() -> None:
+def test_censored_walks_give_steps_over_falls_and_no_fall_only_a_lower_bound() -> None:
     censored = mfpt_estimate(np.array([10, 100, 100]), np.array([True, False, False]))
-    assert censored.mfpt == pytest.approx(210) and censored.censored == 2
-    assert censored.ci[0] < 210 < censored.ci[1]
+    assert censored.mfpt == pytest.approx(211) and censored.censored == 2
+    assert censored.ci[0] < 211 < censored.ci[1]
     none = mfpt_estimate(np.array([100, 100]), np.array([False, False]))
     assert math.isinf(none.mfpt) and math.isinf(none.ci[1]) and 0 < none.ci[0] < 200
 

@@ -6,17 +6,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from PIL import Image
 
 from biped_sim import load_config, simulate
+from biped_sim.contact.ground import ground_height_at
+from biped_sim.contact.profile import profile_arrays
 from biped_sim.io.trajectory import RunData, load_run
 from biped_sim.measure.pose import Poses, run_poses
-from biped_sim.plots import RIGID_RUN_FIGURES
+from biped_sim.picture import OFF_LEG_COLOUR, body_colour
+from biped_sim.plots import RIGID_RUN_FIGURES, walker_figure
 
 from .conftest import CONFIGS, invoke
 
 BUNDLED = sorted(CONFIGS.glob("*.yaml"))
-SHORT = {"rigid": ["simulation.max_steps=3"], "compliant": ["simulation.t_end=0.6"]}
+SHORT = {"rigid": ["simulation.max_steps=3", "output.sample_rate=100"], "compliant": ["simulation.t_end=0.6"]}
 
 
 def short_run_directory(config: Path, out: Path, *overrides: str) -> Path:
@@ -40,9 +44,15 @@ def stance_foot_bottoms(run: RunData, poses: Poses) -> np.ndarray:
     return bottoms[np.arange(len(run.time)), step % bottoms.shape[1]]
 
 
-@pytest.mark.parametrize("config", BUNDLED, ids=lambda p: p.stem)
-def test_every_bundled_walker_is_drawn_standing_on_its_stance_foot_and_animated(config: Path, tmp_path: Path) -> None:
-    run_dir = short_run_directory(config, tmp_path / "run")
+@pytest.mark.parametrize(
+    ("config", "overrides"),
+    [(config, ()) for config in BUNDLED] + [(CONFIGS / "round_foot_walker.yaml", ("formulation.kind=minimal",))],
+    ids=[config.stem for config in BUNDLED] + ["round_foot_walker_minimal"],
+)
+def test_every_bundled_walker_is_drawn_standing_on_its_stance_foot_and_animated(
+    config: Path, overrides: tuple[str, ...], tmp_path: Path
+) -> None:
+    run_dir = short_run_directory(config, tmp_path / "run", *overrides)
     run = load_run(run_dir)
     poses = run_poses(run)
     bottoms = stance_foot_bottoms(run, poses)
@@ -64,17 +74,72 @@ def test_a_rigid_hip_moves_with_the_foot_offset(tmp_path: Path) -> None:
     np.testing.assert_allclose(bottoms, 0.0, atol=1e-9)
 
 
-def test_plot_draws_a_rigid_run_and_the_walker_of_a_kneed_walker(tmp_path: Path) -> None:
-    run_dir = short_run_directory(CONFIGS / "kneed_walker.yaml", tmp_path / "run")
-    result = invoke("plot", str(run_dir))
+@pytest.fixture(scope="module")
+def kneed_run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Three steps of Chen's rigid kneed walker from its limit cycle (read-only; figures may go below it)."""
+    return short_run_directory(CONFIGS / "kneed_walker.yaml", tmp_path_factory.mktemp("kneed") / "run")
+
+
+def test_plot_draws_a_rigid_run_and_the_walker_of_a_kneed_walker(kneed_run_dir: Path) -> None:
+    result = invoke("plot", str(kneed_run_dir))
     assert result.exit_code == 0, result.output
-    names = sorted(p.name for p in (run_dir / "figures").iterdir())
+    names = sorted(p.name for p in (kneed_run_dir / "figures").iterdir())
     assert names == sorted(f"{name}.{fmt}" for name in RIGID_RUN_FIGURES for fmt in ("png", "svg"))
 
 
-def test_a_stop_is_drawn_engaged_only_at_its_limit(tmp_path: Path) -> None:
-    run = load_run(short_run_directory(CONFIGS / "kneed_walker.yaml", tmp_path / "run"))
-    poses = run_poses(run)
-    engaged = np.array([poses.at(i).engaged for i in range(len(run.time))])
+def test_the_walker_figure_holds_every_pose_whole(kneed_run_dir: Path) -> None:
+    ax = walker_figure(load_run(kneed_run_dir)).axes[0]
+    (x_lo, x_hi), (y_lo, y_hi) = ax.get_xlim(), ax.get_ylim()
+    points = np.hstack([np.vstack(line.get_data()) for line in ax.get_lines()])
+    assert points.shape[1] > 6 * 8  # six poses, each body and foot
+    assert np.all((points[0] >= x_lo) & (points[0] <= x_hi) & (points[1] >= y_lo) & (points[1] <= y_hi))
+
+
+def test_a_stop_is_drawn_engaged_only_at_its_limit(kneed_run_dir: Path) -> None:
+    poses = run_poses(load_run(kneed_run_dir))
+    engaged = np.array([poses.at(i).engaged for i in range(len(poses.time))])
     assert engaged[0].all()  # just after a heel strike both knees are locked straight
     assert not engaged[:, 1].all() and not engaged[:, 0].all()  # each swing knee bends in its step
+
+
+def test_a_wheel_is_drawn_as_spokes_from_its_hub(tmp_path: Path) -> None:
+    run = load_run(short_run_directory(CONFIGS / "rimless_wheel.yaml", tmp_path / "run"))
+    pose = run_poses(run).at(0)
+    (spokes,) = pose.segments
+    np.testing.assert_array_equal(spokes[0::2], np.repeat(pose.hip[None], len(spokes) // 2, axis=0))
+    np.testing.assert_allclose(spokes[1::2], pose.foot_centres, atol=1e-15)
+    np.testing.assert_allclose(np.hypot(*(spokes[1::2] - pose.hip).T), run.config.walker.leg_length, rtol=1e-12)
+
+
+def test_a_body_off_the_legs_is_drawn_from_the_hip_to_its_centre_of_mass(tmp_path: Path) -> None:
+    """A torso (a third body on the hip, no legs of its own) in compliant dynamics: grey, up to its mass."""
+    config = yaml.safe_load((CONFIGS / "kneed_walker_compliant.yaml").read_text())
+    description = config["walker"]["description"]
+    description["bodies"].append({"name": "torso", "mass": 0.3, "inertia": 1e-3, "com": [0.0, 0.2]})
+    description["joints"].append({"name": "waist", "parent": "thigh_1", "child": "torso"})
+    path = tmp_path / "torso.yaml"
+    path.write_text(yaml.safe_dump(config))
+    run = load_run(short_run_directory(path, tmp_path / "run", "simulation.t_end=0.2"))
+    poses = run_poses(run)
+    torso = poses.skeleton.names.index("torso")
+    assert poses.skeleton.leg_of[torso] == -1 and body_colour(poses.skeleton, torso) == OFF_LEG_COLOUR
+    for i in (0, len(run.time) - 1):
+        pose = poses.at(i)
+        segment = pose.segments[torso]
+        np.testing.assert_array_equal(segment[0], pose.hip)
+        angle = pose.angles[torso]
+        np.testing.assert_allclose(segment[1] - pose.hip, 0.2 * np.array([-np.sin(angle), np.cos(angle)]), atol=1e-15)
+
+
+def test_a_rigid_walker_stands_on_a_ground_profile(tmp_path: Path) -> None:
+    """Down a 5 mm step, one foot is on the profile at every sample (the hip carries the stance level)."""
+    step_down = "ground.profile={kind: steps, steps: [{at: 0.2, height: -0.005}]}"
+    config = CONFIGS / "round_foot_walker.yaml"
+    run = load_run(short_run_directory(config, tmp_path / "run", "dynamics=rigid", step_down))
+    assert len(run.steps["strike_time"]) >= 2 and run.hip[-1, 1] < run.hip[0, 1]  # strikes: the step was taken
+    poses = run_poses(run)
+    centres = np.array([poses.at(i).foot_centres for i in range(len(run.time))])
+    vertices, ends = profile_arrays(run.config.ground.profile, run.config.ground.slope)
+    ground = ground_height_at(centres[:, :, 0].ravel(), vertices, ends).reshape(centres.shape[:2])
+    gap = centres[:, :, 1] - poses.skeleton.foot_radius - ground
+    np.testing.assert_allclose(np.abs(gap).min(axis=1), 0.0, atol=1e-12)

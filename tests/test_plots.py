@@ -65,6 +65,7 @@ def test_walker_drawing_puts_the_stance_foot_on_the_ground(short_run_dir: Path) 
         assert np.hypot(*(leg[:, 1] - leg[:, 0])) == pytest.approx(walker.leg_length - walker.foot_radius, rel=1e-9)
     arrows = drawing.arrows.U, drawing.arrows.V
     assert np.hypot(*arrows).max() > 0  # the stance foot carries a force
+    assert drawing.stamp.get_text() == "t =  0.000 s"
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from biped_sim import config_from_dict, load_config
+from biped_sim.config import LEG_KEYS
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.report.targets import compare_targets
 from biped_sim.studies.bifurcation import check_bifurcation
@@ -54,16 +55,16 @@ def test_a_bad_compare_target_names_what_is_wrong(  # type: ignore[no-untyped-de
     ],
 )  # fmt: skip
 def test_a_guess_is_four_numbers_or_the_four_keys(text: str, expected: dict[str, float] | None) -> None:
-    guess = parse_guess(text)
+    guess = parse_guess(text, LEG_KEYS)
     assert guess is not None and set(guess) == {"stance_angle", "stance_rate", "swing_angle", "swing_rate"}
     assert expected is None or guess == expected
-    assert parse_guess(None) is None
+    assert parse_guess(None, LEG_KEYS) is None
 
 
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ("[0.2, -0.2]", "expected the four keys"),
+        ("[0.2, -0.2]", "expected the 4 keys stance_angle, stance_rate, swing_angle, swing_rate"),
         ("[.nan, -0.2, -0.2, -0.04]", "stance_angle must be a finite number"),
         ("[true, -0.2, -0.2, -0.04]", "values must be numbers"),
         ("[0.2, -0.2, -0.2", "malformed YAML"),
@@ -71,7 +72,7 @@ def test_a_guess_is_four_numbers_or_the_four_keys(text: str, expected: dict[str,
 )
 def test_a_bad_guess_is_an_argument_error(text: str, match: str) -> None:
     with pytest.raises(ArgumentError, match=rf"^guess: .*{match}"):
-        parse_guess(text)
+        parse_guess(text, LEG_KEYS)
 
 
 @pytest.mark.parametrize(

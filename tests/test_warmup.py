@@ -10,7 +10,7 @@ import pytest
 from numba import njit
 
 from biped_sim import load_config, simulate
-from biped_sim._compiled_cache import recording_compilations
+from biped_sim._compiled_cache import profiling_compilations, recording_compilations
 from biped_sim.multibody.dispatch import FORMULATIONS
 from biped_sim.simulate import RunResult, warmup
 from biped_sim.sweep import load_sweep
@@ -64,6 +64,29 @@ def test_recording_compilations_lists_what_numba_compiles() -> None:
         twice(2.0)
     assert first == [f"{__name__}.{twice.py_func.__qualname__}"]
     assert again == []
+
+
+def test_profiling_compilations_charges_each_function_its_own_compile() -> None:
+    @njit
+    def inner(x: float) -> float:
+        return x + 1.0
+
+    @njit
+    def outer(x: float) -> float:
+        return inner(x) * 2.0
+
+    with profiling_compilations() as profile:
+        outer(1.0)
+    summary = profile.summary()
+    names = {entry["function"] for entry in summary["top"]}
+    assert summary["functions"] == 2
+    assert {f"{__name__}.{f.py_func.__qualname__}" for f in (inner, outer)} <= names
+    assert summary["lowering_cpu_s"] > 0.0 and summary["front_end_cpu_s"] > 0.0
+    passes = summary["lowering_cpu_s"] + summary["front_end_cpu_s"]
+    assert sum(entry["cpu_s"] for entry in summary["top"]) < 1.5 * passes + 0.05  # each pass counted once
+    with profiling_compilations() as again:
+        outer(2.0)
+    assert again.summary()["functions"] == 0
 
 
 def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles_nothing(

@@ -15,15 +15,20 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import time
+from collections import defaultdict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numba
 from numba.core import event
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_PACKAGES = ("contact", "multibody", "integrate")
+LOWERING_PASS = "native_lowering"  # numba's lowering to LLVM IR, with LLVM's optimisation and machine code
+OUTSIDE = "(typed outside any function's compile)"  # a pass no compile event encloses
 _COMPILES = re.compile(r"^\s*(from numba\b|import numba\b|from biped_sim\.kernel import)", re.M)
 
 
@@ -75,3 +80,56 @@ def recording_compilations() -> Iterator[list[str]]:
 
     with event.install_listener("numba:compile", _Compilations()):
         yield names
+
+
+class CompileProfile(event.Listener):
+    """CPU seconds per compiled function and per compiler pass, each exclusive of the events nested in it.
+
+    numba's events nest: a caller's compile runs its passes, and its typing compiles its callees. A pass is
+    charged to the innermost function being compiled, so each function's figure is its own compile only.
+    """
+
+    def __init__(self) -> None:
+        self._open: list[list[Any]] = []  # [(kind, name), start, CPU seconds of the events nested in it]
+        self.functions: dict[str, float] = defaultdict(float)
+        self.passes: dict[str, float] = defaultdict(float)
+        self.compiled = 0
+
+    def on_start(self, ev: event.Event) -> None:
+        if ev.kind == "numba:compile":
+            function = ev.data["dispatcher"].py_func
+            key = ("function", f"{function.__module__}.{function.__qualname__}")
+            self.compiled += 1
+        else:
+            key = ("pass", ev.data["name"].split(" [")[0])
+        self._open.append([key, time.process_time(), 0.0])
+
+    def on_end(self, ev: event.Event) -> None:
+        (kind, name), start, nested = self._open.pop()
+        spent = time.process_time() - start
+        if kind == "pass":
+            self.passes[name] += spent - nested
+            name = next((key[1] for key, _, _ in reversed(self._open) if key[0] == "function"), OUTSIDE)
+        self.functions[name] += spent - nested
+        if self._open:
+            self._open[-1][2] += spent
+
+    def summary(self, top: int = 8) -> dict[str, Any]:
+        """Functions compiled; CPU seconds in lowering (numba's LLVM IR, LLVM's optimisation and machine code)
+        and in numba's front end (bytecode, typing, inlining, rewrites); the ``top`` costliest functions."""
+        lowering = self.passes.get(LOWERING_PASS, 0.0)
+        costliest = sorted(self.functions.items(), key=lambda item: -item[1])[:top]
+        return {
+            "functions": self.compiled,
+            "lowering_cpu_s": lowering,
+            "front_end_cpu_s": sum(self.passes.values()) - lowering,
+            "top": [{"function": name, "cpu_s": seconds} for name, seconds in costliest],
+        }
+
+
+@contextmanager
+def profiling_compilations() -> Iterator[CompileProfile]:
+    """Inside the block, where numba's compile time goes (:class:`CompileProfile`); nothing for a cache load."""
+    profile = CompileProfile()
+    with event.install_listener("numba:compile", profile), event.install_listener("numba:run_pass", profile):
+        yield profile

@@ -88,7 +88,8 @@ class WalkerDrawing:
         self.arrows = self.ax.quiver(zeros, zeros, zeros, zeros, angles="xy", scale_units="xy", scale=1.0,
                                      color="C3", width=0.012, zorder=7)  # fmt: skip
         self.stamp = self.ax.text(0.03, 0.95, "", transform=self.ax.transAxes, va="top", family="monospace")
-        self.time_unit = run.summary.get("units", {}).get("time", "s")
+        nondimensional = run.summary.get("units", {}).get("time", "s") != "s"  # the simplest walker's (g = l = 1)
+        self.time_unit = "" if nondimensional else " s"
 
     def draw(self, i: int) -> None:
         """Place every artist at sample ``i``."""
@@ -104,7 +105,7 @@ class WalkerDrawing:
         hip = world @ pose.hip
         self.ax.set_xlim(hip[0] - 0.9 * self.height, hip[0] + 0.9 * self.height)
         self.ax.set_ylim(hip[1] - 1.25 * self.height, hip[1] + self.top)
-        self.stamp.set_text(f"t = {run.time[i]:6.3f} {self.time_unit}")
+        self.stamp.set_text(f"t = {run.time[i]:6.3f}{self.time_unit}")
 
 
 @contextlib.contextmanager

@@ -2,10 +2,10 @@
 
 The one drawing of a walker, of any description and either dynamics, shared by the animation
 (:mod:`biped_sim.animate`) and the walker figure (:func:`biped_sim.plots.walker_figure`): each body as its
-segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as arcs of their radius about
-the body's axis or as dots (point feet), the hip as a black dot, and each joint stop as a square at its joint,
-filled when the joint is at or past its stop. The scene is drawn in the world frame: the slope frame turned by the
-slope angle, so that the ground visibly descends.
+segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as sectors of their radius about
+the body's axis (a rocker: the arc joined to its centre) or as dots (point feet), the hip as a black dot, and
+each joint stop as a square at its joint, filled when the joint is at or past its stop. The scene is drawn in the
+world frame: the slope frame turned by the slope angle, so that the ground visibly descends.
 """
 
 from __future__ import annotations
@@ -79,8 +79,9 @@ class WalkerPicture:
         for f, (line, b) in enumerate(zip(self.feet, self.sk.foot_body, strict=True)):
             radius, angle = self.sk.foot_radius[f], pose.angles[b]
             c, s = math.cos(angle), math.sin(angle)
-            arc = pose.foot_centres[f] + radius * self.arc @ np.array([[c, s], [-s, c]])
-            self._set(line, arc if radius > 0 else pose.foot_centres[f])
+            centre = pose.foot_centres[f]
+            arc = centre + radius * self.arc @ np.array([[c, s], [-s, c]])
+            self._set(line, np.vstack([centre, arc, centre]) if radius > 0 else centre)  # a rocker: a sector
         self._set(self.hip, pose.hip)
         self._set(self.stops_free, pose.joints[~pose.engaged])
         self._set(self.stops_engaged, pose.joints[pose.engaged])

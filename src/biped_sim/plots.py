@@ -311,6 +311,8 @@ def walker_figure(run: RunData) -> Figure:
     reach = max(float(np.max(poses.hip[samples, 1])), 1e-3)
     x = poses.hip[samples, 0]
     draw_ground(ax, run.config, float(x.min()) - 0.6 * reach, float(x.max()) + 0.6 * reach, 0.15 * reach)
+    ax.relim()  # the walker's lines were placed after they were made
+    ax.autoscale_view()
     return fig
 
 

@@ -104,6 +104,10 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
         if row:
             ok = row["wall_s"] < row["target_s"]
             out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
+    for pair, row in result.get("fit", {}).get("recovery", {}).items():
+        ok = row["wall_s_per_fit"] < row["target_s_per_fit"]
+        label = f"recovery check ({pair}), per fit, 2 workers < {row['target_s_per_fit']:g} s"
+        out.append((label, f"{row['wall_s_per_fit']:.1f} s", ok))
     out += uncertainty_targets(result.get("uncertainty"))
     mj = result.get("mujoco") or {}
     best = fastest_accurate_row(result)
@@ -194,6 +198,7 @@ def notes(result: dict[str, Any]) -> list[str]:
             f"Sweep of {sweep['runs']} runs ({sweep['t_end']:g} s each, files written): " + ", ".join(parts)
             + (f" ({sweep['speedup_2_vs_1']:.2f}x)." if "speedup_2_vs_1" in sweep else ".")
         )  # fmt: skip
+    lines += compile_notes(result.get("compile"))
     lines += rigid_map_notes(result.get("rigid_map"))
     lines += uncertainty_notes(result.get("uncertainty"))
     mj = result.get("mujoco")
@@ -238,6 +243,21 @@ def rigid_map_notes(rigid: dict[str, Any] | None) -> list[str]:
         lines.append(
             f"Basin {name}: {basin['cells']} cells x {basin['steps']} steps in {basin['wall_s']:.1f} s with "
             f"{basin['workers']} workers (pool start included; {basin['fraction_walking']:.1%} of the cells walk)."
+        )
+    return lines
+
+
+def compile_notes(rows: list[dict[str, Any]] | None) -> list[str]:
+    """The report's lines: per group, the cold and the cached warm-up and the costliest functions."""
+    lines = []
+    for row in rows or []:
+        cold, cached = row["cold"], row["cached"]
+        top = ", ".join(f"{entry['function'].rsplit('.', 1)[-1]} {entry['cpu_s']:.1f}" for entry in cold["top"][:4])
+        lines.append(
+            f"Cold compile, {row['group']}: {cold['functions']} functions, {cold['cpu_s']:.1f} CPU s "
+            f"({cold['wall_s']:.1f} s wall; lowering {cold['lowering_cpu_s']:.1f}, numba's front end "
+            f"{cold['front_end_cpu_s']:.1f}; costliest: {top}); cached {cached['cpu_s']:.1f} CPU s "
+            f"({cached['wall_s']:.1f} s wall, {cached['functions']} compiled)."
         )
     return lines
 

@@ -31,6 +31,7 @@ import numpy as np
 import scipy
 
 from biped_sim.bench.baseline import integrate_baseline
+from biped_sim.bench.compile import cold_compile_per_group
 from biped_sim.bench.fit import fit_bench
 from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
@@ -95,7 +96,7 @@ class BenchSettings:
     uncertainty: bool = (
         True  # the 1,024-sample ensemble, the N = 256 Sobol study, MuJoCo's rollouts (bench.uncertainty)
     )
-    compile_time: bool = True
+    compile_time: bool = True  # the cold start-up and the cold compile per group
     mujoco: bool = True
     quick: bool = False
 
@@ -348,6 +349,9 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     log(f"kneed walker's RHS in minimal coordinates {rhs_kneed_us:.3f} us ({rhs_kneed_us / rhs_minimal_us:.2f}x)")
     result["startup"] = startup_times(settings.config_path, cold=settings.compile_time)
     log(f"start-up: {json.dumps(result['startup'])}")
+    if settings.compile_time:
+        result["compile"] = cold_compile_per_group()
+        log(f"cold compile per group: {json.dumps(result['compile'])}")
     if settings.sweep_runs:
         result["sweep"] = sweep_throughput(settings.config_path, settings.sweep_runs, settings.t_end)
         log(f"sweep: {json.dumps(result['sweep'])}")

@@ -23,7 +23,11 @@ def limit_cycle_command(
     set_: SetOption = None,
     guess: Annotated[
         str | None,
-        typer.Option("--guess", help="Initial guess: '[stance_angle, stance_rate, swing_angle, swing_rate]'."),
+        typer.Option(
+            "--guess",
+            help="Initial guess: the walker's initial-state keys as a mapping, or their values in order "
+            "('[stance_angle, stance_rate, swing_angle, swing_rate]' for the compass); rigid: or its section's.",
+        ),
     ] = None,
     settle_steps: Annotated[
         int | None,
@@ -37,13 +41,21 @@ def limit_cycle_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
-    from biped_sim.studies.limit_cycle import limit_cycle, parse_guess
+    from biped_sim.rigid.limit_cycle import SearchFellError
+    from biped_sim.studies.limit_cycle import guess_keys, limit_cycle, parse_guess
 
     config = load(config_path, set_)
-    cycle = limit_cycle(config, parse_guess(guess), settle_steps)
+    start = parse_guess(guess, *guess_keys(config)) if guess is not None else None
+    try:
+        cycle = limit_cycle(config, start, settle_steps)
+    except SearchFellError as exc:  # the search failed: no gait from its starts (the input was fine)
+        fail(exc.reason, 1)
     doc = cycle.to_json()
     if as_json:
         typer.echo(json.dumps(doc, indent=2))
+    if not cycle.converged:
+        fail(cycle.failure(), 1)
+    if as_json:
         return
     table = Table(title=f"{doc['dynamics']} {doc['walker']} limit cycle, slope {doc['slope']:g}")
     table.add_column("quantity")
@@ -51,6 +63,9 @@ def limit_cycle_command(
     table.add_row("converged", f"{doc['converged']} (residual {doc['residual']:.1e}, tolerance {doc['tolerance']:g})")
     for key, value in doc["fixed_point"].items():
         table.add_row(key, f"{value:.10f}")
+    for where, lines in doc["lines"].items():
+        for key, value in lines.items():
+            table.add_row(f"{key} ({where.replace('_', ' ')})", f"{value:.10f}")
     table.add_row("step period [s]", f"{doc['step_period']:.8f}")
     table.add_row("step length [m]", f"{doc['step_length']:.8f}")
     table.add_row("speed [m/s]", f"{doc['speed']:.6f}")

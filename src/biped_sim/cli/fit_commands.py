@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import shutil
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from biped_sim.cli.common import ConfigArgument, SetOption, app, load
+from biped_sim.cli.common import ConfigArgument, SetOption, app, end_interrupted, load, user_errors
 from biped_sim.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -34,20 +34,22 @@ PROGRESS_INTERVAL_S = 2.0
 
 
 def _flag_errors(func: Callable[..., Any]) -> Callable[..., Any]:
-    """The API names its arguments in errors (``parameters: ...``); the user typed flags (``--param: ...``)."""
+    """:func:`~biped_sim.cli.common.user_errors` (one line, exit 2 for bad input, 1 for a full disk, 130 on Ctrl-C,
+    143 on SIGTERM) with the API's argument names (``parameters: ...``) shown as the flags the user typed
+    (``--param: ...``) and, when interrupted, how to resume (the checkpoint is flushed on the way out)."""
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return func(*args, **kwargs)
         except ConfigError as exc:
-            typer.echo(f"error: {FLAGS.get(exc.field, exc.field)}: {exc.reason}", err=True)
-            sys.exit(2)
-        except KeyboardInterrupt:
-            typer.echo("interrupted: run the same command again to resume from the checkpoint", err=True)
-            sys.exit(130)
+            if exc.field in FLAGS:
+                raise ConfigError(FLAGS[exc.field], exc.reason) from None
+            raise
+        except KeyboardInterrupt as exc:
+            end_interrupted(exc, "run the same command again to resume from the checkpoint")
 
-    return wrapper
+    return user_errors(wrapper)
 
 
 def _progress(label: str | None) -> Callable[[Evaluator], None]:
@@ -69,7 +71,8 @@ def _progress(label: str | None) -> Callable[[Evaluator], None]:
 def _print(label: str | None, doc: dict[str, Any]) -> None:
     """One line per fit (values, errors, evaluations, verdict), its warnings, and the posterior's intervals."""
     values = ", ".join(f"{k} = {v:.6g}" for k, v in doc["parameters"].items())
-    rms = f"RMS error {doc['rms_error_s']:.4g} s, " if doc["rms_error_s"] is not None else ""
+    known = doc["rms_error_s"] is not None and math.isfinite(doc["rms_error_s"])
+    rms = f"RMS error {doc['rms_error_s']:.4g} s, " if known else ""
     typer.echo(
         (f"{label}: " if label else "") + f"{values}; {rms}RMS residual {doc['rms_weighted_residual']:.3g}, "
         f"{doc['evaluations']} evaluations ({doc['simulations']} simulated, {doc['evaluations_replayed']} from the "
@@ -105,7 +108,9 @@ def fit_command(
     set_: SetOption = None,
     skip: Annotated[int, typer.Option("--skip-steps", help="Model steps before reference step 1.")] = 0,
     quantity: Annotated[list[str] | None, typer.Option("--quantity", help="Fit only these quantities.")] = None,
-    global_method: Annotated[str, typer.Option("--global", help="Global stage: cma or de.")] = "cma",
+    global_method: Annotated[
+        str, typer.Option("--global", help="Global stage: multistart (Sobol, polishes, IPOP), cma or de.")
+    ] = "multistart",
     posterior: Annotated[int, typer.Option("--posterior", help="Posterior draws (emcee), 0: none.")] = 0,
     walkers: Annotated[int | None, typer.Option("--walkers", help="emcee walkers (default max(16, 4 p)).")] = None,
     prior: Annotated[list[str] | None, typer.Option("--prior", help="KEY=normal:MEAN:SD (default: bounds).")] = None,
@@ -121,9 +126,18 @@ def fit_command(
     from biped_sim.io.output import check_output_dir, staged_directory
     from biped_sim.io.references import load_reference
     from biped_sim.report.fit import FIT_OUTPUT, label_dir, write_calibration, write_contest
-    from biped_sim.studies.fit import GLOBAL_METHODS, calibrate, fit_problems, parse_each, parse_prior, priors_for
-    from biped_sim.sweep import study_executor
+    from biped_sim.studies.fit import (
+        GLOBAL_METHODS,
+        calibrate,
+        fit_problems,
+        parse_each,
+        parse_prior,
+        priors_for,
+        sampler_size,
+    )  # fmt: skip
+    from biped_sim.sweep import check_executor, study_executor
 
+    check_executor(executor, scheduler)
     for option, value, least in (("--skip-steps", skip, 0), ("--posterior", posterior, 0), ("--jobs", jobs, 1)):
         if value < least:
             raise ConfigError(option, f"must be at least {least}")
@@ -139,12 +153,14 @@ def fit_command(
     priors = tuple(parse_prior(text) for text in prior or [])
     for _, problem in problems:
         priors_for(problem.parameters, priors)
+        if posterior > 0:
+            sampler_size(problem, posterior, walkers)
     out_dir = out or Path("results") / "fit" / config_path.stem
     check_output_dir(out_dir, FIT_OUTPUT)
-    side = _checkpoints(out_dir)
     options = {"global_method": global_method, "draws": posterior, "walkers": walkers, "priors": priors}
     fits = []
     with study_executor(executor, jobs, scheduler) as pool:
+        side = _checkpoints(out_dir)  # once the executor is up: a refused one leaves nothing behind
         for label, problem in problems:
             checkpoint = side / f"{label_dir(label or 'fit')}.checkpoint.json"
             fits.append((label, calibrate(problem, pool, checkpoint=checkpoint, progress=_progress(label), **options)))

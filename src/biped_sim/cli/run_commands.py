@@ -20,7 +20,7 @@ from biped_sim.io.output import check_writable_dir
 from biped_sim.io.run_files import previous_run
 from biped_sim.rigid.start import NONDIMENSIONAL
 from biped_sim.simulate import RunResult, prepare_model, simulate
-from biped_sim.simulate.warmup import warm_up, warm_up_configs
+from biped_sim.simulate.warmup import warm_up_configs, warm_up_in_processes
 
 
 def _fmt(value: float, digits: int = 5) -> str:
@@ -138,10 +138,12 @@ def warmup_command(
     every: Annotated[
         bool, typer.Option("--all", help="Every formulation x integrator family (every contact law is in each).")
     ] = False,
+    jobs: Annotated[
+        int, typer.Option("--jobs", "-j", min=0, help="Groups compiled at once, each in a process (0: one per core).")
+    ] = 0,
 ) -> None:
     """Compile (or load from the cache) the default walker's kernels, so that the first run starts in seconds."""
-    for config in warm_up_configs(every):
-        done = warm_up(config)
+    for done in warm_up_in_processes(warm_up_configs(every), jobs or None):
         if done is not None:
             typer.echo(done.line())
 

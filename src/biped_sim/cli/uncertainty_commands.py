@@ -104,8 +104,9 @@ def uncertainty_command(
     distributions, options = read_spec(str(spec_file)) if spec_file is not None else ([], {})
     distributions += [parse_param(text) for text in param or []]
     chosen = "saltelli" if sobol_indices else method or options.get("method", "sobol")
+    count = samples if samples is not None else options.get("samples", DEFAULT_SAMPLES)  # -n 0 is refused, not 256
     spec = UncertaintySpec(
-        config, tuple(distributions), samples or options.get("samples", DEFAULT_SAMPLES), chosen,
+        config, tuple(distributions), count, chosen,
         seed if seed is not None else options.get("seed", 0),
         read_posterior(posterior) if posterior is not None else None, surrogate_order,
     )  # fmt: skip
@@ -146,7 +147,8 @@ def mfpt_command(
     from biped_sim.io.atomic import write_json_atomic
     from biped_sim.plots import save_figure
     from biped_sim.report.uncertainty import mfpt_figure
-    from biped_sim.studies.uncertainty.mfpt import mfpt_curve
+    from biped_sim.studies.uncertainty.mfpt import check_mfpt_input, mfpt_curve
+    from biped_sim.studies.uncertainty.rimless_chain import walks_random_slopes
     from biped_sim.sweep import study_executor, workers_for
 
     config = load(config_path, set_)
@@ -154,8 +156,8 @@ def mfpt_command(
         levels = [float(text) for text in roughness.split(",")]
     except ValueError:
         raise ArgumentError("roughness", f"{roughness[:60]!r}: expected comma-separated numbers") from None
-    wheel = config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"
-    chosen = ground or ("slope" if wheel else "height")
+    chosen = ground or ("slope" if walks_random_slopes(config) else "height")
+    check_mfpt_input(config, chosen, levels, seeds, cap)
     check_writable_dir(out)
     workers = 1 if chosen == "slope" else workers_for(len(levels) * seeds, jobs)
     with study_executor(executor, workers, scheduler) as pool:

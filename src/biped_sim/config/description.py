@@ -12,6 +12,7 @@ from biped_sim.config.base import NormalModelName, Strict
 
 Vector2 = tuple[float, float]
 SIDES = ("stance", "swing")
+MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
 
 
 def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
@@ -37,8 +38,26 @@ class BodySpec(Strict):
 
     name: str = Field(..., min_length=1, description="Unique body name.")
     mass: float = Field(..., ge=0, description="Mass [kg].")
-    inertia: float = Field(0.0, ge=0, description="Moment of inertia about its centre of mass [kg m^2].")
+    inertia: float | None = Field(
+        None, ge=0, description="Moment of inertia about its centre of mass [kg m^2] (none given: 0)."
+    )
+    radius_of_gyration: float | None = Field(
+        None, ge=0, description="Or its radius of gyration about the centre of mass [m]: inertia = mass r^2."
+    )
     com: Vector2 = Field((0.0, 0.0), description="Centre of mass in the body frame [m]: (across + downhill, along).")
+
+    @model_validator(mode="after")
+    def _one_inertia(self) -> BodySpec:
+        if self.inertia is not None and self.radius_of_gyration is not None:
+            raise ValueError("radius_of_gyration: give inertia or radius_of_gyration, not both")
+        return self
+
+    @property
+    def moment_of_inertia(self) -> float:
+        """The moment of inertia about the centre of mass [kg m^2]: ``inertia``, or mass r^2, or 0."""
+        if self.radius_of_gyration is not None:
+            return self.mass * self.radius_of_gyration**2
+        return self.inertia or 0.0
 
 
 class PointMassSpec(Strict):
@@ -67,6 +86,12 @@ class StopSpec(Strict):
         "leg) and holds the joint at its limit from both sides with the stop's law until the leg's foot leaves the "
         "ground behind the other leg's; only for a joint within one leg (a knee) of a two-legged walker whose leg "
         "has a foot. Rigid dynamics locks a struck stop until its leg swings again, latch or not.",
+    )
+    release_at_heel_strike: bool = Field(
+        False,
+        description="Rigid dynamics: the trailing leg's stop lets go at the heel strike, its joint free through the "
+        "strike's impulse (McGeer's free trailing knee; the section gains the new swing leg's rates below its hip "
+        "body); default: held through the strike. Set it on both legs' stops alike.",
     )
 
 
@@ -114,16 +139,30 @@ class WalkerDescription(Strict):
     (:meth:`state_keys`).
     """
 
-    bodies: list[BodySpec] = Field(..., min_length=1, description="The bodies; the first is the root.")
-    point_masses: list[PointMassSpec] = Field(default_factory=list, description="Point masses on bodies.")
-    joints: list[JointSpec] = Field(default_factory=list, description="Revolute joints, one per non-root body.")
-    feet: list[FootSpec] = Field(..., min_length=1, description="Feet (arcs or points on bodies).")
-    legs: list[list[str]] = Field(..., min_length=1, description="Each leg's bodies, hip first; legs alike.")
+    bodies: list[BodySpec] = Field(
+        ..., min_length=1, max_length=MAX_PARTS, description="The bodies; the first is the root."
+    )
+    point_masses: list[PointMassSpec] = Field(
+        default_factory=list, max_length=MAX_PARTS, description="Point masses on bodies."
+    )
+    joints: list[JointSpec] = Field(
+        default_factory=list, max_length=MAX_PARTS, description="Revolute joints, one per non-root body."
+    )
+    feet: list[FootSpec] = Field(..., min_length=1, max_length=MAX_PARTS, description="Feet (arcs or points).")
+    legs: list[list[str]] = Field(
+        ..., min_length=1, max_length=MAX_PARTS, description="Each leg's bodies, hip first; legs alike."
+    )
 
     @model_validator(mode="after")
     def _a_tree(self) -> WalkerDescription:
         names = [b.name for b in self.bodies]
-        for field_name, items in (("bodies", self.bodies), ("joints", self.joints), ("feet", self.feet)):
+        named = (
+            ("bodies", self.bodies),
+            ("point_masses", self.point_masses),
+            ("joints", self.joints),
+            ("feet", self.feet),
+        )
+        for field_name, items in named:
             labels = [item.name for item in items]
             if len(set(labels)) != len(labels):
                 raise ValueError(f"{field_name}: names must be unique")
@@ -171,6 +210,12 @@ class WalkerDescription(Strict):
         if len(self.legs[0]) > 1 and len(set(self.roles())) != len(self.legs[0]):
             raise ValueError("legs: the bodies of a leg need distinct roles (names like thigh_1, shank_1)")
 
+    def massless_bodies(self) -> list[str]:
+        """The bodies with no mass of their own nor a point mass on them (a compliant or a described rigid walker
+        cannot move them: their mass matrix rows are zero)."""
+        carried = {p.body for p in self.point_masses if p.mass > 0.0}
+        return [b.name for b in self.bodies if b.mass <= 0.0 and b.name not in carried]
+
     def roles(self) -> list[str]:
         """The body roles of a leg, hip down: a body's name without its trailing '_<leg>' (thigh_1 -> thigh)."""
         first = self.legs[0]
@@ -179,6 +224,17 @@ class WalkerDescription(Strict):
             if [name.rsplit("_", 1)[0] if "_" in name else name for name in leg] != roles:
                 raise ValueError("legs: every leg's bodies need the same roles in the same order (thigh_1, thigh_2)")
         return roles
+
+    def leg_length(self) -> float:
+        """Hip to the lowest foot bottom with every angle zero [m] (the legs along the slope normal): the walker's
+        length scale."""
+        joint_of = {j.child: j for j in self.joints}
+        origin = {self.bodies[0].name: (0.0, 0.0)}
+        while len(origin) < len(self.bodies):  # a tree (checked): each pass places the children of placed bodies
+            for child, joint in joint_of.items():
+                if joint.parent in origin and child not in origin:
+                    origin[child] = (origin[joint.parent][0] + joint.at[0], origin[joint.parent][1] + joint.at[1])
+        return -min(origin[f.body][1] + f.centre[1] - f.radius for f in self.feet)
 
     def state_keys(self) -> tuple[str, ...]:
         """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate.

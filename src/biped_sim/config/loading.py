@@ -15,6 +15,8 @@ from pydantic import ValidationError
 from biped_sim.config.schema import Config
 from biped_sim.errors import ArgumentError, ConfigError, quote
 
+MAX_FILE_BYTES = 256 * 1024  # a config, sweep, reference or uncertainty file: the largest bundled one is 4 KiB
+
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that reads ``1e7`` as a float (YAML 1.2) and ``on``/``off`` as strings."""
@@ -72,7 +74,8 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
 
     A list of named items (a description's bodies, joints, feet) is entered by an item's name
     (``walker.description.bodies.thigh_1.mass``) or its index; an unknown name or an index out of range is a
-    one-line ConfigError naming the list and its names.
+    one-line ConfigError naming the list and its names. A key ending at a named parameter (an item with a
+    ``value``: ``walker.parameters.thigh_mass``) sets its value.
     """
     parts = key.split(".")
     node: Any = data
@@ -85,15 +88,17 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
             child = {}
             node[part] = child
         node = child
-    if isinstance(node, list):
-        node[_list_index(node, parts, len(parts) - 1)] = value
+    slot = _list_index(node, parts, len(parts) - 1) if isinstance(node, list) else parts[-1]
+    current = node[slot] if isinstance(node, list) else node.get(slot)
+    if isinstance(current, dict) and "value" in current and not isinstance(value, dict):
+        current["value"] = value  # a named parameter stands for its value
     else:
-        node[parts[-1]] = value
+        node[slot] = value
 
 
 def get_dotted(data: Any, key: str) -> Any:
-    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`) of plain config data;
-    ConfigError naming the key when a section or field on the way is missing."""
+    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`; a named parameter's value)
+    of plain config data; ConfigError naming the key when a section or field on the way is missing."""
     parts = key.split(".")
     node = data
     for depth, part in enumerate(parts):
@@ -101,9 +106,11 @@ def get_dotted(data: Any, key: str) -> Any:
             node = node[_list_index(node, parts, depth)]
         elif isinstance(node, dict) and part in node:
             node = node[part]
+        elif isinstance(node, dict) and part == "parameters" and depth + 1 < len(parts) and parts[depth + 1] in node:
+            continue  # a preset's parameters are its fields: walker.parameters.leg_inertia is walker.leg_inertia
         else:
             raise ConfigError(key, "unknown config key")
-    return node
+    return node["value"] if isinstance(node, dict) and "value" in node else node  # a parameter: its value
 
 
 def _list_index(items: list[Any], parts: list[str], depth: int) -> int:
@@ -174,13 +181,16 @@ def derive(config: Config, values: Mapping[str, Any]) -> Config:
 
 
 def read_text_file(path: str | Path, what: str = "config file") -> str:
-    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory or not text."""
+    """The text of a UTF-8 file; ConfigError naming the path when it is missing, a directory, not text or larger
+    than :data:`MAX_FILE_BYTES` (a file that size is generated, and reading it would take minutes)."""
     path = Path(path)
     if path.is_dir():
         raise ConfigError(str(path), f"is a directory, not a {what}")
     if not path.is_file():
         raise ConfigError(str(path), f"no such {what}")
     try:
+        if (size := path.stat().st_size) > MAX_FILE_BYTES:
+            raise ConfigError(str(path), f"{size:,} bytes, larger than a {what} may be ({MAX_FILE_BYTES // 1024} KiB)")
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(str(path), f"not a UTF-8 text file (byte {exc.start}): is it a {what}?") from None

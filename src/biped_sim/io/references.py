@@ -59,6 +59,7 @@ MEASURED_UNITS = {
 POSITIVE_QUANTITIES = ("step_period", "step_length", "step_speed")
 StepOrigin = Literal["release", "heel_strike"]
 ORIGIN_OFFSET = {"release": 0, "heel_strike": 1}  # reference step k is model step k + offset (release numbering)
+MAX_STEPS = 10_000  # values of a quantity and the largest step number: a fit simulates as far as the last step
 
 
 class _Strict(BaseModel):
@@ -109,6 +110,8 @@ def _check_steps(steps: list[int] | None, n: int, where: str = "steps") -> None:
         raise ValueError(f"{where}: {len(steps)} step numbers for {n} values")
     if any(s < 1 for s in steps) or any(b <= a for a, b in itertools.pairwise(steps)):
         raise ValueError(f"{where}: must be increasing step numbers starting at 1 or later")
+    if steps and steps[-1] > MAX_STEPS:
+        raise ValueError(f"{where}: step {steps[-1]:,} is past the last step a reference may number ({MAX_STEPS:,})")
 
 
 def _check_std(std: list[float] | None, n: int, where: str = "std") -> None:
@@ -127,7 +130,7 @@ class Measurement(_Strict):
     unit: str
     statistic: Literal["mean", "median", "single"] = "mean"
     steps: list[int] | None = Field(None, description="Step numbers of the values (default 1, 2, ...).")
-    mean: list[float] = Field(..., min_length=1)
+    mean: list[float] = Field(..., min_length=1, max_length=MAX_STEPS)
     std: list[float] | None = Field(None, description="Standard deviation of single trials, per step.")
     n_trials: int | list[int] | None = Field(None, description="Trials per step (one number for all, or a list).")
 
@@ -143,8 +146,7 @@ class Measurement(_Strict):
                 raise ValueError(f"mean: entry {i + 1} is a {name} and must be > 0 (got {value})")
         _check_steps(self.steps, n)
         _check_std(self.std, n)
-        trials = self.n_trials if isinstance(self.n_trials, list) else [self.n_trials or 1] * n
-        if len(trials) != n or any(t < 1 for t in trials):
+        if len(self.trials) != n or any(t < 1 for t in self.trials):
             raise ValueError(f"n_trials: one number >= 1, or {n} of them")
         return self
 
@@ -154,7 +156,9 @@ class Measurement(_Strict):
 
     @property
     def trials(self) -> list[int]:
-        return self.n_trials if isinstance(self.n_trials, list) else [self.n_trials or 1] * len(self.mean)
+        if isinstance(self.n_trials, list):
+            return self.n_trials
+        return [1 if self.n_trials is None else self.n_trials] * len(self.mean)
 
 
 class ReferenceSpec(_Strict):
@@ -168,7 +172,7 @@ class ReferenceSpec(_Strict):
     compared: str | None = Field(None, description="For errors: which model against which measurement.")
     step_origin: StepOrigin = Field("release", description="How steps are numbered (module docstring).")
     steps: list[int] | None = Field(None, description="Step numbers of the values (default 1, 2, ...).")
-    values: list[float] | None = Field(None, min_length=1)
+    values: list[float] | None = Field(None, min_length=1, max_length=MAX_STEPS)
     std: list[float] | None = None
     measurements: list[Measurement] | None = Field(None, min_length=1, description="Several quantities per step.")
     published_errors: list[str] = Field(default_factory=list, description="Error files to show beside ours.")

@@ -84,7 +84,7 @@ class Pose:
 
     time: float
     hip: np.ndarray  # (2,)
-    segments: list[np.ndarray]  # per body (k + 1, 2): its origin, then the points it reaches
+    segments: list[np.ndarray]  # per body (2 k, 2): its origin and each point it reaches in turn
     angles: np.ndarray  # (nb,) each body's angle [rad] (its -y axis from the slope normal)
     foot_centres: np.ndarray  # (nf, 2)
     joints: np.ndarray  # (n_stops, 2) where each stopped joint is (the child's origin)
@@ -130,7 +130,10 @@ class Poses:
     def at(self, i: int) -> Pose:
         """The pose at sample ``i``."""
         sk, angles, origins = self.skeleton, self.angles[i], self.origins[i]
-        segments = [np.vstack([origins[b], origins[b] + _turn(angles[b], ends)]) for b, ends in enumerate(sk.ends)]
+        segments = [  # from the origin out to each end (a star: a wheel's spokes)
+            np.vstack([np.vstack([origins[b], end]) for end in origins[b] + _turn(angles[b], ends)])
+            for b, ends in enumerate(sk.ends)
+        ]
         feet = origins[sk.foot_body] + np.array(
             [_turn(angles[b], c[None])[0] for b, c in zip(sk.foot_body, sk.foot_centre, strict=True)]
         ).reshape(-1, 2)

@@ -33,6 +33,10 @@ RIGID_TOLERANCE = 1e-10
 FD_STEP = 1e-6
 MAX_NEWTON = 30
 SETTLE_STEPS = 30
+LINES_NOTE = (
+    "lines: each leg's line from the hip to its foot (the point, or the arc's centre), its angle from the slope "
+    "normal (+ foot downhill), and the inter-leg angle stance minus swing, at the fixed point and at touchdown"
+)
 STABILITY_MARGIN = 1e-9  # |lambda| < 1 - margin counts as stable
 # the gait search's scan when the walk from the guess falls: step angles [rad] x stance rates [sqrt(g / l)]
 SCAN_ANGLES = (0.1, 0.15, 0.2, 0.25, 0.3)
@@ -61,6 +65,8 @@ class LimitCycle:
     tolerance: float
     notes: list[str] = field(default_factory=list)
     start: str = ""  # which start the solver found the cycle from (empty: not recorded)
+    tried: str = ""  # every start the search tried (the one line of a failed search)
+    lines: dict[str, dict[str, float]] = field(default_factory=dict)  # the legs' hip-to-foot lines: see leg_lines
 
     @property
     def max_multiplier_modulus(self) -> float:
@@ -74,10 +80,18 @@ class LimitCycle:
     def speed(self) -> float:
         return self.step_length / self.step_period if self.step_period > 0 else math.nan
 
+    def failure(self) -> str:
+        """The one line of a search that did not converge: its best residual and what it tried."""
+        return (
+            f"no {self.dynamics} limit cycle: Newton did not converge (best residual {self.residual:.1e}, tolerance "
+            f"{self.tolerance:g}) from {self.tried}"
+        )
+
     def to_json(self) -> dict[str, Any]:
-        """The JSON document of ``biped-sim limit-cycle --json``."""
-        order = np.argsort(-np.abs(self.multipliers))
-        return {
+        """The JSON document of ``biped-sim limit-cycle --json``; a search that did not converge is its status, what
+        it tried and its residual, without the point it stopped at (not a gait)."""
+        status = {
+            "status": "converged" if self.converged else "not_converged",
             "dynamics": self.dynamics,
             "walker": self.walker,
             "slope": self.slope,
@@ -85,9 +99,17 @@ class LimitCycle:
             "iterations": self.iterations,
             "residual": self.residual,
             "tolerance": self.tolerance,
+            "tried": self.tried,
+        }
+        if not self.converged:
+            return {**status, "error": self.failure()}
+        order = np.argsort(-np.abs(self.multipliers))
+        return {
+            **status,
             "section": list(self.section_names),
             "fixed_point": self.fixed_point,
             "touchdown": self.touchdown,
+            "lines": self.lines,
             "step_period": self.step_period,
             "step_length": self.step_length,
             "speed": self.speed,
@@ -101,6 +123,11 @@ class LimitCycle:
 
 class StepFailedError(RuntimeError):
     """The walker fell or stalled during a step of the map."""
+
+
+class SearchFellError(ConfigError):
+    """The walker fell from every start of a gait search: a config's start is unusable (a run on
+    ``rigid_limit_cycle``), and the limit-cycle command's search failed (exit 1)."""
 
 
 # --- rigid ---------------------------------------------------------------------------------------------------
@@ -212,12 +239,12 @@ def scan_starts(walker: RigidWalker) -> list[tuple[str, np.ndarray]]:
     points = []
     for k in SCAN_RATES:
         rate = -k * scale
-        if walker.name == "rimless_wheel":
+        if walker.shift:  # a wheel: its section is the rate alone
             points.append((f"scan stance_rate {rate:.4g}", np.array([rate])))
             continue
         for angle in SCAN_ANGLES:
             label = f"scan stance_angle {angle:g}, stance_rate {rate:.4g}"
-            z = [angle, rate] if walker.name == "simplest" else [angle, rate, SCAN_SWING_RATIO * rate]
+            z = [angle, rate] + [SCAN_SWING_RATIO * rate] * (len(walker.section_names) - 2)  # the swing leg's rates
             points.append((label, np.array(z)))
     return points
 
@@ -229,7 +256,8 @@ def rigid_limit_cycle(
 ) -> LimitCycle:
     """Period-1 fixed point of the rigid model of ``config.walker`` and its multipliers.
 
-    The initial guess is ``guess`` (the four README keys), else the config's initial state, else (for the
+    The initial guess is ``guess`` (the walker's initial-state keys, or its section's: :meth:`RigidWalker.guess_state`),
+    else the config's initial state, else (for the
     rigid_limit_cycle start) generic post-impact states. The guess first walks ``settle_steps`` steps, so
     that Newton starts near the stable cycle when there is one, then Newton starts from the guess itself;
     when neither converges (the walker falls from the guess), the same two tries run from each point of
@@ -239,7 +267,7 @@ def rigid_limit_cycle(
     rigid = config if config.dynamics == "rigid" else config.model_copy(update={"dynamics": "rigid"})
     walker = rigid_walker(rigid)
     if guess is not None:
-        starts = [("the guess", walker.state_from_legs(guess))]
+        starts = [("the guess", walker.guess_state(guess))]
     elif config.simulation.initial == "rigid_limit_cycle":
         starts = [(f"generic start {i + 1}", start) for i, start in enumerate(_generic_starts(walker))]
     else:
@@ -255,25 +283,25 @@ def rigid_limit_cycle(
         z0 = walker.to_section(x)
         tries += [(label, z0, settle_steps), (label, z0, 0)] if settle_steps else [(label, z0, 0)]
     solved = _solve_from(step_map, tries)
+    tried = _tried([label for label, _ in starts], settle_steps)
     if settle_steps and (solved is None or not solved[0][1]):
         # the scan: every point walked first (stable gaits), then every point as it is (any gait)
         scan = scan_starts(walker)
+        tried += f", then the {len(scan)} points of a scan (each walked, then as it is)"
         scanned = _solve_from(
             step_map, [(label, z, settle_steps) for label, z in scan] + [(label, z, 0) for label, z in scan]
         )
         if scanned is not None and (solved is None or scanned[0][1]):
             solved = scanned
     if solved is None:
-        raise ConfigError(
-            "simulation.initial",
-            f"no rigid limit cycle: the rigid {walker.name} falls from the guess"
-            + (" and from every start of the scan" if settle_steps else ""),
-        )
+        raise SearchFellError("simulation.initial", f"no rigid limit cycle: the walker falls from {tried}")
     (z, converged, iterations, residual), how = solved
     _, step = rigid_map(walker, z, compiled)
     jac = map_jacobian(step_map, z)
     x_plus = walker.from_section(z)
-    touchdown = walker.legs_state(np.concatenate([step.x_minus[: walker.n_q][::-1], step.x_minus[walker.n_q :][::-1]]))
+    x_touchdown = walker.relabelled(step.x_minus)
+    lines = {"fixed_point": walker.leg_lines(x_plus), "touchdown": walker.leg_lines(x_touchdown)}
+    lines = lines if lines["fixed_point"] else {}
     return LimitCycle(
         dynamics="rigid",
         walker=walker.name,
@@ -284,7 +312,7 @@ def rigid_limit_cycle(
         section_names=walker.section_names,
         section_point=z,
         fixed_point=walker.legs_state(x_plus),
-        touchdown=touchdown,
+        touchdown=walker.legs_state(x_touchdown),
         step_period=step.period,
         step_length=step.length,
         jacobian=jac,
@@ -297,19 +325,29 @@ def rigid_limit_cycle(
             f"multipliers: central differences, relative step {FD_STEP:g}; the coordinates the impact fixes "
             "(zero multipliers) are not section coordinates",
             "touchdown: the state just before the strike, relabelled (stance = the leg touching down)",
+            *([LINES_NOTE] if lines else []),
         ],
         start=how,
+        tried=tried,
+        lines=lines,
     )
+
+
+def _tried(labels: list[str], settle_steps: int) -> str:
+    """What a search started from, in a few words: 'the guess (walked 30 steps, then as it is)'."""
+    what = labels[0] if len(labels) == 1 else f"the {len(labels)} generic starts"
+    return what + (f" (walked {settle_steps} steps, then as it is)" if settle_steps else "")
 
 
 def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
     """Post-impact states typical of passive gaits (rates scaled by sqrt(g / l)), tried when no guess is given."""
     scale = math.sqrt(walker.gravity / walker.leg_length)
-    if walker.name == "rimless_wheel":
+    if walker.shift:  # a wheel: its section is the rate alone
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
     starts = ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
-    if len(walker.section_names) == 3:  # the legs just after a strike, as the walker's section places them
-        return [walker.from_section(np.array([angle, -k * scale, -0.4 * k * scale])) for angle, k in starts]
+    if len(walker.section_names) >= 3:  # the legs just after a strike, as the walker's section places them
+        swing = len(walker.section_names) - 2  # the swing leg's rates (its hip body's; a free trailing knee's)
+        return [walker.from_section(np.array([angle, -k * scale] + [-0.4 * k * scale] * swing)) for angle, k in starts]
     return [np.array([angle, -angle, -k * scale, -0.4 * k * scale]) for angle, k in starts]
 
 

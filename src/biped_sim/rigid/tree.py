@@ -15,6 +15,8 @@ Massless legs (Garcia's simplest walker) are the limit of infinitesimal foot mas
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from biped_sim.config import Config, WalkerDescription
@@ -23,6 +25,7 @@ from biped_sim.errors import ConfigError
 from biped_sim.rigid.tree_build import Tree, tree_locks, tree_params
 from biped_sim.rigid.tree_kernels import (
     PAST,
+    RELEASED,
     STOP,
     STRIKE,
     after_phase,
@@ -74,11 +77,17 @@ class RigidWalker:
             self.leg_offsets[child] = self.leg_offsets[parent] + limit
         self.start_locks = [(parent, child, limit) for parent, child, limit, *_, leg in locks if leg != 1]
         n, half = self.n_q, self.n_q // 2
+        # the swing leg's locks, hip down (parent, child, whether the heel strike leaves it free: its stops released),
+        # and the bodies whose rates are free just after the strike: its hip body, each released stop's child
+        released = any(lock[4] == RELEASED for lock in locks)
+        self.swing_locks = [(lock[0], lock[1], released and lock[5] == 1) for lock in locks if lock[1] >= half]
+        self.free_swing = [half] + [child for _, child, free in self.swing_locks if free]
         if self.shift:
             self.section_names: tuple[str, ...] = (self.state_names[1],)
         else:
             swing_light = self.params[perm_offset(self.params) + 2 * n + half] != 0.0
-            self.section_names = (self.state_names[0], self.state_names[n], self.state_names[n + half])
+            swing_rates = [self.state_names[n + k] for k in self.free_swing]
+            self.section_names = (self.state_names[0], self.state_names[n], *swing_rates)
             self.section_names = self.section_names[:2] if swing_light else self.section_names
             self._check_alike()
 
@@ -173,6 +182,23 @@ class RigidWalker:
         """The stance contact point (the frame of :func:`~.tree_kernels.point`)."""
         return np.array([-self.foot_radius * q[rolling(self.params, 0)], 0.0])
 
+    def leg_lines(self, x: np.ndarray) -> dict[str, float]:
+        """The angle of each leg's line from the hip to its foot (the point, or the arc's centre) from the slope normal
+        (+ foot downhill; a straight leg's angle plus its foot's lean), and the inter-leg angle, stance minus swing
+        (empty for a wheel: its spokes' angles are its state)."""
+        if self.shift:
+            return {}
+        q = np.asarray(x[: self.n_q], dtype=float)
+        hip = self.hip(q)
+        stance = self.contact_point(q) + np.array([0.0, self.foot_radius])
+        swing = np.array(point(self.params, self.n_points + 1, q))
+        stance_line, swing_line = (math.atan2(foot[0] - hip[0], hip[1] - foot[1]) for foot in (stance, swing))
+        return {
+            "stance_line_angle": stance_line,
+            "swing_line_angle": swing_line,
+            "inter_leg_angle": stance_line - swing_line,
+        }
+
     def step_length(self, x_start: np.ndarray, x_minus: np.ndarray) -> float:
         """Advance of the contact point over a step: from the stance contact at the start to the landing foot's."""
         return float(self.swing_foot(x_minus, 0.0, 0.0)[0] - self.contact_point(np.asarray(x_start))[0])
@@ -216,18 +242,22 @@ class RigidWalker:
     def to_section(self, x_plus: np.ndarray) -> np.ndarray:
         """Independent coordinates of a post-impact state."""
         n = self.n_q
-        indices = [n] if self.shift else [0, n, n + n // 2][: len(self.section_names)]
+        indices = [n] if self.shift else [0, n, *(n + k for k in self.free_swing)][: len(self.section_names)]
         return np.array([x_plus[i] for i in indices])
 
     def from_section(self, z: np.ndarray) -> np.ndarray:
-        """Post-impact state from its section coordinates (the legs symmetric about -phi, every stop locked)."""
+        """Post-impact state from its section coordinates (the legs symmetric about -phi, every stop locked; the
+        swing leg's bodies turning with its hip body but those the strike leaves free, which have their own rates)."""
         if self.shift:
             return np.array([0.5 * self.shift - self.lean, z[0]])
         half = self.n_q // 2
         swing = -z[0] - 2.0 * self.lean
         angles = np.concatenate([z[0] + self.leg_offsets[:half], swing + self.leg_offsets[half:]])
-        swing_rate = z[2] if len(z) > 2 else 0.0
-        x = np.concatenate([angles, np.full(half, z[1]), np.full(half, swing_rate)])
+        rates = np.concatenate([np.full(half, z[1]), np.zeros(half)])
+        rates[self.free_swing[: len(z) - 2]] = z[2:]
+        for parent, child, free in self.swing_locks:  # hip down: a held stop's child turns with its parent
+            rates[child] = rates[child] if free else rates[parent]
+        x = np.concatenate([angles, rates])
         tree_light_rates(self.params, x)
         return x
 
@@ -239,6 +269,20 @@ class RigidWalker:
         for parent, child, limit in self.start_locks:
             x[child], x[n + child] = x[parent] + limit, x[n + parent]
         return x
+
+    def relabelled(self, x_minus: np.ndarray) -> np.ndarray:
+        """A pre-impact state in the roles after the heel strike (the landing leg's bodies first), rates unchanged:
+        the strike's relabelling without its impulse (coordinate k is coordinate perm[k] before plus shift[k])."""
+        n, o = self.n_q, perm_offset(self.params)
+        perm = self.params[o : o + n].astype(int)
+        return np.concatenate([x_minus[:n][perm] + self.params[o + n : o + 2 * n], x_minus[n:][perm]])
+
+    def guess_state(self, guess: dict[str, float]) -> np.ndarray:
+        """The post-impact state of a guess: its section coordinates (:attr:`section_names`) or its initial-state
+        keys (:meth:`state_from_legs`)."""
+        if set(guess) == set(self.section_names):
+            return self.from_section(np.array([guess[name] for name in self.section_names]))
+        return self.state_from_legs(guess)
 
     def legs_state(self, x: np.ndarray) -> dict[str, float]:
         """The initial-state keys of a state (the wheel's 'swing' spoke: the one just behind its stance spoke)."""

@@ -14,7 +14,7 @@ import numpy as np
 
 from biped_sim.config import Config, FootSpec, WalkerDescription
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.tree_kernels import PAST, STOP, STRIKE
+from biped_sim.rigid.tree_kernels import PAST, RELEASED, STOP, STRIKE
 from biped_sim.rigid.tree_layout import T_ROWS, T_TABLES, T_TRIG, T_WORK, gravity_vector, layout_offsets
 
 Vec = np.ndarray
@@ -98,10 +98,10 @@ def _rows(tree: Tree, d: WalkerDescription, pinned: FootSpec) -> list[tuple[floa
     for b in d.bodies:
         parts = [(b.mass, np.array(b.com))] + [(pm.mass, np.array(pm.at)) for pm in d.point_masses if pm.body == b.name]
         mass = sum(m for m, _ in parts)
-        if mass == 0.0 and b.inertia == 0.0:
+        if mass == 0.0 and b.moment_of_inertia == 0.0:
             continue
         com = sum((m * at for m, at in parts), np.zeros(2)) / mass if mass > 0.0 else parts[0][1]
-        inertia = b.inertia + sum(m * float((at - com) @ (at - com)) for m, at in parts)
+        inertia = b.moment_of_inertia + sum(m * float((at - com) @ (at - com)) for m, at in parts)
         rows.append((mass, inertia, tree.index[b.name], tree.at(b.name, (float(com[0]), float(com[1])), pinned)))
     return rows
 
@@ -134,7 +134,7 @@ def _flat(w: dict[int, Vec], n: int) -> list[float]:
 def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, float, float, int]]:
     """(parent, child, limit, sign, active, leg) of every stop; a leg joint needs one stop, or two at one angle (a
     locked joint: leg -1, never a phase), the hip none."""
-    locks = []
+    locks, released = [], set()
     for j in d.joints:
         leg = next(i for i, leg in enumerate(d.legs) if j.child in leg)
         if j.parent not in d.legs[leg]:
@@ -152,7 +152,14 @@ def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, 
             )
         stop = j.stops[0]
         sign = 1.0 if stop.side == "upper" else -1.0
-        locks.append((tree.index[j.parent], tree.index[j.child], stop.angle, sign, float(leg == 0), leg))
+        active = (RELEASED if stop.release_at_heel_strike else 1.0) if leg == 0 else 0.0
+        locks.append((tree.index[j.parent], tree.index[j.child], stop.angle, sign, active, leg))
+        released.add(stop.release_at_heel_strike)
+    if len(released) > 1:
+        raise ConfigError(
+            "walker.description.joints",
+            "release_at_heel_strike: rigid dynamics needs it on every leg stop or none (the legs swap roles)",
+        )
     return locks
 
 

@@ -65,6 +65,7 @@ from biped_sim.rigid.tree_layout import (
 
 STOP, PAST, STRIKE = 0, 1, 2  # phase kinds: a swing stop strikes; the hip passes over the stance foot; heel strike
 FLOW, IMPACT, AT_REST = 0, 1, 2  # the light rows' right side: gravity and bias; their velocity just before; none
+RELEASED = 2.0  # a lock's active field: held through the stance, released through the heel strike
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
 
 
@@ -85,10 +86,11 @@ def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> 
 
 
 @kernel
-def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool) -> int:
+def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool, release: bool) -> int:
     """Write M of table t and the active lock rows into the (m x m) matrix at p[w:] and, for the ``flow``, the
     generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into p[w + m m:]; returns the rows used (the workspace's
-    last 2 n floats hold a point's Jacobian meanwhile; the angles cached by :func:`fill_trig`)."""
+    last 2 n floats hold a point's Jacobian meanwhile; the angles cached by :func:`fill_trig`). ``release``: the
+    locks marked RELEASED are left free (a heel strike's trailing knee)."""
     n = coords(p)
     r = w + m * m
     jw = r + m + 2 * (int(p[T_NPTS]) + int(p[T_NLIGHT]))
@@ -117,7 +119,8 @@ def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool)
     used = n
     for j in range(int(p[T_NLOCK])):
         o = lock_offset(p, j)
-        if p[o + 4] != 0.0:
+        active = p[o + 4]
+        if active != 0.0 and not (release and active == RELEASED):
             parent, child = int(p[o]), int(p[o + 1])
             p[w + used * m + parent] = p[w + parent * m + used] = -1.0
             p[w + used * m + child] = p[w + child * m + used] = 1.0
@@ -227,7 +230,7 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     fill_trig(p, q)
     w = work_offset(p)
     r = w + m * m
-    used = _assemble(p, 0, w, m, qd, True)
+    used = _assemble(p, 0, w, m, qd, True, False)
     _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
     _light_tier(p, 0, q, qd, FLOW, w, m, r)
@@ -255,24 +258,18 @@ def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
 
 
 @kernel
-def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> None:
-    """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
-    (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being
-    coordinate perm[k] before). The right side is each row's momentum just before, m J'^T v- + I omega-."""
+def _impact_rates(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, release: bool) -> None:
+    """The rates after a plastic impact with the active locks (the RELEASED ones free when ``release``) in table t,
+    written to the workspace's right side; its own right side is each row's momentum just before, m J'^T v- + I
+    omega-."""
     n = coords(p)
     m = n + int(p[T_NLOCK])
-    q, qd = x[:n], x[n:]
-    fill_trig(p, q)
     w = work_offset(p)
     r, v = w + m * m, w + m * m + m
-    t = 1 if strike else 0
     npts = int(p[T_NPTS])
-    if strike:  # every stop of both legs locked through the heel strike
-        for j in range(int(p[T_NLOCK])):
-            p[lock_offset(p, j) + 4] = 1.0
     for i in range(npts):
         p[v + 2 * i], p[v + 2 * i + 1] = velocity_at(p, 0, w_offset(p, 0, i), qd)
-    used = _assemble(p, t, w, m, qd, False)
+    used = _assemble(p, t, w, m, qd, False, release)
     for a in range(m):
         p[r + a] = 0.0
     for i in range(npts):
@@ -285,6 +282,39 @@ def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> 
     _pin_light(p, t, w, m, r)
     _solve(p, w, m, used, r)
     _light_tier(p, t, q, qd, IMPACT, w, m, r)
+
+
+@kernel
+def _released_closing(p: np.ndarray, r: int) -> bool:
+    """Whether a RELEASED lock's joint leaves the strike turning into its stop (the rates at p[r:])."""
+    for j in range(int(p[T_NLOCK])):
+        o = lock_offset(p, j)
+        if p[o + 4] == RELEASED and p[o + 3] * (p[r + int(p[o + 1])] - p[r + int(p[o])]) > 0.0:
+            return True
+    return False
+
+
+@kernel
+def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> None:
+    """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
+    (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being
+    coordinate perm[k] before). Every stop of both legs is locked through the heel strike but the RELEASED ones
+    (the trailing leg's, McGeer's free trailing knee), unless one of these would leave it closing on its stop:
+    then they are held too (a stop pushes, never pulls)."""
+    n = coords(p)
+    q, qd = x[:n], x[n:]
+    fill_trig(p, q)
+    r = work_offset(p) + (n + int(p[T_NLOCK])) ** 2
+    t = 1 if strike else 0
+    released = False
+    if strike:  # every stop of both legs locked through the heel strike, the released ones aside
+        for j in range(int(p[T_NLOCK])):
+            o = lock_offset(p, j)
+            released = released or p[o + 4] == RELEASED
+            p[o + 4] = RELEASED if p[o + 4] == RELEASED else 1.0
+    _impact_rates(p, t, q, qd, released)
+    if released and _released_closing(p, r):
+        _impact_rates(p, t, q, qd, False)
     perm = perm_offset(p)
     for k in range(n):
         src = int(p[perm + k]) if strike else k
@@ -381,7 +411,7 @@ def tree_push(p: np.ndarray, x: np.ndarray, px: float, py: float, out: np.ndarra
     w = work_offset(p)
     r = w + m * m
     npts = int(p[T_NPTS])
-    used = _assemble(p, 0, w, m, qd, False)
+    used = _assemble(p, 0, w, m, qd, False, False)
     for a in range(m):
         p[r + a] = 0.0
     for k in range(n):

@@ -7,14 +7,19 @@ Every contact law is part of each group's kernels (the laws are dispatched at ru
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
 ``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
 ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
-the package has; a sweep's workers warm each group before its first timed run, and a Dask worker can
-warm itself at start (:mod:`biped_sim.sweep.preload`).
+the package has, each group in a process of its own, one per core at a time (:func:`warm_up_in_processes`);
+a sweep's workers warm each group before its first timed run, and a Dask worker can warm itself at start
+(:mod:`biped_sim.sweep.preload`).
 """
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from multiprocessing import get_context
 from typing import get_args
 
 from biped_sim._compiled_cache import recording_compilations
@@ -85,6 +90,33 @@ def warm_up(config: Config) -> WarmUp | None:
         simulate(short)
     _WARMED.add(group)
     return WarmUp(*group, config.integrator.method, tuple(compiled), time.perf_counter() - start)
+
+
+def available_cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def warm_up_in_processes(configs: Sequence[Config], workers: int | None = None) -> list[WarmUp | None]:
+    """:func:`warm_up` each config in a process of its own, ``workers`` at a time (default: one per core), in order.
+
+    numba compiles one function at a time in a process (its compiler lock), so groups compile in parallel only
+    in separate processes; each writes the on-disk cache, from which this process and every later one load.
+    A config whose group this process warmed already, or a rigid one, is None (nothing to do), as in warm_up.
+    """
+    groups: dict[tuple[str, str, str], Config] = {}  # the first config of each group still to warm
+    for config in configs:
+        if config.dynamics == "compliant" and group_of(config) not in _WARMED:
+            groups.setdefault(group_of(config), config)
+    todo = list(groups.values())
+    workers = min(len(todo), workers or available_cores())
+    if workers <= 1:
+        done = {id(config): warm_up(config) for config in todo}
+    else:
+        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
+            done = dict(zip(map(id, todo), pool.map(warm_up, todo), strict=True))
+        _WARMED.update(group_of(config) for config in todo)
+    return [done.get(id(config)) for config in configs]
 
 
 def group_config(formulation: str, family: str, ground: str) -> Config:

@@ -21,16 +21,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import LEG_KEYS, STATE_KEYS, Config, derive, parse_yaml
+from biped_sim.config import STATE_KEYS, Config, derive, parse_yaml
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE
 from biped_sim.multibody.planar import foot_kinematics
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import (
+    LINES_NOTE,
     SETTLE_STEPS,
     LimitCycle,
+    SearchFellError,
     StepFailedError,
     map_jacobian,
     newton_fixed_point,
@@ -239,6 +242,8 @@ def compliant_limit_cycle(
     def step_map(z: np.ndarray) -> np.ndarray:
         return section.step(z).z_next
 
+    tried = "the touchdowns of a run from " + ("the guess" if guess is not None else "the config's initial state")
+    tried += f" (after {settle_steps} steps and its first)" if settle_steps else ""
     found = None
     for z_start in touchdown_guesses(config, section, guess, settle_steps):
         try:
@@ -250,13 +255,15 @@ def compliant_limit_cycle(
         if found[1]:
             break
     if found is None:
-        raise ConfigError("simulation.initial", "no compliant limit cycle: the walker falls from every start")
+        raise SearchFellError("simulation.initial", f"no compliant limit cycle: the walker falls from {tried}")
     z, converged, iterations, residual = found
     step = section.step(z)
     jacobian = map_jacobian(step_map, z, COMPLIANT_FD_STEP)
     multipliers = np.linalg.eigvals(jacobian)
     noise = noise_floor(step_map, z, jacobian)
     legs = section.legs(z)
+    rigid = rigid_walker(config.model_copy(update={"dynamics": "rigid"}))  # the same legs' geometry
+    lines = rigid.leg_lines(rigid.state_from_legs(legs))
     return LimitCycle(
         dynamics="compliant",
         walker=config.walker.kind,
@@ -283,7 +290,10 @@ def compliant_limit_cycle(
             f"{COMPLIANT_TOLERANCE:g})",
             f"multipliers: central differences, relative step {COMPLIANT_FD_STEP:g}; "
             + contact_multiplier_note(multipliers),
+            LINES_NOTE,
         ],
+        tried=tried,
+        lines={"fixed_point": lines, "touchdown": lines},
     )
 
 
@@ -297,25 +307,38 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
     )
 
 
-def parse_guess(text: str | None) -> dict[str, float] | None:
-    """A guess of the gait from text: a YAML/JSON mapping of the four README keys, or four numbers in
-    ``LEG_KEYS`` order (None for None); ArgumentError naming ``guess`` otherwise."""
+def guess_keys(config: Config) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The keys a guess of ``config``'s gait may take: its initial-state keys (:meth:`Config.initial_keys`) and, in
+    rigid dynamics, its Poincare section's coordinates (the compliant search starts from a run: the state only)."""
+    section = rigid_walker(config).section_names if config.dynamics == "rigid" else ()
+    return config.initial_keys(), section
+
+
+def parse_guess(text: str | None, keys: tuple[str, ...], section: tuple[str, ...] = ()) -> dict[str, float] | None:
+    """A guess of the gait from text: a YAML/JSON mapping of the walker's initial-state ``keys`` (the compass's four
+    README keys, a kneed walker's eight) or of its ``section`` coordinates, or as many numbers in either's order
+    (None for None); ArgumentError naming ``guess`` and listing the keys otherwise."""
     if text is None:
         return None
     try:
         value = parse_yaml(text, source="guess")
     except ConfigError as exc:
         raise ArgumentError("guess", exc.reason) from None
-    if isinstance(value, list) and len(value) == len(LEG_KEYS):
-        value = dict(zip(LEG_KEYS, value, strict=True))
-    if not isinstance(value, dict) or set(value) != set(LEG_KEYS):
-        raise ArgumentError("guess", f"expected the four keys {', '.join(LEG_KEYS)} (or four numbers in that order)")
-    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in LEG_KEYS):
+    if isinstance(value, list):
+        names = next((names for names in (keys, section) if names and len(value) == len(names)), ())
+        value = dict(zip(names, value, strict=True)) if names else None
+    if not isinstance(value, dict) or set(value) not in [set(keys)] + ([set(section)] if section else []):
+        expected = f"expected the {len(keys)} keys {', '.join(keys)} (or {len(keys)} numbers in that order)"
+        if section:
+            expected += f", or the section's {len(section)}: {', '.join(section)}"
+        raise ArgumentError("guess", expected)
+    names = tuple(value)
+    if any(isinstance(value[k], bool) or not isinstance(value[k], int | float) for k in names):
         raise ArgumentError("guess", "values must be numbers")
-    bad = [k for k in LEG_KEYS if not math.isfinite(value[k])]
+    bad = [k for k in names if not math.isfinite(value[k])]
     if bad:
         raise ArgumentError("guess", f"{bad[0]} must be a finite number")
-    return {k: float(value[k]) for k in LEG_KEYS}
+    return {k: float(value[k]) for k in names}
 
 
 def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_steps: int | None = None) -> LimitCycle:

@@ -155,7 +155,7 @@ def fit_recovery_checks() -> list[Check]:
         [(_, problem)] = fit_problems(start, Reference(Path("synthetic"), spec), list(texts))
         result = calibrate(problem).result
         group = "Fit recovery: " + ", ".join(p.key for p in problem.parameters)
-        verdict = "converged" if result.converged else "; ".join(result.reasons)
+        verdict = result.verdict
         checks.append(Check(group, "verdict", "converged", verdict, "-", result.converged))
         rms = result.after.stats.rms_abs if result.after is not None else math.nan
         checks.append(

@@ -34,7 +34,15 @@ import numpy as np
 from biped_sim.config import Config, derive, parse_yaml
 from biped_sim.errors import ConfigError
 from biped_sim.io.references import Reference
-from biped_sim.studies.fit.bayes import PosteriorRun, Prior, parse_prior, predictive_band, priors_for, sample_posterior
+from biped_sim.studies.fit.bayes import (
+    PosteriorRun,
+    Prior,
+    parse_prior,
+    predictive_band,
+    priors_for,
+    sample_posterior,
+    sampler_size,
+)
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import GLOBAL_METHODS, SEED, run_fit
 from biped_sim.studies.fit.parameters import FitParameter, fit_parameter, parse_parameter
@@ -45,7 +53,7 @@ from biped_sim.studies.fit.synthetic import synthetic_reference, synthetic_refer
 __all__ = [
     "GLOBAL_METHODS", "Calibration", "FitParameter", "FitProblem", "FitResult", "Outcome", "PosteriorRun", "Prior",
     "calibrate", "contest", "fit_parameter", "fit_problems", "parse_each", "parse_parameter", "parse_prior",
-    "priors_for", "synthetic_reference", "synthetic_reference_data",
+    "priors_for", "sampler_size", "synthetic_reference", "synthetic_reference_data",
 ]  # fmt: skip
 
 
@@ -97,7 +105,7 @@ def calibrate(
     *,
     checkpoint: Path | None = None,
     progress: Callable[[Evaluator], None] | None = None,
-    global_method: str = "cma",
+    global_method: str = "multistart",
     seed: int = SEED,
     draws: int = 0,
     walkers: int | None = None,
@@ -109,6 +117,8 @@ def calibrate(
     when it exists, so that an interrupted call made again resumes without re-simulating.
     """
     priors = priors_for(problem.parameters, priors)
+    if draws > 0:
+        sampler_size(problem, draws, walkers)
     evaluator = Evaluator(problem, executor, checkpoint, progress)
     try:
         result = summarize(run_fit(evaluator, global_method, seed), evaluator)

@@ -165,6 +165,21 @@ def _diagnose(run: PosteriorRun, steps: int, parameters: tuple[FitParameter, ...
             )
 
 
+def sampler_size(problem: FitProblem, draws: int, walkers: int | None) -> tuple[int, int]:
+    """(walkers, steps) of the sampler for ``draws`` posterior draws; ConfigError naming the argument at fault
+    (checked before a fit starts, so that no fit runs only to be refused at its posterior)."""
+    if not problem.weighted:
+        raise ConfigError(str(problem.reference.path), "a Bayesian fit needs a std for every measured quantity")
+    p = len(problem.parameters)
+    walkers = max(16, 4 * p) if walkers is None else walkers
+    if walkers < 2 * p or walkers % 2:
+        raise ConfigError("walkers", f"must be even and at least {2 * p} (twice the parameters)")
+    steps = math.ceil(draws / walkers)
+    if steps < 10:
+        raise ConfigError("draws", f"at least {10 * walkers} ({walkers} walkers x 10 steps)")
+    return walkers, steps
+
+
 def sample_posterior(
     evaluator: Evaluator,
     u0: np.ndarray,
@@ -176,15 +191,8 @@ def sample_posterior(
 ) -> PosteriorRun:
     """Sample the posterior of ``evaluator.problem`` from around the optimum ``u0`` (normalised)."""
     problem = evaluator.problem
-    if not problem.weighted:
-        raise ConfigError(str(problem.reference.path), "a Bayesian fit needs a std for every measured quantity")
+    walkers, steps = sampler_size(problem, draws, walkers)
     p = len(problem.parameters)
-    walkers = walkers or max(16, 4 * p)
-    if walkers < 2 * p or walkers % 2:
-        raise ConfigError("walkers", f"must be even and at least {2 * p} (twice the parameters)")
-    steps = math.ceil(draws / walkers)
-    if steps < 10:
-        raise ConfigError("draws", f"at least {10 * walkers} ({walkers} walkers x 10 steps)")
     priors = priors_for(problem.parameters, priors)
     before = evaluator.evaluations + evaluator.replayed
     evaluator.stage = "posterior (emcee)"

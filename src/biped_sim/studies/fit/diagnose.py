@@ -15,11 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2 as chi2_distribution
 
 from biped_sim.studies.fit.evaluate import Evaluator
-from biped_sim.studies.fit.optimize import FitRun
-from biped_sim.studies.fit.problem import FitProblem, simulate_outcome
+from biped_sim.studies.fit.optimize import MISFIT_P_VALUE, FitRun, misfit_p_value
+from biped_sim.studies.fit.problem import FitProblem, Outcome, simulate_outcome
 
 PROFILE_POINTS = 3
 PROFILE_WIDTH_SE = 1.0  # spacing of the scan, in conditional standard errors
@@ -28,7 +27,6 @@ JUMP_RATIO = 0.5  # a first difference this far (relative) off its neighbours' l
 NOISE_FLOOR = 1e-3  # residuals (in standard errors) that move less than this are not judged
 AT_BOUND = 1e-6  # normalised distance from a bound that counts as on it
 NUMBERING_RATIO = 0.25  # a shifted numbering this much better is flagged
-MISFIT_P_VALUE = 1e-3  # chi2 above its 99.9th percentile: the data are not matched
 
 
 @dataclass
@@ -103,10 +101,8 @@ def misfit(run: FitRun) -> str | None:
     problem = run.problem
     n, p = len(run.residuals), len(problem.parameters)
     chi2 = float(run.residuals @ run.residuals)
-    if not problem.weighted or n <= p:
-        return None
-    p_value = float(chi2_distribution.sf(chi2, n - p))
-    if p_value >= MISFIT_P_VALUE:
+    p_value = misfit_p_value(problem, 0.5 * chi2)
+    if p_value is None or p_value >= MISFIT_P_VALUE:
         return None
     return (
         f"the fitted model misses the data: chi2 {chi2:.4g} for {n - p} degrees of freedom (p = {p_value:.1e}); "
@@ -147,16 +143,27 @@ def numbering_check(problem: FitProblem, start: np.ndarray) -> str | None:
     )
 
 
-def verdict(run: FitRun, profiles: list[Profile], reached: bool) -> list[str]:
-    """Why the fit is not converged (empty: it is)."""
+def unreached_text(steps: list[int], outcome: Outcome) -> str | None:
+    """Which reference steps the fitted walker never reached and how its run ended (None: it reached them all)."""
+    if not steps:
+        return None
+    named = ", ".join(map(str, sorted(set(steps))[:10])) + (", ..." if len(set(steps)) > 10 else "")
+    return (
+        f"the fitted walker never reaches reference step {named} (its run ended {outcome.status} after "
+        f"{outcome.strikes} model steps)"
+    )
+
+
+def verdict(run: FitRun, profiles: list[Profile], unreached: str | None) -> list[str]:
+    """Why the fit is not converged (empty: it is); ``unreached``: :func:`unreached_text`."""
     reasons = []
     if not run.polish.success:
         reasons.append(f"the polish met no tolerance ({run.polish.message})")
     for parameter, u in zip(run.problem.parameters, run.u, strict=True):
         if u <= AT_BOUND or u >= 1 - AT_BOUND:
             reasons.append(f"{parameter.key} is on a bound")
-    if not reached:
-        reasons.append("the fitted walker does not reach every reference step")
+    if unreached:
+        reasons.append(unreached)
     for profile in profiles:
         if profile.jump is not None:
             reasons.append(f"the objective is not smooth along {profile.key} ({profile.jump})")

@@ -10,12 +10,17 @@ from biped_sim.io.tables import Column, Table
 from biped_sim.studies.compare import Comparison
 from biped_sim.studies.fit.diagnose import JUMP_RATIO, PROFILE_POINTS, PROFILE_WIDTH_SE
 from biped_sim.studies.fit.optimize import (
+    BASIN_RADIUS,
     CMA_SETTINGS,
     DE_SETTINGS,
     FD_STEP,
     GRID_POINTS,
+    IPOP_SETTINGS,
     POLISH_EVALUATIONS,
+    POLISH_STARTS,
+    SOBOL_PER_PARAMETER,
     TOLERANCES,
+    FitRun,
 )
 from biped_sim.studies.fit.parameters import LOG_SPAN
 from biped_sim.studies.fit.problem import PENALTY_SCALES
@@ -48,15 +53,21 @@ def targets_used(result: FitResult) -> dict[str, Any]:
     }
 
 
+def _global_settings(run: FitRun) -> dict[str, Any]:
+    """The settings of the global stage that ran."""
+    if run.global_method == "multistart" or run.global_stage.name == "grid":
+        grid = run.global_stage.name == "grid"
+        design = {"grid_points": GRID_POINTS} if grid else {"sobol_per_parameter": SOBOL_PER_PARAMETER}
+        return design | {"basin_radius": BASIN_RADIUS, "polish_starts": POLISH_STARTS, "ipop_cma": IPOP_SETTINGS}
+    return DE_SETTINGS if run.global_method == "de" else CMA_SETTINGS
+
+
 def _method(result: FitResult) -> dict[str, Any]:
     run = result.run
     return {
+        "global_method": run.global_method,
         "global_stage": run.global_stage.name,
-        "global_settings": {"grid_points": GRID_POINTS}
-        if run.global_stage.name == "grid"
-        else DE_SETTINGS
-        if run.global_method == "de"
-        else CMA_SETTINGS,
+        "global_settings": _global_settings(run),
         "seed": run.seed,
         "polish": "scipy.optimize.least_squares (trf), variables normalised to [0, 1] over the bounds",
         "log_scale_when_bounds_span": LOG_SPAN,
@@ -78,7 +89,8 @@ def fit_document(result: FitResult, config_path: str | None = None) -> dict[str,
     return {
         "parameters": result.parameters,
         "converged": result.converged,
-        "verdict": "converged" if result.converged else "not converged: " + "; ".join(result.reasons),
+        "verdict": result.verdict,
+        "alternatives": [vars(a) for a in result.alternatives],
         "misfit": result.misfit,
         "rms_error_s": after.stats.rms_abs if after is not None else None,
         "max_error_s": after.stats.max_abs if after is not None else None,
@@ -89,7 +101,7 @@ def fit_document(result: FitResult, config_path: str | None = None) -> dict[str,
         "simulations": result.simulations,
         "evaluations_replayed": result.replayed,
         "wall_time_s": run.wall_time_s,
-        "stages": [vars(s) | {"u": list(s.u), "point": problem.values(s.u)} for s in (run.global_stage, run.polish)],
+        "stages": [vars(s) | {"u": list(s.u), "point": problem.values(s.u)} for s in (run.global_stage, *run.basins)],
         "estimates": [vars(e) | {"scale": "log" if e.log else "linear"} for e in result.estimates],
         "correlation": {"keys": keys, "matrix": ident.correlation.tolist()},
         "residual_variance": result.residual_variance,
@@ -134,7 +146,7 @@ def parameter_table(result: FitResult, name: str = "fit_parameters") -> Table:
     ]
     rows = [vars(e) | {"scale": "log" if e.log else "linear"} for e in result.estimates]
     notes = [f"Standard errors from the Jacobian and the {result.variance_source}."]
-    notes.append("Converged." if result.converged else "NOT converged: " + "; ".join(result.reasons) + ".")
+    notes.append(result.verdict[0].upper() + result.verdict[1:] + ".")
     notes += [f"Warning: {result.misfit}."] if result.misfit else []
     notes += [f"Warning: {w}." for w in result.identifiability.warnings]
     return Table(name, "Fitted parameters", columns, rows, notes)

@@ -1,37 +1,62 @@
-"""The optimizer of a fit: a bounded global stage, then a local least-squares polish from its best point.
+"""The optimizer of a fit: a bounded global stage, then continued least-squares polishes from its best basins.
 
 The objective, half the sum of squared weighted residuals, is piecewise smooth in contact parameters (a
-rebound or a slip that appears moves the gait) and has cliffs where the walker falls: a local method from
-one start walks into the nearest step. The global stage is scipy's ``differential_evolution`` (seeded,
-``updating="deferred"`` so that each generation is one batch of simulations on the executor through its
-``workers`` map) or CMA-ES from ``cma`` (each generation one batch), over the normalised variables. CMA-ES
-is the default, chosen by measurement (docs/experiments.md: it recovered more hidden restitutions for the
-same evaluations); a one-parameter fit scans a grid of ``GRID_POINTS`` instead (CMA-ES needs two
-dimensions, and in one a grid is the robust answer). The polish is
-``least_squares`` (trust-region reflective, bounded to [0, 1]) with forward differences of
-``FD_STEP`` of the normalised range, its p difference runs one batch. Everything runs through one
-:class:`~biped_sim.studies.fit.evaluate.Evaluator`, so points are never simulated twice and a checkpoint
-resumes an interrupted fit.
+rebound or a slip that appears moves the gait) and has cliffs where the walker falls; and a gait started
+from a fixed state is a transient whose later steps amplify a parameter's change, so over seven steps the
+truth's basin is a needle (issue 27: 0.01 wide in restitution) while over the first three it is wide. One
+CMA-ES run converges on the basin it meets first; a local method from one start walks into the nearest
+step. The default global stage, ``multistart``, is therefore:
+
+1. a scrambled Sobol design (``scipy.stats.qmc.Sobol``, seeded) of ``2^ceil(log2(SOBOL_PER_PARAMETER p))``
+   points over the box (normalised variables), one batch on the executor, scored on the targets of the
+   continuation's first level (below);
+2. the design's basins: a point is a basin's lowest point when no lower design point lies within
+   ``BASIN_RADIUS`` of it; the best ``POLISH_STARTS`` of them are each polished by continuation over the
+   steps (:func:`step_levels`: the targets up to the first model step with more targets than parameters,
+   then one step more at a time, each level polished from the last one's optimum, the last on every target);
+3. when the best polished basin still misses the data (a reference with std: chi2 beyond its
+   ``1 - MISFIT_P_VALUE`` quantile), IPOP-CMA-ES restarts (``cma.fmin2``, the population doubled at each
+   restart, each generation one batch) within ``IPOP_SETTINGS["maxfevals"]`` evaluations in all; their best
+   point is polished too. Without a std there is no noise level to miss, and the budget is not spent.
+
+The polished basins are all kept (:attr:`FitRun.basins`, best first): two of them at equal cost within the
+noise mean the data do not pick one (:mod:`.alternatives`). The choice of this stage over one CMA-ES run or
+differential evolution (``cma``, ``de``, kept for comparison) is measured in docs/experiments.md. A
+one-parameter fit scans a grid of ``GRID_POINTS`` instead of the design (in one dimension a grid is the
+robust answer), and polishes its basins the same way. The polish is ``least_squares`` (trust-region
+reflective, bounded to [0, 1]) with forward differences of ``FD_STEP`` of the normalised range, its p
+difference runs one batch. Everything runs through one :class:`~biped_sim.studies.fit.evaluate.Evaluator`,
+so points are never simulated twice and a checkpoint resumes an interrupted fit.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
 import cma
 import numpy as np
 from scipy.optimize import differential_evolution, least_squares
+from scipy.stats import chi2 as chi2_distribution
+from scipy.stats import qmc
 
 from biped_sim.errors import ConfigError
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.problem import FitProblem, Outcome
 
 FD_STEP = 1e-3  # forward-difference step of the polish, in normalised variables
-GLOBAL_METHODS = ("de", "cma")
+GLOBAL_METHODS = ("multistart", "cma", "de")
+SOBOL_PER_PARAMETER = 16  # design points per parameter (rounded up to a power of two: 32 for two parameters)
+BASIN_RADIUS = 0.15  # normalised distance within which a lower design point claims a point's basin
+POLISH_STARTS = 3  # the best basins of the design polished
+SAME_POINT = 1e-3  # polishes ending this close (normalised, in every variable) found the same basin
+IPOP_SETTINGS = {"sigma0": 0.25, "popsize": 8, "incpopsize": 2, "restarts": 4, "maxfevals": 240, "tolx": 1e-4}
+MISFIT_P_VALUE = 1e-3  # chi2 above its 99.9th percentile: the data are not matched
 DE_SETTINGS = {"popsize": 8, "maxiter": 40, "tol": 1e-3, "atol": 1e-9, "mutation": (0.5, 1.0), "recombination": 0.7}
 CMA_SETTINGS = {"sigma0": 0.25, "popsize": 8, "maxfevals": 640, "tolx": 1e-4}
 POLISH_EVALUATIONS = 30  # least_squares' max_nfev (each Jacobian costs p more runs)
+LEVEL_EVALUATIONS = 10  # ... on each level of the continuation before the last
 TOLERANCES = {"ftol": 1e-8, "xtol": 1e-6, "gtol": 1e-8}
 SEED = 11  # the global stage's seed (recorded in fit.json)
 GRID_POINTS = 41  # the global stage of a one-parameter fit
@@ -65,6 +90,7 @@ class FitRun:
     wall_time_s: float
     global_method: str
     seed: int
+    basins: list[Stage]  # every polished basin, best first (the first is ``polish``)
 
     @property
     def u(self) -> np.ndarray:
@@ -108,34 +134,138 @@ def _cma(evaluator: Evaluator, dimension: int, seed: int) -> Stage:
     return Stage("cma", best, float(strategy.result.fbest), used, True, str(dict(strategy.stop())))
 
 
-def _grid(evaluator: Evaluator, dimension: int, seed: int) -> Stage:
-    """One parameter: a grid of GRID_POINTS over the bounds in one batch (CMA-ES needs two dimensions)."""
-    evaluator.stage = "global (grid)"
-    points = [np.array([u]) for u in np.linspace(0.0, 1.0, GRID_POINTS)]
-    costs = evaluator.costs(points)
-    best = int(np.argmin(costs))
-    return Stage("grid", points[best], costs[best], len(points), True, f"best of {GRID_POINTS} grid points")
+def _design(evaluator: Evaluator, dimension: int, seed: int, rows: np.ndarray) -> tuple[Stage, np.ndarray, np.ndarray]:
+    """The space-filling start in one batch: a scrambled Sobol design, or in one dimension a grid of GRID_POINTS;
+    (its best point, the points, their costs over the targets ``rows``)."""
+    if dimension == 1:
+        points = np.linspace(0.0, 1.0, GRID_POINTS)[:, None]
+        name, text = "grid", f"{GRID_POINTS} grid points"
+    else:
+        m = math.ceil(math.log2(SOBOL_PER_PARAMETER * dimension))
+        points = qmc.Sobol(dimension, scramble=True, seed=np.random.default_rng(seed)).random_base2(m)
+        name, text = "sobol", f"{len(points)} scrambled Sobol points"
+    evaluator.stage = f"global ({text})"
+    residuals = [evaluator.problem.residuals(o) for o in evaluator.outcomes(list(points))]
+    costs = np.array([0.5 * float(r[rows] @ r[rows]) for r in residuals])
+    best = int(np.argmin([0.5 * float(r @ r) for r in residuals]))
+    full = 0.5 * float(residuals[best] @ residuals[best])
+    return Stage(name, points[best], full, len(points), True, f"best of {text}"), points, costs
 
 
-def _polish(evaluator: Evaluator, start: np.ndarray) -> Stage:
+def step_levels(problem: FitProblem) -> list[np.ndarray]:
+    """The targets of the continuation, as row masks: those up to model step k, for each k from the first with more
+    targets than parameters to the last (the last mask: every target)."""
+    model_steps = np.array([t.model_step for t in problem.targets])
+    p = len(problem.parameters)
+    levels = [model_steps <= k for k in sorted(set(model_steps.tolist())) if np.count_nonzero(model_steps <= k) > p]
+    return levels or [np.ones(len(model_steps), dtype=bool)]
+
+
+def basin_starts(points: np.ndarray, costs: np.ndarray, radius: float, count: int) -> list[int]:
+    """The lowest points of up to ``count`` distinct basins of a design, best first: the points with no lower
+    design point within ``radius``."""
+    order = np.argsort(costs, kind="stable")
+    starts: list[int] = []
+    for rank, i in enumerate(order):
+        if not np.any(np.linalg.norm(points[order[:rank]] - points[i], axis=1) <= radius):
+            starts.append(int(i))
+        if len(starts) == count:
+            break
+    return starts
+
+
+def misfit_p_value(problem: FitProblem, cost: float) -> float | None:
+    """The chance of a chi2 (twice ``cost``) this large from the reference's noise alone (None without a std)."""
+    n, p = len(problem.targets), len(problem.parameters)
+    if not problem.weighted or n <= p:
+        return None
+    return float(chi2_distribution.sf(2.0 * cost, n - p))
+
+
+def _ipop(evaluator: Evaluator, dimension: int, seed: int) -> Stage | None:
+    """IPOP-CMA-ES from the box's centre: restarts with the population doubled, within the stated budget."""
+    budget = IPOP_SETTINGS["maxfevals"]
+    if budget <= 0 or dimension < 2:
+        return None
+    before = evaluator.evaluations + evaluator.replayed
+    evaluator.stage = "global (IPOP-CMA-ES)"
+    options = {
+        "bounds": [0.0, 1.0], "seed": seed, "popsize": IPOP_SETTINGS["popsize"], "maxfevals": budget,
+        "tolx": IPOP_SETTINGS["tolx"], "verbose": -9, "verb_log": 0, "verb_disp": 0,
+    }  # fmt: skip
+    best, strategy = cma.fmin2(
+        None, [0.5] * dimension, IPOP_SETTINGS["sigma0"], options, parallel_objective=evaluator.costs,
+        restarts=IPOP_SETTINGS["restarts"], incpopsize=IPOP_SETTINGS["incpopsize"],
+    )  # fmt: skip
+    used = evaluator.evaluations + evaluator.replayed - before
+    return Stage("ipop_cma", np.asarray(best, dtype=float), float(strategy.result.fbest), used, True, "IPOP-CMA-ES")
+
+
+def _polish(
+    evaluator: Evaluator, start: np.ndarray, rows: np.ndarray | None = None, evaluations: int = POLISH_EVALUATIONS
+) -> Stage:
+    """``least_squares`` from ``start`` on the targets ``rows`` (all by default), at most ``evaluations`` steps."""
     before = evaluator.evaluations + evaluator.replayed
     evaluator.stage = "polish (least squares)"
+    kept = slice(None) if rows is None else rows
     solution = least_squares(
-        evaluator.residuals,
+        lambda u: evaluator.residuals(u)[kept],
         start,
-        jac=lambda u: evaluator.jacobian(u, FD_STEP),
+        jac=lambda u: evaluator.jacobian(u, FD_STEP)[kept],
         bounds=(0.0, 1.0),
         method="trf",
         x_scale=1.0,
-        max_nfev=POLISH_EVALUATIONS,
+        max_nfev=evaluations,
         **TOLERANCES,
     )
     used = evaluator.evaluations + evaluator.replayed - before
     return Stage("least_squares", solution.x, float(solution.cost), used, solution.status > 0, str(solution.message))
 
 
-def run_fit(evaluator: Evaluator, global_method: str = "cma", seed: int = SEED) -> FitRun:
-    """Fit ``evaluator.problem``: the global stage, the polish from its best point, the Jacobian there."""
+def _polished(evaluator: Evaluator, start: Stage, levels: list[np.ndarray] | None = None) -> Stage:
+    """The polish from ``start``'s point, or that point itself if the polish ends higher (never worse); with
+    ``levels``, continued through them: each level's targets polished from the previous level's optimum."""
+    u, used = start.u, 0
+    for rows in (levels or [])[:-1]:
+        stage = _polish(evaluator, u, rows, LEVEL_EVALUATIONS)
+        u, used = stage.u, used + stage.evaluations
+    polish = _polish(evaluator, u)
+    polish.evaluations += used
+    if polish.cost > start.cost:
+        return Stage("least_squares", start.u, start.cost, polish.evaluations, False, f"kept the {start.name} point")
+    return polish
+
+
+def _multistart(evaluator: Evaluator, dimension: int, seed: int) -> tuple[Stage, list[Stage]]:
+    """The design, the polishes of its best basins and of the IPOP restarts' best: (the best global point, the
+    distinct polished basins, best first)."""
+    levels = step_levels(evaluator.problem)
+    design, points, costs = _design(evaluator, dimension, seed, levels[0])
+    chosen = basin_starts(points, costs, BASIN_RADIUS, POLISH_STARTS)
+    starts = [Stage(design.name, points[i], evaluator.costs([points[i]])[0], 0, True, "") for i in chosen]
+    polished = _polish_distinct(evaluator, starts, levels)
+    p_value = misfit_p_value(evaluator.problem, polished[0].cost)
+    restarts = _ipop(evaluator, dimension, seed) if p_value is not None and p_value < MISFIT_P_VALUE else None
+    if restarts is not None:
+        polished = _polish_distinct(evaluator, [restarts], levels, polished)
+    best_global = design if restarts is None or design.cost <= restarts.cost else restarts
+    return best_global, polished
+
+
+def _polish_distinct(
+    evaluator: Evaluator, starts: list[Stage], levels: list[np.ndarray], polished: list[Stage] | None = None
+) -> list[Stage]:
+    """``polished`` with the continued polish of each start that ends in a basin not yet among them, best first."""
+    out = list(polished or [])
+    for start in starts:
+        stage = _polished(evaluator, start, levels)
+        if all(np.max(np.abs(stage.u - other.u)) > SAME_POINT for other in out):
+            out.append(stage)
+    return sorted(out, key=lambda stage: stage.cost)
+
+
+def run_fit(evaluator: Evaluator, global_method: str = "multistart", seed: int = SEED) -> FitRun:
+    """Fit ``evaluator.problem``: the global stage, the polishes of its basins, the Jacobian at the best."""
     if global_method not in GLOBAL_METHODS:
         raise ConfigError("global_method", f"unknown method {global_method!r}; expected one of {GLOBAL_METHODS}")
     clock = time.perf_counter()
@@ -143,15 +273,17 @@ def run_fit(evaluator: Evaluator, global_method: str = "cma", seed: int = SEED) 
     p = len(problem.parameters)
     start = np.array([q.to_unit(q.start) for q in problem.parameters])
     (start_outcome,) = evaluator.outcomes([start])
-    stage = (_grid if p == 1 else _de if global_method == "de" else _cma)(evaluator, p, seed)
-    polish = _polish(evaluator, stage.u)
-    if polish.cost > stage.cost:  # the polish never makes it worse
-        polish = Stage("least_squares", stage.u, stage.cost, polish.evaluations, False, "kept the global stage's point")
+    if global_method == "multistart" or p == 1:
+        stage, basins = _multistart(evaluator, p, seed)
+    else:
+        stage = (_de if global_method == "de" else _cma)(evaluator, p, seed)
+        basins = [_polished(evaluator, stage)]
+    polish = basins[0]
     evaluator.stage = "Jacobian at the optimum"
     jacobian = evaluator.jacobian(polish.u, FD_STEP)
     (best_outcome,) = evaluator.outcomes([polish.u])
     evaluator.save()
     return FitRun(
         problem, stage, polish, problem.residuals(best_outcome), jacobian, start_outcome, best_outcome,
-        evaluator.evaluations, evaluator.replayed, time.perf_counter() - clock, global_method, seed,
+        evaluator.evaluations, evaluator.replayed, time.perf_counter() - clock, global_method, seed, basins,
     )  # fmt: skip

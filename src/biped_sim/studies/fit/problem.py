@@ -29,8 +29,8 @@ import numpy as np
 from pydantic import ValidationError
 
 from biped_sim.config import Config, derive, set_dotted
-from biped_sim.errors import ConfigError
-from biped_sim.io.references import MEASURED_UNITS, Reference
+from biped_sim.errors import ConfigError, quote
+from biped_sim.io.references import MAX_STEPS, MEASURED_UNITS, Reference
 from biped_sim.multibody.dispatch import system_foot_contact
 from biped_sim.simulate import simulate
 from biped_sim.studies.fit.parameters import FitParameter, check_parameters
@@ -144,6 +144,8 @@ class Target:
 
 def reference_targets(reference: Reference, skip: int, quantities: tuple[str, ...] | None) -> tuple[Target, ...]:
     """The targets of ``reference`` (of the named quantities; all by default); ConfigError for a zero std."""
+    if unknown := [q for q in quantities or () if q not in MEASURED_UNITS]:
+        raise ConfigError("quantities", f"unknown quantity {quote(unknown[0])}; known: {', '.join(MEASURED_UNITS)}")
     measured = [m for m in reference.measured() if quantities is None or m.quantity in quantities]
     if not measured:
         raise ConfigError(str(reference.path), "holds no measured step quantities to fit (only published errors?)")
@@ -179,6 +181,12 @@ class FitProblem:
         if self.skip < 0:
             raise ConfigError("skip", "must be at least 0")
         object.__setattr__(self, "targets", reference_targets(self.reference, self.skip, self.quantities))
+        last = max(self.targets, key=lambda t: t.model_step)
+        if last.model_step > MAX_STEPS:
+            raise ConfigError(
+                "skip", f"reference step {last.step:,} is model step {last.model_step:,}, past the {MAX_STEPS:,} "
+                "steps a fit may simulate: it could never be matched",
+            )  # fmt: skip
         if len(self.targets) < len(self.parameters):
             raise ConfigError(
                 "parameters",

@@ -20,13 +20,23 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.io.references import Reference
 from biped_sim.studies.compare import Comparison, compare_periods
-from biped_sim.studies.fit.diagnose import AT_BOUND, Profile, misfit, numbering_check, profile_scans, verdict
+from biped_sim.studies.fit.alternatives import Alternative, alternatives
+from biped_sim.studies.fit.diagnose import (
+    AT_BOUND,
+    Profile,
+    misfit,
+    numbering_check,
+    profile_scans,
+    unreached_text,
+    verdict,
+)
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import FitRun
 from biped_sim.studies.fit.problem import Outcome, simulate_outcome
 
 RANK_TOLERANCE = 1e-6
 CORRELATION_LIMIT = 0.99
+UNIDENTIFIED_MARK = "the data do not determine"
 
 
 @dataclass(frozen=True)
@@ -73,7 +83,7 @@ def identifiability_warnings(estimates: list[Estimate], ident: Identifiability, 
     warnings, p = [], len(estimates)
     if ident.rank < p:
         names = ", ".join(estimates[j].key for j in sorted(unresolved)) or "a combination of parameters"
-        warnings.append(f"Jacobian rank {ident.rank} < {p} parameters: the data do not determine {names}")
+        warnings.append(f"Jacobian rank {ident.rank} < {p} parameters: {UNIDENTIFIED_MARK} {names}")
     for i in range(p):
         for j in range(i + 1, p):
             c = ident.correlation[i, j]
@@ -103,10 +113,20 @@ class FitResult:
     misfit: str | None = None  # the data are not matched at the optimum (diagnose.misfit)
     simulations: int = 0  # run by the fit, the scans included
     replayed: int = 0  # read back from a checkpoint
+    alternatives: list[Alternative] = field(default_factory=list)  # other sets that fit as well (.alternatives)
 
     @property
     def converged(self) -> bool:
-        return not self.reasons
+        return not self.reasons and not self.alternatives
+
+    @property
+    def verdict(self) -> str:
+        """ "converged", "not identifiable: ..." (other parameter sets fit as well) or "not converged: ..."."""
+        if self.alternatives:
+            sets = "; ".join(", ".join(f"{k} = {v:.6g}" for k, v in a.parameters.items()) for a in self.alternatives)
+            text = f"not identifiable: {len(self.alternatives) + 1} distinct parameter sets fit within the noise "
+            return text + f"(the best and {sets})" + "".join(f"; {r}" for r in self.reasons)
+        return "converged" if not self.reasons else "not converged: " + "; ".join(self.reasons)
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -177,11 +197,16 @@ def summarize(run: FitRun, evaluator: Evaluator) -> FitResult:
     after_data = problem.evaluation_data(run.u)
     after_data["formulation"]["kind"] = problem.config.formulation.kind  # the fitted config as the user runs it
     after = simulate_outcome(after_data)
-    reached = bool(np.all(np.isfinite(problem.model_values(after))))
+    unreached = [
+        t.step for t, value in zip(problem.targets, problem.model_values(after), strict=True) if math.isnan(value)
+    ]
     evaluator.save()
-    totals = {"simulations": evaluator.evaluations, "replayed": evaluator.replayed}
+    others = alternatives(run, s2 if math.isfinite(s2) else 1.0, cov)
+    totals = {"simulations": evaluator.evaluations, "replayed": evaluator.replayed, "alternatives": others}
+    missed = misfit(run)  # another minimum or a model error: never a converged fit
+    reasons = verdict(run, profiles, unreached_text(unreached, after)) + ([missed] if missed else [])
     return FitResult(
-        run, estimates, ident, s2, source, profiles, verdict(run, profiles, reached),
+        run, estimates, ident, s2, source, profiles, reasons,
         _periods(problem.reference, run.start_outcome, problem.skip, "start"),
-        _periods(problem.reference, after, problem.skip, "fitted"), after, fitted, misfit(run), **totals,
+        _periods(problem.reference, after, problem.skip, "fitted"), after, fitted, missed, **totals,
     )  # fmt: skip

@@ -30,6 +30,7 @@ KINDS = {
     "triangular": ("LO", "MODE", "HI"),
     "interval": ("LO", "HI"),
 }
+SPEC_KEYS = ("parameters", "samples", "seed", "method")  # an uncertainty file's section
 UNIT_CLIP = 1e-12  # unit samples are kept inside (0, 1): a normal's inverse is infinite at the ends
 
 
@@ -135,6 +136,9 @@ def read_spec(path: str) -> tuple[list[Distribution], dict[str, Any]]:
             found.append(_from_mapping(str(key), entry))
         else:
             raise ConfigError(str(key), "expected DIST:N1:N2 or a mapping with 'distribution'")
+    if unknown := [str(k) for k in section if k not in SPEC_KEYS]:
+        where = "uncertainty." if "uncertainty" in data else ""
+        raise ConfigError(f"{path}: {where}{unknown[0]}", f"unknown key; expected {', '.join(SPEC_KEYS)}")
     return found, {k: v for k, v in section.items() if k != "parameters"}
 
 

@@ -10,11 +10,12 @@ Two grounds:
   compiled rigid step map, with the Markov chain of its analytic apex-to-apex map beside it as a check
   (:mod:`.rimless_chain`).
 
-The estimate (:func:`mfpt_estimate`): when no walk reached the cap, the mean of the strike counts with a
-Student-t interval (no assumption on their distribution); when some did (censored), the maximum-likelihood
-mean of a geometric first passage (a metastable walker: a constant chance of falling per step), total strikes
-over falls, with the exact Poisson (chi-square) interval of the fall rate; with no fall at all, only a lower
-bound.
+The estimate (:func:`mfpt_estimate`): a metastable walker has a constant chance p of falling at each step, so its
+first-passage time T, the step on which it falls (the falling step counted: the Markov chain's m = 1 + E m'), is
+geometric with mean 1 / p >= 1. A walk that fell after s strikes has T = s + 1, one that reached the cap after s
+strikes T > s (censored); the likelihood p^k (1 - p)^S (k falls, S strikes in all) gives the MFPT (S + k) / k and
+its likelihood-ratio interval (the p within chi2_1(confidence) / 2 of the maximum), which stays at or above one
+step; with no fall at all, the MFPT is unbounded above and the interval's lower end is the bound the walks give.
 """
 
 from __future__ import annotations
@@ -26,17 +27,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy import optimize, stats
 
 from biped_sim.config import Config, derive
 from biped_sim.errors import ArgumentError
+from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.tasks import results_as_done
-from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, wheel_walks
+from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, walks_random_slopes, wheel_walks
 from biped_sim.studies.uncertainty.samples import run_formulation
 
 CONFIDENCE = 0.95
 SPACING = 0.1  # [leg lengths] between the random heights
 GROUNDS = ("height", "slope")
+MAX_CAP = 10_000  # steps of a walk: its random ground (2 leg lengths a step) and its samples stay within bounds
 TIME_PER_STEP = 10.0  # a height walk's t_end: this many sqrt(l / g) per step (it stops at the cap)
 
 
@@ -52,19 +55,34 @@ class Estimate:
 
 
 def mfpt_estimate(strikes: np.ndarray, fell: np.ndarray, confidence: float = CONFIDENCE) -> Estimate:
-    """The MFPT of walks that took ``strikes`` steps and fell (``fell``) or reached the cap (see module)."""
+    """The MFPT [steps] of walks that took ``strikes`` steps and fell (``fell``) or reached the cap (see module)."""
     strikes, fell = np.asarray(strikes, dtype=float), np.asarray(fell, dtype=bool)
-    n, k, total = strikes.size, int(np.count_nonzero(fell)), float(np.sum(strikes))
-    a = 1.0 - confidence
-    if k == n:
-        mean = float(np.mean(strikes))
-        half = float(stats.t.ppf(1 - a / 2, n - 1) * np.std(strikes, ddof=1) / math.sqrt(n)) if n > 1 else math.inf
-        return Estimate(mean, (mean - half, mean + half), k, 0, "mean of uncensored walks, Student-t interval")
-    rate_low = stats.chi2.ppf(a / 2, 2 * k) / (2 * total) if k else 0.0
-    rate_high = stats.chi2.ppf(1 - a / 2, 2 * k + 2) / (2 * total)
-    ci = (1.0 / rate_high, 1.0 / rate_low if k else math.inf)
-    mfpt = total / k if k else math.inf
-    return Estimate(mfpt, ci, k, n - k, "censored: geometric maximum likelihood, chi-square interval")
+    k, total = int(np.count_nonzero(fell)), float(np.sum(strikes))
+    p_low, p_high = _likelihood_interval(k, total, float(stats.chi2.ppf(confidence, 1)))
+    mfpt = (total + k) / k if k else math.inf
+    ci = (1.0 / p_high, 1.0 / p_low if p_low > 0 else math.inf)
+    return Estimate(
+        mfpt, ci, k, strikes.size - k, "geometric first passage, censored at the cap; likelihood-ratio interval"
+    )
+
+
+def _likelihood_interval(k: int, total: float, threshold: float) -> tuple[float, float]:
+    """The fall probabilities p whose log-likelihood k ln p + total ln(1 - p) is within ``threshold`` / 2 of its
+    maximum, at p = k / (k + total)."""
+
+    def log_likelihood(p: float) -> float:
+        return (k * math.log(p) if k else 0.0) + (total * math.log1p(-p) if total else 0.0)
+
+    best = k / (k + total)
+    peak = log_likelihood(best) if 0.0 < best < 1.0 else 0.0
+
+    def excess(p: float) -> float:
+        return 2.0 * (peak - log_likelihood(p)) - threshold
+
+    tiny = 1e-300
+    low = optimize.brentq(excess, tiny, best) if k else 0.0
+    high = optimize.brentq(excess, best, 1.0 - 1e-16) if total else 1.0
+    return low, high
 
 
 def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
@@ -121,14 +139,15 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
     """ArgumentError naming the argument at fault."""
     if ground not in GROUNDS:
         raise ArgumentError("ground", f"unknown ground {ground!r}; expected one of {', '.join(GROUNDS)}")
-    if ground == "slope" and not (config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"):
+    if ground == "slope" and not walks_random_slopes(config):
         raise ArgumentError("ground", "random slopes per step are walked by the rigid rimless wheel only")
     if not roughness or not all(math.isfinite(h) and h >= 0 for h in roughness):
         raise ArgumentError("roughness", "give non-negative roughness levels")
     if seeds < 2:
         raise ArgumentError("seeds", "need at least 2 seeds")
-    if cap < 1:
-        raise ArgumentError("cap", "must be at least 1 step")
+    check_run_count(len(roughness) * seeds, "seeds", "walks (roughness levels x seeds)")
+    if not 1 <= cap <= MAX_CAP:
+        raise ArgumentError("cap", f"must be from 1 to {MAX_CAP:,} steps")
 
 
 def mfpt_curve(
