@@ -71,6 +71,31 @@ def one_line_error(stderr: str) -> str:
     return lines[0]
 
 
+# Modules that share an expensive session fixture (tiny_sweep_dir: eight runs on two worker processes): xdist runs
+# them on one worker, which computes it once; every other module is a unit of its own, so that its module-scoped
+# fixtures are computed once too. pytest-xdist's loadgroup would do this with marks, but groups nothing with
+# pytest 9.2 (pytest-dev/pytest-xdist#1386).
+SHARED_FIXTURE_MODULES = {
+    f"tests/{name}.py": "tiny_sweep"
+    for name in ("test_compare", "test_report", "test_study_arguments", "test_study_faults", "test_sweep_run")
+}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """Under ``-n N`` with the default distribution, hand out tests by module (:data:`SHARED_FIXTURE_MODULES`)."""
+    if config.getoption("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ModuleScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return SHARED_FIXTURE_MODULES.get(module, module)
+
+    return ModuleScheduling(config, log)
+
+
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:
     """Name the order the tests ran in (pytest-randomly shuffles it), even under ``-q``: a failure that depends on
     the order is then reproduced with the same seed."""
