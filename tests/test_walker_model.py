@@ -243,3 +243,20 @@ def test_a_mirrored_leg_goes_with_bodies_off_the_legs_and_the_hips_own_fields() 
     assert [f.centre for f in described.feet] == [(0.0, -0.35)] * 2
     assert described.bodies[1].inertia == pytest.approx(0.01)
     assert config.initial_keys() == LEG_KEYS and config.walker.leg_length == 0.5
+
+
+def test_a_presets_parameters_are_its_fields_under_the_same_key() -> None:
+    default = CONFIGS / "round_foot_walker.yaml"
+    config = load_config(default, ["walker.parameters.leg_inertia=0.004"])
+    assert config.hash() == load_config(default, ["walker.leg_inertia=0.004"]).hash()
+    assert "parameters" not in config.model_dump()["walker"]
+    key = "walker.parameters.hip_mass"
+    assert numeric_value(config, key) == 2.0 and fit_parameter(config, key, 1.5, 2.5).start == 2.0
+    assert derive(config, {key: 2.5}).walker.hip_mass == 2.5  # type: ignore[union-attr]
+    check_distributions(config, [parse_distribution(key, "uniform:1.8:2.2")])
+    with pytest.raises(ConfigError) as caught:
+        load_config(default, ["walker.parameters.thigh_mass=1"])
+    assert str(caught.value) == (
+        "walker.parameters: the compass walker has no parameter 'thigh_mass'; its parameters: leg_length, "
+        "foot_radius, leg_mass, leg_com_from_hip, leg_inertia, leg_com_offset, foot_offset, hip_mass"
+    )

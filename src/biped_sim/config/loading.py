@@ -106,6 +106,8 @@ def get_dotted(data: Any, key: str) -> Any:
             node = node[_list_index(node, parts, depth)]
         elif isinstance(node, dict) and part in node:
             node = node[part]
+        elif isinstance(node, dict) and part == "parameters" and depth + 1 < len(parts) and parts[depth + 1] in node:
+            continue  # a preset's parameters are its fields: walker.parameters.leg_inertia is walker.leg_inertia
         else:
             raise ConfigError(key, "unknown config key")
     return node["value"] if isinstance(node, dict) and "value" in node else node  # a parameter: its value

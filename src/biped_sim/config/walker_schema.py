@@ -38,6 +38,27 @@ class Preset(Strict):
 
     @model_validator(mode="before")
     @classmethod
+    def _parameters_are_fields(cls, data: Any) -> Any:
+        """``parameters`` (NAME -> value, or a list of name and value) sets the preset's fields of those names:
+        every walker's physical parameters are ``walker.parameters.NAME`` (a preset's also ``walker.NAME``)."""
+        if not isinstance(data, dict) or "parameters" not in data:
+            return data
+        given = data["parameters"]
+        if isinstance(given, list):
+            given = {p.get("name"): p.get("value") for p in given if isinstance(p, dict)}
+        own = [name for name in cls.model_fields if name != "kind"]
+        if not isinstance(given, dict):
+            raise ValueError("parameters: expected NAME: value entries")
+        if unknown := [name for name in given if name not in own]:
+            listed = ", ".join(own) or "none"
+            kind = data.get("kind")
+            raise ValueError(
+                f"parameters: the {kind} walker has no parameter {quote(unknown[0])}; its parameters: {listed}"
+            )
+        return {**{k: v for k, v in data.items() if k != "parameters"}, **given}
+
+    @model_validator(mode="before")
+    @classmethod
     def _no_other_kinds_fields(cls, data: Any) -> Any:
         if isinstance(data, dict) and "description" in data:
             raise ValueError(f"description: only walker.kind: description has one, not the {data.get('kind')} walker")
