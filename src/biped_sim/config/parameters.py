@@ -174,6 +174,12 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
         raise ValueError("legs: follows from the mirrored leg (walker.description.leg), do not give it too")
     if unknown := sorted(set(leg) - set(LEG_PARTS)):
         raise ValueError(f"leg: unknown key {unknown[0]!r} (a leg has {', '.join(LEG_PARTS)})")
+    for part in LEG_PARTS:
+        if not isinstance(out.get(part, []), list):  # a key such as bodies.thigh_1.mass set on the written form
+            raise ValueError(
+                f"{part}: expected a list (of the parts off the mirrored leg); the leg's own are "
+                f"walker.description.leg.{part}, named without their _1 or _2"
+            )
     own = {str(item.get("name")) for part in LEG_PARTS for item in leg.get(part, []) if isinstance(item, dict)}
     copies = [_leg_copy(leg, own, f"_{k}") for k in (1, 2)]
     hip_body = f"{leg['bodies'][0].get('name')}"
