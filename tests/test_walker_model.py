@@ -192,6 +192,8 @@ def test_every_study_addresses_a_named_parameter(tmp_path: Path) -> None:
          "be greater than or equal to 0"),
         (["walker.description.legs=[[thigh_1], [thigh_2]]"], "walker.description.legs: follows from the mirrored leg"),
         (["walker.parameters.0.name=hip_mass"], "walker.parameters: 'hip_mass' is given twice"),
+        (["walker.description.bodies.thigh_1.mass=0.6"], "walker.description.bodies: expected a list (of the parts "
+         "off the mirrored leg); the leg's own are walker.description.leg.bodies, named without their _1 or _2"),
     ],
 )  # fmt: skip
 def test_a_bad_parameter_or_expression_is_one_line(overrides: list[str], message: str) -> None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import copy
+import functools
 import math
 import operator
 import typing
@@ -110,18 +111,24 @@ def resolve_numbers(model: type[BaseModel], data: Any, names: Mapping[str, float
     and nested records followed); ValueError ``"<dotted field>: reason"`` for an expression that fails."""
     if not isinstance(data, dict):
         return data
+    numbers, records = _field_kinds(model)
     out = dict(data)
     for key, value in data.items():
-        field = model.model_fields.get(key)
-        if field is None:
-            continue  # the model refuses it itself
-        annotation = field.annotation
-        if is_number_annotation(annotation):
+        if key in numbers and isinstance(value, str | list | tuple):  # an expression, or a vector of them
             out[key] = _numbers(value, names, f"{where}.{key}")
-        elif (sub := _record_type(annotation)) is not None and isinstance(value, list):
-            out[key] = [resolve_numbers(sub, item, names, f"{where}.{key}.{_label(item, i)}") for i, item in
+        elif key in records and isinstance(value, list):
+            out[key] = [resolve_numbers(records[key], item, names, f"{where}.{key}.{_label(item, i)}") for i, item in
                         enumerate(value)]  # fmt: skip
-    return out
+    return out  # a key outside the model is left for the model to refuse
+
+
+@functools.cache
+def _field_kinds(model: type[BaseModel]) -> tuple[frozenset[str], dict[str, type[BaseModel]]]:
+    """The model's number fields, and its fields that are lists of records with their record type."""
+    fields = model.model_fields.items()
+    numbers = frozenset(key for key, field in fields if is_number_annotation(field.annotation))
+    records = {key: record for key, field in fields if (record := _record_type(field.annotation)) is not None}
+    return numbers, records
 
 
 def _record_type(annotation: Any) -> type[BaseModel] | None:
@@ -167,6 +174,12 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
         raise ValueError("legs: follows from the mirrored leg (walker.description.leg), do not give it too")
     if unknown := sorted(set(leg) - set(LEG_PARTS)):
         raise ValueError(f"leg: unknown key {unknown[0]!r} (a leg has {', '.join(LEG_PARTS)})")
+    for part in LEG_PARTS:
+        if not isinstance(out.get(part, []), list):  # a key such as bodies.thigh_1.mass set on the written form
+            raise ValueError(
+                f"{part}: expected a list (of the parts off the mirrored leg); the leg's own are "
+                f"walker.description.leg.{part}, named without their _1 or _2"
+            )
     own = {str(item.get("name")) for part in LEG_PARTS for item in leg.get(part, []) if isinstance(item, dict)}
     copies = [_leg_copy(leg, own, f"_{k}") for k in (1, 2)]
     hip_body = f"{leg['bodies'][0].get('name')}"

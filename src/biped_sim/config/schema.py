@@ -271,9 +271,14 @@ class Config(Strict):
         described = self.walker.description
         if described is None:
             return
-        if massless := described.massless_bodies():
+        massless = described.massless_bodies()
+        if self.dynamics == "rigid" and len(massless) < len(described.bodies):  # held by a locked joint, or light
+            one_stop = {j.child for j in described.joints if len(j.stops) == 1}
+            massless = [name for name in massless if name in one_stop]  # free while its joint swings: singular
+        if massless:
             raise ValueError(
                 f"walker.description.bodies.{massless[0]}.mass: a body needs mass (its own or a point mass)"
+                + ("; rigid: or a locked joint (two stops at one angle)" if self.dynamics == "rigid" else "")
             )
 
     def _initial_keys_match(self) -> None:
