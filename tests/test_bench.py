@@ -257,3 +257,11 @@ def test_mujoco_walker_matches_initial_state_and_walks_one_step() -> None:
     np.testing.assert_allclose(walker.qpos0[2:], [0.25, -0.5])
     assert len(result["strikes"]) == 1
     assert result["strikes"][0] == pytest.approx(0.389, abs=0.01)  # ours: 0.38908 s
+
+
+def test_bench_markdown_reports_the_recovery_check_cost_per_fit_against_its_target() -> None:
+    result = made_up_result()
+    row = {"cases": 2, "recovered": 2, "rate": 1.0, "dishonest_misses": 0, "evaluations_per_fit": 280.0}
+    result["fit"] = {"recovery": {"inertia+restitution": row | {"wall_s_per_fit": 21.0, "target_s_per_fit": 15.0}}}
+    met = {name: (shown, ok) for name, shown, ok in targets(result)}
+    assert met["recovery check (inertia+restitution), per fit, 2 workers < 15 s"] == ("21.0 s", False)

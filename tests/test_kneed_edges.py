@@ -76,6 +76,9 @@ def test_a_failed_gait_search_exits_1_naming_its_starts_and_prints_no_gait() -> 
     assert as_json.exit_code == 1 and one_line_error(as_json.stderr) == line
     assert doc["status"] == "not_converged" and doc["tried"] == "the 3 generic starts" and not doc["converged"]
     assert not {"fixed_point", "touchdown", "step_period", "multipliers", "stable"} & set(doc)
+    falls = invoke("limit-cycle", str(KNEED), "--guess", "[0.2, 3.0, 0.0]", "--settle-steps", "0")  # thrown back
+    assert falls.exit_code == 1 and falls.stdout == ""
+    assert one_line_error(falls.stderr) == "error: no rigid limit cycle: the walker falls from the guess"
 
 
 def test_the_touchdown_names_the_landing_legs_bodies_with_a_bent_knee_stop(tmp_path: Path) -> None:
@@ -148,6 +151,7 @@ def test_a_free_trailing_knee_has_a_four_coordinate_section_and_a_gait(tmp_path:
     assert cycle.step_period != pytest.approx(held.step_period, rel=1e-3)
     result = simulate(load_config(kneed_yaml(tmp_path, FREE_STOP), ["simulation.max_steps=6"]))
     assert result.status == "walking" and len(result.step_periods) == 5  # the steps between the 6 strikes
+    assert result.summary["energy_residual_max_relative"] < 1e-9  # the strikes' losses booked
     np.testing.assert_allclose(result.step_periods, cycle.step_period, rtol=1e-8)
 
 

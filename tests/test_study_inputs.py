@@ -4,6 +4,7 @@ refused in one line naming the field or option, before any simulation and before
 from __future__ import annotations
 
 import copy
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -200,3 +201,30 @@ def test_the_mfpt_interval_covers_a_geometric_first_passage_at_its_level() -> No
         estimate = mfpt_estimate(np.minimum(first_passage - 1, cap), first_passage - 1 < cap)
         covered += estimate.ci[0] <= 1.0 / p <= estimate.ci[1]
     assert 0.93 <= covered / 2000 <= 0.97
+
+
+@pytest.mark.parametrize("executor", [None, ThreadPoolExecutor(1)], ids=["serial", "executor"])
+def test_a_batch_interrupted_keeps_its_finished_evaluations_for_the_checkpoint(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, executor: ThreadPoolExecutor | None
+) -> None:
+    """SIGTERM or Ctrl-C in the middle of a batch: the checkpoint written on the way out holds what finished."""
+    from biped_sim import load_config
+    from biped_sim.studies.fit import evaluate
+
+    calls: list[int] = []
+
+    def first_then_interrupted(data: dict[str, Any]) -> Outcome:
+        calls.append(1)
+        if len(calls) > 1:
+            raise KeyboardInterrupt
+        return Outcome((0.0, 0.4), (0.0, 0.2), (0.1,), (-0.1,), "walking", 0.4)
+
+    monkeypatch.setattr(evaluate, "simulate_outcome", first_then_interrupted)
+    [(_, problem)] = fit_problems(load_config(DEFAULT_CONFIG), load_reference(REFERENCE), [PARAM[1]])
+    checkpoint = tmp_path / "fit.checkpoint.json"
+    evaluator = evaluate.Evaluator(problem, executor, checkpoint)
+    with pytest.raises(KeyboardInterrupt):
+        evaluator.outcomes([[0.2], [0.4], [0.6]])
+    evaluator.save()
+    assert evaluator.evaluations == 1 and list(evaluator.cache) == [evaluate.point_key([0.2])]
+    assert len(evaluate.Evaluator(problem, None, checkpoint).cache) == 1

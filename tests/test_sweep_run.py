@@ -14,7 +14,7 @@ import pytest
 
 from biped_sim.config import Config
 from biped_sim.simulate import simulate
-from biped_sim.sweep import load_sweep, run_sweep
+from biped_sim.sweep import dask_executor, load_sweep, run_sweep
 from biped_sim.sweep import runner as sweep_runner
 from biped_sim.sweep.rows import METRIC_COLUMNS, SETTING_COLUMNS
 from biped_sim.testing import TINY_SWEEP_METHODS, TINY_SWEEP_RUNS, TINY_SWEEP_SLOPES, write_sweep
@@ -169,7 +169,7 @@ def test_resume_after_kill_skips_finished_runs_and_ignores_partial_files(tmp_pat
 def test_dask_local_cluster_gives_the_same_results_as_local_processes(tiny_sweep_dir: Path, tmp_path: Path) -> None:
     pytest.importorskip("distributed")
     sweep = load_sweep(tiny_sweep_dir.parent / "tiny.yaml")
-    with sweep_runner.dask_executor(jobs=2, scheduler=None) as executor:
+    with dask_executor(jobs=2, scheduler=None) as executor:
         outcome = run_sweep(sweep, tmp_path / "dask", executor)
     assert outcome.progress.done == TINY_SWEEP_RUNS
     local = pd.read_csv(tiny_sweep_dir / "sweep.csv").drop(columns=TIMING_COLUMNS)

@@ -3,9 +3,9 @@
 The one drawing of a walker, of any description and either dynamics, shared by the animation
 (:mod:`biped_sim.animate`) and the walker figure (:func:`biped_sim.plots.walker_figure`): each body as its
 segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as sectors of their radius about
-the body's axis (a rocker: the arc joined to its centre) or as dots (point feet), the hip as a black dot, and each joint stop as a square at its joint,
-filled when the joint is at or past its stop. The scene is drawn in the world frame: the slope frame turned by the
-slope angle, so that the ground visibly descends.
+the body's axis (a rocker: the arc joined to its centre) or as dots (point feet), the hip as a black dot, and
+each joint stop as a square at its joint, filled when the joint is at or past its stop. The scene is drawn in the
+world frame: the slope frame turned by the slope angle, so that the ground visibly descends.
 """
 
 from __future__ import annotations

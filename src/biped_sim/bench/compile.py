@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 from typing import Any
 
 from biped_sim._compiled_cache import profiling_compilations
@@ -60,8 +61,25 @@ def cold_compile_per_group() -> list[dict[str, Any]]:
     return [group_row(group) for group in BUNDLED_GROUPS]
 
 
+def cold_first_run(config_path: Path) -> dict[str, Any]:
+    """``biped-sim run`` of a config in a fresh process on an empty numba cache: wall and CPU seconds, as a user's
+    first run after an install (or after an edit of compiled code) pays them."""
+    with tempfile.TemporaryDirectory(prefix="biped-sim-bench-run-") as tmp:
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "cache")}
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        command = [sys.executable, "-m", "biped_sim.cli", "run", str(config_path), "--out", str(Path(tmp) / "run")]
+        subprocess.run(command, env=env, capture_output=True, check=True)
+        wall = time.perf_counter() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return {"config": config_path.name, "wall_s": wall, "cpu_s": cpu}
+
+
 if __name__ == "__main__":
     if len(sys.argv) == 4:  # a child of _child: one group, profiled
         print(json.dumps(profile_group(*sys.argv[1:])))
+    elif sys.argv[1:] == ["runs"]:  # the first run of every bundled config, each on an empty cache
+        print(json.dumps([cold_first_run(path) for path in sorted(Path("configs").glob("*.yaml"))], indent=1))
     else:
         print(json.dumps(cold_compile_per_group(), indent=1))

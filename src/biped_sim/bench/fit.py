@@ -4,6 +4,9 @@
   step periods at 0.0049 kg m^2 and 0.42, rounded to 5 decimals (std 10 us given, so the fit is weighted):
   ``biped_sim.studies.fit.calibrate`` with the default global stage, the polish and the profile scans,
   on a local pool of 2 workers (its start and the workers' cache loading included). Target: 60 s.
+* Recovery: the cost per fit of the slow tier's recovery check (``tests/test_fit_recovery.py``, issue 27),
+  its first ``RECOVERY_CASES`` random cases of each parameter pair (``biped_sim.studies.fit.recovery``) on 2
+  workers: evaluations and wall time per fit, and how many were recovered. The check runs 20 per pair.
 * Posterior: the same problem with 4,000 draws of emcee (16 walkers x 250 steps) from the fitted optimum,
   the fit's own evaluations reused through one checkpoint. Target: 10 minutes.
 """
@@ -18,13 +21,15 @@ from typing import Any
 from biped_sim.config import derive, load_config
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.studies.fit import calibrate, fit_problems, synthetic_reference_data
+from biped_sim.studies.fit.recovery import PAIRS, draw_cases, recover, summary
 from biped_sim.sweep import study_executor
 
 CONFIG = Path("configs/round_foot_walker.yaml")
 HIDDEN = {"walker.leg_inertia": 0.0049, "contact.restitution": 0.42}
 PARAMETERS = ["walker.leg_inertia=0.004:0.007", "contact.restitution=0.1:0.9"]
 STEPS, STD_S, DRAWS, WORKERS = 7, 1e-5, 4000, 2
-TARGETS_S = {"global_fit": 60.0, "posterior": 600.0}
+TARGETS_S = {"global_fit": 60.0, "posterior": 600.0, "recovery_per_fit": 15.0}  # recovery: 40 fits in 10 min
+RECOVERY_CASES, RECOVERY_SEED = 2, 27  # the check's seed: its first cases
 
 
 def fit_problem() -> Any:
@@ -50,6 +55,7 @@ def fit_bench(posterior: bool = True) -> dict[str, Any]:
             "evaluations": fitted.run.evaluations, "parameters": fitted.parameters,
             "standard_errors": {e.key: e.standard_error for e in fitted.estimates}, "converged": fitted.converged,
         }  # fmt: skip
+        out["recovery"] = recovery_bench()
         if posterior:
             clock = time.perf_counter()
             with study_executor("local", WORKERS) as pool:
@@ -61,3 +67,13 @@ def fit_bench(posterior: bool = True) -> dict[str, Any]:
                 "autocorrelation_time": sampled.posterior.autocorrelation, "warnings": sampled.posterior.warnings,
             }  # fmt: skip
     return out
+
+
+def recovery_bench() -> dict[str, object]:
+    """Per parameter pair: the recovery check's first RECOVERY_CASES cases, their cost per fit and rate."""
+    base = load_config(CONFIG)
+    cases = {pair: draw_cases(base, pair, RECOVERY_CASES, RECOVERY_SEED)[0] for pair in PAIRS}
+    with study_executor("local", WORKERS) as pool:
+        recoveries = [recover(base, pair, hidden, pool) for pair in PAIRS for hidden in cases[pair]]
+    rows = {pair: {k: v for k, v in row.items() if k != "misses"} for pair, row in summary(recoveries).items()}
+    return {pair: row | {"target_s_per_fit": TARGETS_S["recovery_per_fit"]} for pair, row in rows.items()}

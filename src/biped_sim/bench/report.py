@@ -104,6 +104,10 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
         if row:
             ok = row["wall_s"] < row["target_s"]
             out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
+    for pair, row in result.get("fit", {}).get("recovery", {}).items():
+        ok = row["wall_s_per_fit"] < row["target_s_per_fit"]
+        label = f"recovery check ({pair}), per fit, 2 workers < {row['target_s_per_fit']:g} s"
+        out.append((label, f"{row['wall_s_per_fit']:.1f} s", ok))
     out += uncertainty_targets(result.get("uncertainty"))
     out += run_cost_targets(result.get("run_cost"))
     mj = result.get("mujoco") or {}

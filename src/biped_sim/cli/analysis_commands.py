@@ -41,10 +41,15 @@ def limit_cycle_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Period-1 gait (fixed point of the step map at heel strike) and its Floquet multipliers."""
+    from biped_sim.rigid.limit_cycle import SearchFellError
     from biped_sim.studies.limit_cycle import guess_keys, limit_cycle, parse_guess
 
     config = load(config_path, set_)
-    cycle = limit_cycle(config, parse_guess(guess, *guess_keys(config)) if guess is not None else None, settle_steps)
+    start = parse_guess(guess, *guess_keys(config)) if guess is not None else None
+    try:
+        cycle = limit_cycle(config, start, settle_steps)
+    except SearchFellError as exc:  # the search failed: no gait from its starts (the input was fine)
+        fail(exc.reason, 1)
     doc = cycle.to_json()
     if as_json:
         typer.echo(json.dumps(doc, indent=2))

@@ -89,19 +89,25 @@ def flores_chi(e: float) -> float:
 
 @dataclass(frozen=True)
 class NormalLaw:
-    """A registered normal law: its dispatch number, compiled function and hysteresis factor."""
+    """A registered normal law: its dispatch number, compiled function, hysteresis factor, and its force family.
+
+    ``family`` names the force form: laws of one family are one force law whose free parameter (chi) each
+    maps from the restitution in its own way, so with the restitution fitted they are reparametrisations of
+    each other, which no data can tell apart (the fit's contest reports them as one, with the implied chi).
+    """
 
     index: int
     function: Callable[..., float]
     chi: Callable[[float], float] | None
+    family: str
 
 
 NORMAL_LAWS: dict[str, NormalLaw] = {
-    "hertz": NormalLaw(0, hertz_force, None),
-    "kelvin_voigt": NormalLaw(1, kelvin_voigt_force, None),
-    "hunt_crossley": NormalLaw(2, hunt_crossley_force, hunt_crossley_chi),
-    "lankarani_nikravesh": NormalLaw(3, lankarani_nikravesh_force, lankarani_nikravesh_chi),
-    "flores": NormalLaw(4, flores_force, flores_chi),
+    "hertz": NormalLaw(0, hertz_force, None, "hertz"),
+    "kelvin_voigt": NormalLaw(1, kelvin_voigt_force, None, "kelvin_voigt"),
+    "hunt_crossley": NormalLaw(2, hunt_crossley_force, hunt_crossley_chi, "hunt_crossley"),
+    "lankarani_nikravesh": NormalLaw(3, lankarani_nikravesh_force, lankarani_nikravesh_chi, "hunt_crossley"),
+    "flores": NormalLaw(4, flores_force, flores_chi, "hunt_crossley"),
 }
 # the compiled dispatch below reads the registry: law number i is the i-th function
 NORMAL_FUNCTIONS = registered_functions(NORMAL_LAWS)

@@ -133,5 +133,5 @@ def write_contest(
     results = [(label, c.result) for label, c in fits]
     ranking = ranking_table(key, results)
     ranking.write(directory)
-    save_figure(contest_errors_figure([(label, r) for label, r, _ in ranked(results)]), directory, "contest_errors")
+    save_figure(contest_errors_figure([(e.label, e.result) for e in ranked(key, results)]), directory, "contest_errors")
     return ranking, docs

@@ -125,6 +125,11 @@ class StepFailedError(RuntimeError):
     """The walker fell or stalled during a step of the map."""
 
 
+class SearchFellError(ConfigError):
+    """The walker fell from every start of a gait search: a config's start is unusable (a run on
+    ``rigid_limit_cycle``), and the limit-cycle command's search failed (exit 1)."""
+
+
 # --- rigid ---------------------------------------------------------------------------------------------------
 
 
@@ -234,7 +239,7 @@ def scan_starts(walker: RigidWalker) -> list[tuple[str, np.ndarray]]:
     points = []
     for k in SCAN_RATES:
         rate = -k * scale
-        if walker.name == "rimless_wheel":
+        if walker.shift:  # a wheel: its section is the rate alone
             points.append((f"scan stance_rate {rate:.4g}", np.array([rate])))
             continue
         for angle in SCAN_ANGLES:
@@ -282,18 +287,14 @@ def rigid_limit_cycle(
     if settle_steps and (solved is None or not solved[0][1]):
         # the scan: every point walked first (stable gaits), then every point as it is (any gait)
         scan = scan_starts(walker)
-        tried += f", then the {len(scan)} points of the scan (each walked, then as it is)"
+        tried += f", then the {len(scan)} points of a scan (each walked, then as it is)"
         scanned = _solve_from(
             step_map, [(label, z, settle_steps) for label, z in scan] + [(label, z, 0) for label, z in scan]
         )
         if scanned is not None and (solved is None or scanned[0][1]):
             solved = scanned
     if solved is None:
-        raise ConfigError(
-            "simulation.initial",
-            f"no rigid limit cycle: the rigid {walker.name} falls from the guess"
-            + (" and from every start of the scan" if settle_steps else ""),
-        )
+        raise SearchFellError("simulation.initial", f"no rigid limit cycle: the walker falls from {tried}")
     (z, converged, iterations, residual), how = solved
     _, step = rigid_map(walker, z, compiled)
     jac = map_jacobian(step_map, z)
@@ -341,7 +342,7 @@ def _tried(labels: list[str], settle_steps: int) -> str:
 def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
     """Post-impact states typical of passive gaits (rates scaled by sqrt(g / l)), tried when no guess is given."""
     scale = math.sqrt(walker.gravity / walker.leg_length)
-    if walker.name == "rimless_wheel":
+    if walker.shift:  # a wheel: its section is the rate alone
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
     starts = ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
     if len(walker.section_names) >= 3:  # the legs just after a strike, as the walker's section places them

@@ -33,6 +33,7 @@ from biped_sim.rigid.limit_cycle import (
     LINES_NOTE,
     SETTLE_STEPS,
     LimitCycle,
+    SearchFellError,
     StepFailedError,
     map_jacobian,
     newton_fixed_point,
@@ -241,6 +242,8 @@ def compliant_limit_cycle(
     def step_map(z: np.ndarray) -> np.ndarray:
         return section.step(z).z_next
 
+    tried = "the touchdowns of a run from " + ("the guess" if guess is not None else "the config's initial state")
+    tried += f" (after {settle_steps} steps and its first)" if settle_steps else ""
     found = None
     for z_start in touchdown_guesses(config, section, guess, settle_steps):
         try:
@@ -252,10 +255,8 @@ def compliant_limit_cycle(
         if found[1]:
             break
     if found is None:
-        raise ConfigError("simulation.initial", "no compliant limit cycle: the walker falls from every start")
+        raise SearchFellError("simulation.initial", f"no compliant limit cycle: the walker falls from {tried}")
     z, converged, iterations, residual = found
-    tried = "the touchdowns of a run from " + ("the guess" if guess is not None else "the config's initial state")
-    tried += f" (after {settle_steps} steps and its first)" if settle_steps else ""
     step = section.step(z)
     jacobian = map_jacobian(step_map, z, COMPLIANT_FD_STEP)
     multipliers = np.linalg.eigvals(jacobian)

@@ -8,26 +8,24 @@ with local_executor(jobs=2) as executor:
 
 from __future__ import annotations
 
-from biped_sim.sweep.rows import read_sweep
-from biped_sim.sweep.runner import (
-    SweepOutcome,
-    SweepProgress,
+from biped_sim.sweep.executors import (
+    SchedulerLostError,
     check_executor,
     dask_executor,
     default_jobs,
-    execute_run,
     local_executor,
     make_executor,
-    pending_runs,
-    run_sweep,
     study_executor,
     workers_for,
 )
+from biped_sim.sweep.rows import read_sweep
+from biped_sim.sweep.runner import SweepOutcome, SweepProgress, execute_run, pending_runs, run_sweep
 from biped_sim.sweep.spec import RangeSpec, RunSpec, Sweep, SweepSpec, check_buildable, expand, load_sweep
 
 __all__ = [
     "RangeSpec",
     "RunSpec",
+    "SchedulerLostError",
     "Sweep",
     "SweepOutcome",
     "SweepProgress",

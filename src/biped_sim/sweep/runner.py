@@ -1,9 +1,8 @@
-"""Running a sweep: executors, the worker function, resume, and the sweep table.
+"""Running a sweep: the worker function, resume, and the sweep table.
 
-The runner is written against :class:`concurrent.futures.Executor`: a local
-:class:`~biped_sim.sweep.pool.WorkerPool` (fresh interpreters, one BLAS/numba thread per worker; a dead
-worker fails only its own run) or a Dask cluster through ``distributed.Client(...).get_executor()``,
-with no second code path. Each worker simulates one run, writes its own run directory (every file
+The runner is written against :class:`concurrent.futures.Executor` (:mod:`biped_sim.sweep.executors`: a local
+pool of worker processes, in which a dead worker fails only its own run, or a Dask cluster), with no second
+code path. Each worker simulates one run, writes its own run directory (every file
 atomically, summary.json last) and returns one small row; the parent never touches a run's HDF5 file
 while it is written. A sweep holds a lock on its directory (:mod:`biped_sim.sweep.lock`).
 
@@ -24,138 +23,30 @@ matches the run directories: finished runs as finished, the others pending.
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import inspect
 import json
-import os
 import traceback
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from biped_sim.config import Config
-from biped_sim.errors import ArgumentError, quote
 from biped_sim.io.atomic import write_json_atomic
 from biped_sim.io.run_files import start_run_directory
 from biped_sim.io.trajectory import trajectory_problem
 from biped_sim.simulate import simulate
 from biped_sim.simulate.warmup import warm_up
 from biped_sim.sweep.lock import sweep_lock
-from biped_sim.sweep.pool import WorkerDiedError, WorkerPool
+from biped_sim.sweep.pool import WorkerDiedError
 from biped_sim.sweep.rows import metrics_from_summary, settings_of, unfinished_metrics, write_table
 from biped_sim.sweep.spec import RunSpec, Sweep
 
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
 FAILED_STATUSES = ("error", "diverged")  # a sweep holding such a run exits with 1
-EXECUTORS = ("local", "dask")
 SWEEP_FILES = ("sweep.json", "sweep.csv", "sweep.parquet")  # written by the sweep holding the lock, and no one else
-
-
-def init_worker() -> None:
-    """Worker initializer: one thread per BLAS/OpenMP/numba pool, so N workers use N cores, not N^2."""
-    for name in THREAD_VARIABLES:
-        os.environ[name] = "1"
-
-
-def default_jobs() -> int:
-    """Number of cores this process may use."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
-def workers_for(tasks: int, jobs: int | None = None) -> int:
-    """How many workers ``tasks`` tasks get: ``jobs`` (default: every core), no more than the tasks, at least one."""
-    if jobs is not None and jobs < 1:
-        raise ArgumentError("jobs", "must be at least 1")
-    return max(1, min(jobs or default_jobs(), tasks))
-
-
-@contextlib.contextmanager
-def local_executor(jobs: int) -> Iterator[Executor]:
-    """A pool of ``jobs`` single-threaded worker processes (fresh interpreters: no inherited threads or locks).
-
-    The thread variables are in the workers' environment from the start: numpy reads OpenBLAS's thread
-    count once, on import, before any initializer could set it.
-    """
-    with WorkerPool(jobs, env={**os.environ, **dict.fromkeys(THREAD_VARIABLES, "1")}) as pool:
-        yield pool
-
-
-@contextlib.contextmanager
-def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
-    """A Dask executor: on the cluster at ``scheduler`` (tcp://host:port), else on a LocalCluster of ``jobs`` workers.
-
-    Workers must see the same file system as this process (they write the run directories).
-    """
-    try:
-        from distributed import Client, LocalCluster  # optional extra (biped-sim[dask])
-    except ImportError:
-        raise ArgumentError("executor", "dask needs the optional extra: pip install 'biped-sim[dask]'") from None
-    with contextlib.ExitStack() as stack:
-        if scheduler:
-            try:
-                client = stack.enter_context(Client(scheduler, timeout="10s"))
-            except (OSError, TimeoutError, ValueError, TypeError) as exc:  # unreachable, or not an address at all
-                reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                raise ArgumentError("scheduler", f"cannot connect to {scheduler!r}: {reason}") from None
-        else:
-            cluster = stack.enter_context(
-                LocalCluster(
-                    n_workers=jobs,
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=None,
-                    env=dict.fromkeys(THREAD_VARIABLES, "1"),
-                )
-            )
-            client = stack.enter_context(Client(cluster))
-        client.run(init_worker)
-        executor = client.get_executor()
-        try:
-            yield executor
-        finally:
-            executor.shutdown(wait=False)
-
-
-def check_executor(kind: str, scheduler: str | None = None) -> None:
-    """ArgumentError unless ``kind`` is 'local' or 'dask' (and a ``scheduler`` comes with 'dask' only)."""
-    if kind not in EXECUTORS:
-        raise ArgumentError("executor", f"unknown executor {quote(kind)}; expected local or dask")
-    if kind == "local" and scheduler:
-        raise ArgumentError("scheduler", "only used with the dask executor")
-
-
-@contextlib.contextmanager
-def make_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterator[Executor]:
-    """The executor ``kind``: 'local' (processes) or 'dask' (:func:`check_executor`)."""
-    check_executor(kind, scheduler)
-    if kind == "local":
-        with local_executor(jobs) as executor:
-            yield executor
-    else:
-        with dask_executor(jobs, scheduler) as executor:
-            yield executor
-
-
-@contextlib.contextmanager
-def study_executor(kind: str, jobs: int, scheduler: str | None = None) -> Iterator[Executor | None]:
-    """A study's executor: None (run in this process, no pool) for one local job, else :func:`make_executor`'s.
-
-    Studies take ``executor: Executor | None`` and run serially on None: one job gains nothing from a
-    pool and would pay its start-up and each worker's compilation.
-    """
-    check_executor(kind, scheduler)
-    if kind == "local" and jobs == 1:
-        yield None
-        return
-    with make_executor(kind, jobs, scheduler) as executor:
-        yield executor
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor
+from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,21 +85,33 @@ class Evaluator:
         todo = {k: np.asarray(u, dtype=float) for k, u in zip(keys, points, strict=True) if k not in self.cache}
         self.replayed += sum(1 for k in set(keys) if k in self._restored)
         self._restored.difference_update(keys)
-        tasks = [self.problem.evaluation_data(u) for u in todo.values()]
-        if self.executor is None or len(tasks) < 2:
-            results = [simulate_outcome(task) for task in tasks]
-        else:
-            results = list(self.executor.map(simulate_outcome, tasks))
-        self.cache.update(zip(todo, results, strict=True))
-        self.evaluations += len(tasks)
-        if tasks and time.monotonic() - self._saved_at > SAVE_INTERVAL_S:
+        self._run(todo)
+        if todo and time.monotonic() - self._saved_at > SAVE_INTERVAL_S:
             self.save()
         out = [self.cache[k] for k in keys]
         for outcome in out:
             self.best_cost = min(self.best_cost, self.cost_of(outcome))
-        if self.progress is not None and tasks:
+        if self.progress is not None and todo:
             self.progress(self)
         return out
+
+    def _run(self, todo: dict[str, np.ndarray]) -> None:
+        """Simulate the points ``todo`` (by key); those finished are cached even when the batch is interrupted
+        (Ctrl-C, SIGTERM), so that the checkpoint written on the way out keeps them, in the batch's order."""
+        done: dict[str, Outcome] = {}
+        try:
+            if self.executor is None or len(todo) < 2:
+                for key, u in todo.items():
+                    done[key] = simulate_outcome(self.problem.evaluation_data(u))
+            else:
+                tasks = {
+                    self.executor.submit(simulate_outcome, self.problem.evaluation_data(u)): k for k, u in todo.items()
+                }
+                for future in as_completed(tasks):
+                    done[tasks[future]] = future.result()
+        finally:
+            self.cache.update((key, done[key]) for key in todo if key in done)
+            self.evaluations += len(done)
 
     def cost_of(self, outcome: Outcome) -> float:
         r = self.problem.residuals(outcome)

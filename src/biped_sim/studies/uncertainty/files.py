@@ -24,12 +24,15 @@ from biped_sim.studies.uncertainty.study import Uncertainty, output_names
 H5_FILE, CSV_FILE = "uncertainty.h5", "samples.csv"
 
 
-def _write_h5(study: Uncertainty, tmp: Path) -> None:
+def _h5_image(study: Uncertainty) -> bytes:
+    """The bytes of uncertainty.h5, built in memory: HDF5 never writes to the disk itself, so that a full disk is one
+    Python OSError when the bytes are written, not an error inside the HDF5 library."""
     import h5py
 
     names = output_names(study.spec.config)
     doc = study.to_json()
-    with h5py.File(tmp, "w") as f:
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
         f.create_dataset("keys", data=np.array(list(study.spec.keys), dtype=h5py.string_dtype()))
         f.create_dataset("values", data=study.values)
         if study.unit is not None:
@@ -49,6 +52,7 @@ def _write_h5(study: Uncertainty, tmp: Path) -> None:
         f.attrs["config_hash"] = study.spec.config.hash()
         for name, value in provenance().items():
             f.attrs[name] = value
+    return buffer.getvalue()
 
 
 def samples_csv(study: Uncertainty) -> str:
@@ -68,6 +72,7 @@ def write_study(study: Uncertainty, out_dir: Path) -> list[Path]:
     """uncertainty.h5 and samples.csv in ``out_dir``, atomically; returns their paths."""
     out_dir.mkdir(parents=True, exist_ok=True)
     h5_path, csv_path = out_dir / H5_FILE, out_dir / CSV_FILE
-    write_with(h5_path, lambda tmp: _write_h5(study, tmp))
+    image = _h5_image(study)
+    write_with(h5_path, lambda tmp: tmp.write_bytes(image))
     write_text_atomic(csv_path, samples_csv(study))
     return [h5_path, csv_path]
