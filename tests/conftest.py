@@ -23,6 +23,7 @@ from typing import Any, TypeVar
 
 import pytest
 from click.testing import Result
+from numba.core.registry import CPUDispatcher
 from typer.testing import CliRunner
 
 import biped_sim
@@ -68,6 +69,63 @@ def one_line_error(stderr: str) -> str:
     assert len(lines) == 1 and lines[0].startswith("error: "), stderr
     assert "Traceback" not in stderr
     return lines[0]
+
+
+# Modules that share an expensive session fixture (tiny_sweep_dir: eight runs on two worker processes): xdist runs
+# them on one worker, which computes it once; every other module is a unit of its own, so that its module-scoped
+# fixtures are computed once too. pytest-xdist's loadgroup would do this with marks, but groups nothing with
+# pytest 9.2 (pytest-dev/pytest-xdist#1386).
+SHARED_FIXTURE_MODULES = {
+    f"tests/{name}.py": "tiny_sweep"
+    for name in ("test_compare", "test_report", "test_study_arguments", "test_study_faults", "test_sweep_run")
+}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """Under ``-n N`` with the default distribution, hand out tests by module (:data:`SHARED_FIXTURE_MODULES`)."""
+    if config.getoption("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ModuleScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return SHARED_FIXTURE_MODULES.get(module, module)
+
+    return ModuleScheduling(config, log)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:
+    """Name the order the tests ran in (pytest-randomly shuffles it), even under ``-q``: a failure that depends on
+    the order is then reproduced with the same seed."""
+    seed = getattr(config.option, "randomly_seed", None)
+    if isinstance(seed, int):
+        terminalreporter.write_line(f"tests shuffled with --randomly-seed={seed} (pass it to run them in this order)")
+
+
+def plain_function(compiled: CPUDispatcher) -> Callable[..., Any]:
+    """The plain-Python function of ``compiled``: its ``.py_func``, but for an inlined copy
+    (:func:`biped_sim.kernel.inlined`, the same code object) the original kernel's, whose callees are looked up
+    in its module; the copy's own globals hold compiled copies of them, which numba would compile anew (nothing
+    caches them) in every session that calls them from Python."""
+    plain = compiled.py_func
+    original = getattr(sys.modules.get(plain.__module__), plain.__name__, None)
+    if isinstance(original, CPUDispatcher) and original.py_func.__code__ is plain.__code__:
+        return original.py_func
+    return plain
+
+
+def run_as_plain_python(patch: pytest.MonkeyPatch, packages: tuple[str, ...]) -> None:
+    """Replace every compiled function of the loaded modules of ``packages`` (also in a tuple: the law
+    registries) by its plain-Python function (:func:`plain_function`), for a slow reference of the same source."""
+    for name, module in list(sys.modules.items()):
+        if name.startswith(packages):
+            for attribute, value in list(vars(module).items()):
+                if isinstance(value, CPUDispatcher):
+                    patch.setattr(module, attribute, plain_function(value))
+                elif isinstance(value, tuple) and value and all(isinstance(v, CPUDispatcher) for v in value):
+                    patch.setattr(module, attribute, tuple(plain_function(v) for v in value))
 
 
 @pytest.fixture(scope="session")

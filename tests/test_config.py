@@ -69,7 +69,7 @@ def test_hash_ignores_output_dir_but_not_physics() -> None:
         (["integrator.dt=0"], "integrator.dt", "greater than 0"),
         (["integrator.dt=-1e-3"], "integrator.dt", "greater than 0"),
         (["ground.slope=0.9"], "ground.slope", "friction cone"),
-        (["walker.foot_radius=0", "contact.materials={}"], "contact.stiffness", "point foot"),
+        (["walker.foot_radius=0", "contact.materials={}"], "contact.stiffness", "point feet"),
         (["contact.stiffness=1e6", "contact.materials={}"], "contact.stiffness", "not both"),
     ],
 )

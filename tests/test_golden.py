@@ -28,7 +28,7 @@ from .record_golden import GOLDEN_PATH, read_golden, record, simulated_summary
 
 GOLDEN = read_golden()
 CASES = GOLDEN["cases"]
-FULL_LENGTH = {"round_foot_walker", "four_legged_walker"}  # 2-4 s of wall time each
+FULL_LENGTH = {"round_foot_walker", "four_legged_walker", "kneed_walker_compliant"}  # 2-9 s of wall time each
 TOUCHDOWN = "_touchdown_memory"  # suffix of the cases pinned to the behaviour before contact.impact_memory
 COUNTERS = ("rhs_evals", "accepted_steps", "rejected_steps", "events")
 NOISE_FLOOR = ("energy_residual_max", "energy_residual_max_relative", "constraint_violation_max")
@@ -121,3 +121,13 @@ def test_re_recording_a_compiled_case_moves_nothing(tmp_path: Path) -> None:
 def test_bundled_config_reproduces_its_golden_summary(name: str) -> None:
     case = CASES[name]
     assert differences(simulated_summary(case), case) == {}
+
+
+def test_the_compliant_kneed_walker_takes_its_golden_first_steps() -> None:
+    """The fast tier's short version of the full-length kneed case (slow tier): its first two steps, run alone, bit
+    for bit (a run's arithmetic up to a strike does not depend on where it ends)."""
+    case = CASES["kneed_walker_compliant"]
+    short = simulated_summary({**case, "overrides": [*case["overrides"], "simulation.t_end=1.2"]})
+    assert len(short["step_times"]) == 2
+    for key in ("step_times", "step_feet", "step_periods", "step_lengths"):
+        assert short[key] and short[key] == case["summary"][key][: len(short[key])], key

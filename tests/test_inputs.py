@@ -34,13 +34,21 @@ def number_fields(model: type[BaseModel], prefix: str = "") -> list[str]:
         annotation = field.annotation
         if typing.get_origin(annotation) is list:  # simulation.pushes: a list of records, tests/test_pushes.py
             continue
-        sections = [arg for arg in getattr(annotation, "__args__", (annotation,)) if isinstance(arg, type)]
-        sub = [arg for arg in sections if issubclass(arg, BaseModel)]
+        sub = _models(annotation)  # walker: its first member, the default compass
         if sub:
             keys += number_fields(sub[0], f"{prefix}{name}.")
         elif is_number_annotation(annotation):
             keys.append(f"{prefix}{name}")
     return keys
+
+
+def _models(annotation: typing.Any) -> list[type[BaseModel]]:
+    """The models a field's type names (an optional section's, a union's members, Annotated ones unwrapped)."""
+    if isinstance(annotation, type):
+        return [annotation] if issubclass(annotation, BaseModel) else []
+    if typing.get_origin(annotation) is typing.Annotated:
+        return _models(typing.get_args(annotation)[0])
+    return [model for arg in typing.get_args(annotation) for model in _models(arg)]
 
 
 NUMBER_FIELDS = number_fields(Config)

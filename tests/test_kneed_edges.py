@@ -151,6 +151,7 @@ def test_a_free_trailing_knee_has_a_four_coordinate_section_and_a_gait(tmp_path:
     assert cycle.step_period != pytest.approx(held.step_period, rel=1e-3)
     result = simulate(load_config(kneed_yaml(tmp_path, FREE_STOP), ["simulation.max_steps=6"]))
     assert result.status == "walking" and len(result.step_periods) == 5  # the steps between the 6 strikes
+    assert result.summary["energy_residual_max_relative"] < 1e-9  # the strikes' losses booked
     np.testing.assert_allclose(result.step_periods, cycle.step_period, rtol=1e-8)
 
 

@@ -7,7 +7,6 @@ round-foot walker), each started near its gait (section points of their rigid li
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -22,7 +21,7 @@ from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.tree import RigidWalker
 
-from .conftest import CONFIGS
+from .conftest import CONFIGS, run_as_plain_python
 
 # config, a section point near its gait (stance angle, both rates)
 WALKERS = {
@@ -128,13 +127,9 @@ def test_a_riser_trips_both_at_the_same_point(case, at: float) -> None:  # type:
 @contextmanager
 def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """The rigid step map as plain Python: every compiled function of the rigid, integration and contact modules is
-    its ``.py_func`` (the equations' inlined copies, :func:`biped_sim.kernel.inlined`, stay compiled inside)."""
+    its plain-Python function (conftest.plain_function)."""
     with monkeypatch.context() as patch:
-        for name, module in list(sys.modules.items()):
-            if name.startswith(("biped_sim.rigid", "biped_sim.integrate", "biped_sim.contact")):
-                for attribute, value in list(vars(module).items()):
-                    if isinstance(value, CPUDispatcher):
-                        patch.setattr(module, attribute, value.py_func)
+        run_as_plain_python(patch, ("biped_sim.rigid", "biped_sim.integrate", "biped_sim.contact"))
         yield
 
 

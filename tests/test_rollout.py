@@ -11,7 +11,6 @@ the loop grow without changing a bit either.
 from __future__ import annotations
 
 import dataclasses
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -26,7 +25,7 @@ from biped_sim.multibody.dispatch import FORMULATIONS
 from biped_sim.multibody.formulation import KERNEL_SIGNATURES
 from biped_sim.walkers import BuiltModel, build_model
 
-from .conftest import DEFAULT_CONFIG
+from .conftest import DEFAULT_CONFIG, run_as_plain_python
 
 ENGINE = ("biped_sim.contact", "biped_sim.multibody", "biped_sim.integrate")
 RESULTS = ("t", "y", "modes", "strike_t", "strike_foot", "strike_y", "strike_modes", "contact_log")
@@ -37,13 +36,7 @@ COUNTERS = ("status", "t_final", "rhs_evals", "accepted_steps", "rejected_steps"
 def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """Run the engine as plain Python: every compiled function (also in a tuple) is replaced by its ``.py_func``."""
     with monkeypatch.context() as patch:
-        for name, module in list(sys.modules.items()):
-            if name.startswith(ENGINE):
-                for attribute, value in list(vars(module).items()):
-                    if isinstance(value, CPUDispatcher):
-                        patch.setattr(module, attribute, value.py_func)
-                    elif isinstance(value, tuple) and value and all(isinstance(v, CPUDispatcher) for v in value):
-                        patch.setattr(module, attribute, tuple(v.py_func for v in value))  # the law registries
+        run_as_plain_python(patch, ENGINE)
         for system_type, formulation in list(FORMULATIONS.items()):
             kernels = {kernel: getattr(formulation, kernel).py_func for kernel in KERNEL_SIGNATURES}
             patch.setitem(FORMULATIONS, system_type, dataclasses.replace(formulation, **kernels))

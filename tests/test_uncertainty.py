@@ -132,7 +132,7 @@ def test_wilson_interval_covers_the_proportion_and_stays_in_0_1() -> None:
 
 def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: Path) -> None:
     out = tmp_path / "u"
-    inertia = "walker.leg_inertia=uniform:0.001:0.01"
+    inertia = "contact.restitution=uniform:0.2:0.9"  # unused by the rigid model
     args = ("uncertainty", str(SIMPLEST), "--param", SLOPE, "--param", inertia, "--samples", "4", "--sobol",
             "--surrogate", "1", *SHORT, "--jobs", "1", "--out", str(out), "--json")  # fmt: skip
     first = invoke(*args)
@@ -140,10 +140,11 @@ def test_the_cli_writes_its_files_reports_indices_and_a_rerun_resumes(tmp_path: 
     doc = json.loads(first.stdout)
     assert doc["runs"] == 16 and doc["chunks_reused"] == 0
     assert doc["statistics"]["status_counts"] == {"walking": 16}
-    assert doc["sobol"]["outputs"]["steady_period"]["ranking_total"] == ["ground.slope", "walker.leg_inertia"]
-    assert doc["sobol"]["outputs"]["steady_period"]["indices"]["walker.leg_inertia"]["ST"] == pytest.approx(0, abs=1e-9)
+    assert doc["sobol"]["outputs"]["steady_period"]["ranking_total"] == ["ground.slope", "contact.restitution"]
+    unused = doc["sobol"]["outputs"]["steady_period"]["indices"]["contact.restitution"]
+    assert unused["ST"] == pytest.approx(0, abs=1e-9)
     surrogate = doc["surrogate"]["steady_period"]["indices"]
-    assert surrogate["ground.slope"]["ST"] > 0.99 and surrogate["walker.leg_inertia"]["ST"] < 0.01
+    assert surrogate["ground.slope"]["ST"] > 0.99 and surrogate["contact.restitution"]["ST"] < 0.01
     names = {p.name for p in out.iterdir()}
     assert {"uncertainty.h5", "samples.csv", "bands.png", "bands.svg", "histograms.svg", "sobol.svg"} <= names
     with h5py.File(out / "uncertainty.h5") as f:

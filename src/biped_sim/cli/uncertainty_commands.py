@@ -148,6 +148,7 @@ def mfpt_command(
     from biped_sim.plots import save_figure
     from biped_sim.report.uncertainty import mfpt_figure
     from biped_sim.studies.uncertainty.mfpt import check_mfpt_input, mfpt_curve
+    from biped_sim.studies.uncertainty.rimless_chain import walks_random_slopes
     from biped_sim.sweep import study_executor, workers_for
 
     config = load(config_path, set_)
@@ -155,8 +156,7 @@ def mfpt_command(
         levels = [float(text) for text in roughness.split(",")]
     except ValueError:
         raise ArgumentError("roughness", f"{roughness[:60]!r}: expected comma-separated numbers") from None
-    wheel = config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"
-    chosen = ground or ("slope" if wheel else "height")
+    chosen = ground or ("slope" if walks_random_slopes(config) else "height")
     check_mfpt_input(config, chosen, levels, seeds, cap)
     check_writable_dir(out)
     workers = 1 if chosen == "slope" else workers_for(len(levels) * seeds, jobs)

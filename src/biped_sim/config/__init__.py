@@ -43,6 +43,13 @@ from biped_sim.config.schema import (
     OutputConfig,
     Push,
     SimulationConfig,
+)
+from biped_sim.config.walker_schema import (
+    CompassWalker,
+    DescribedWalker,
+    FourLeggedWalker,
+    RimlessWheelWalker,
+    SimplestWalker,
     WalkerConfig,
 )
 
@@ -51,10 +58,13 @@ __all__ = [
     "STATE_KEYS",
     "BaumgarteConfig",
     "BodySpec",
+    "CompassWalker",
     "Config",
     "ContactConfig",
+    "DescribedWalker",
     "FootSpec",
     "FormulationConfig",
+    "FourLeggedWalker",
     "FrictionConfig",
     "GroundConfig",
     "InitialState",
@@ -65,6 +75,8 @@ __all__ = [
     "OutputConfig",
     "PointMassSpec",
     "Push",
+    "RimlessWheelWalker",
+    "SimplestWalker",
     "SimulationConfig",
     "StopSpec",
     "WalkerConfig",

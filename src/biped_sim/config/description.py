@@ -225,6 +225,17 @@ class WalkerDescription(Strict):
                 raise ValueError("legs: every leg's bodies need the same roles in the same order (thigh_1, thigh_2)")
         return roles
 
+    def leg_length(self) -> float:
+        """Hip to the lowest foot bottom with every angle zero [m] (the legs along the slope normal): the walker's
+        length scale."""
+        joint_of = {j.child: j for j in self.joints}
+        origin = {self.bodies[0].name: (0.0, 0.0)}
+        while len(origin) < len(self.bodies):  # a tree (checked): each pass places the children of placed bodies
+            for child, joint in joint_of.items():
+                if joint.parent in origin and child not in origin:
+                    origin[child] = (origin[joint.parent][0] + joint.at[0], origin[joint.parent][1] + joint.at[1])
+        return -min(origin[f.body][1] + f.centre[1] - f.radius for f in self.feet)
+
     def state_keys(self) -> tuple[str, ...]:
         """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate.
 

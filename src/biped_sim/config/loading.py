@@ -74,7 +74,8 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
 
     A list of named items (a description's bodies, joints, feet) is entered by an item's name
     (``walker.description.bodies.thigh_1.mass``) or its index; an unknown name or an index out of range is a
-    one-line ConfigError naming the list and its names.
+    one-line ConfigError naming the list and its names. A key ending at a named parameter (an item with a
+    ``value``: ``walker.parameters.thigh_mass``) sets its value.
     """
     parts = key.split(".")
     node: Any = data
@@ -87,15 +88,17 @@ def set_dotted(data: dict[str, Any], key: str, value: Any) -> None:
             child = {}
             node[part] = child
         node = child
-    if isinstance(node, list):
-        node[_list_index(node, parts, len(parts) - 1)] = value
+    slot = _list_index(node, parts, len(parts) - 1) if isinstance(node, list) else parts[-1]
+    current = node[slot] if isinstance(node, list) else node.get(slot)
+    if isinstance(current, dict) and "value" in current and not isinstance(value, dict):
+        current["value"] = value  # a named parameter stands for its value
     else:
-        node[parts[-1]] = value
+        node[slot] = value
 
 
 def get_dotted(data: Any, key: str) -> Any:
-    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`) of plain config data;
-    ConfigError naming the key when a section or field on the way is missing."""
+    """The entry ``key`` (dotted, list items by name or index as :func:`set_dotted`; a named parameter's value)
+    of plain config data; ConfigError naming the key when a section or field on the way is missing."""
     parts = key.split(".")
     node = data
     for depth, part in enumerate(parts):
@@ -103,9 +106,11 @@ def get_dotted(data: Any, key: str) -> Any:
             node = node[_list_index(node, parts, depth)]
         elif isinstance(node, dict) and part in node:
             node = node[part]
+        elif isinstance(node, dict) and part == "parameters" and depth + 1 < len(parts) and parts[depth + 1] in node:
+            continue  # a preset's parameters are its fields: walker.parameters.leg_inertia is walker.leg_inertia
         else:
             raise ConfigError(key, "unknown config key")
-    return node
+    return node["value"] if isinstance(node, dict) and "value" in node else node  # a parameter: its value
 
 
 def _list_index(items: list[Any], parts: list[str], depth: int) -> int:

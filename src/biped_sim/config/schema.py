@@ -8,70 +8,18 @@ import math
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BeforeValidator, Field, model_validator
+from pydantic import (
+    BeforeValidator,
+    Field,
+    model_validator,
+)
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
-from biped_sim.config.description import LEG_KEYS, WalkerDescription
+from biped_sim.config.description import LEG_KEYS
 from biped_sim.config.walker_registry import capabilities, refusal
+from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import quote
-
-
-class WalkerConfig(Strict):
-    """Geometry and inertia of the walker (MODEL.md 1)."""
-
-    kind: Literal["compass", "simplest", "rimless_wheel", "four_legged", "description"] = Field(
-        "compass",
-        description=(
-            "Walker builder: 'compass' = two straight legs, round feet, hip joint; 'simplest' = Garcia's "
-            "simplest walker (rigid only, g = l = 1); 'rimless_wheel' = spokes of length leg_length (rigid only); "
-            "'four_legged' = Liu's machine: an outer and an inner pair of legs, each pair joined rigidly by a cross "
-            "bar, the pairs by a hip axle, four disc feet (compliant; formulation.kind: spatial, or minimal for its "
-            "sagittal motion); 'description' = the walker written in walker.description (bodies, joints, feet)."
-        ),
-    )
-    description: WalkerDescription | None = Field(
-        None, description="walker.kind: description: the walker as a tree of bodies (WalkerDescription)."
-    )
-    spokes: int = Field(8, ge=3, description="Number of spokes (rimless_wheel).")
-    leg_length: float = Field(0.5, gt=0, description="Hip to foot bottom, l [m].")
-    foot_radius: float = Field(
-        0.15,
-        ge=0,
-        description="Foot arc radius R [m]; arc centre on the leg axis at l - R from the hip; 0 = point foot.",
-    )
-    leg_mass: float = Field(1.0, gt=0, description="Mass of one leg, m [kg].")
-    leg_com_from_hip: float = Field(0.15, ge=0, description="Leg centre of mass distance from the hip, c [m].")
-    leg_inertia: float = Field(0.005, ge=0, description="Leg moment of inertia about its centre of mass, I [kg m^2].")
-    leg_com_offset: float = Field(0.0, description="Leg centre of mass across the leg, w [m] (McGeer's w), + downhill.")
-    foot_offset: float = Field(0.0, description="Foot arc centre across the leg, d [m] (McGeer's d), + downhill.")
-    hip_mass: float = Field(2.0, ge=0, description="Hip point mass M_H [kg], split half to each leg at the hip.")
-    foot_spacing_outer: float = Field(
-        0.2, gt=0, description="four_legged: lateral distance between the two outer legs (and feet) [m]."
-    )
-    foot_spacing_inner: float = Field(
-        0.1, gt=0, description="four_legged: lateral distance between the two inner legs (and feet) [m]."
-    )
-    crossbar_mass: float = Field(
-        0.1,
-        ge=0,
-        description="four_legged: mass of each cross bar [kg], a uniform rod along the hip axle joining one pair.",
-    )
-
-    @model_validator(mode="after")
-    def _geometry_is_possible(self) -> WalkerConfig:
-        if (self.kind == "description") != (self.description is not None):
-            raise ValueError("description: given exactly when walker.kind is 'description'")
-        if self.foot_radius >= self.leg_length:
-            raise ValueError("foot_radius: must be smaller than walker.leg_length")
-        if self.leg_com_from_hip > self.leg_length:
-            raise ValueError("leg_com_from_hip: must not exceed walker.leg_length")
-        # the leg's mass and its foot arc centre stay within the leg's reach (the arc centre below the hip)
-        if math.hypot(self.leg_com_from_hip, self.leg_com_offset) > self.leg_length:
-            raise ValueError("leg_com_offset: puts the centre of mass farther than walker.leg_length from the hip")
-        if abs(self.foot_offset) >= self.leg_length - self.foot_radius:
-            raise ValueError("foot_offset: |foot_offset| must be smaller than walker.leg_length - walker.foot_radius")
-        return self
 
 
 class GroundConfig(Strict):
@@ -279,7 +227,7 @@ class Config(Strict):
     dynamics: Literal["compliant", "rigid"] = Field(
         "compliant", description="'compliant' = penalty contact (the paper); 'rigid' = hybrid impulsive model."
     )
-    walker: WalkerConfig = Field(default_factory=WalkerConfig)
+    walker: WalkerConfig = Field(default_factory=CompassWalker)
     gravity: float = Field(
         9.81, gt=0, le=1000.0, description="Gravitational acceleration g [m/s^2] (at most 1000: a walker, not a star)."
     )
@@ -303,12 +251,11 @@ class Config(Strict):
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
-        if self.walker.kind == "four_legged" and self.walker.foot_spacing_inner >= self.walker.foot_spacing_outer:
-            raise ValueError("walker.foot_spacing_inner: must be smaller than walker.foot_spacing_outer")
         if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
-        if self.contact.stiffness is None and self.walker.foot_radius == 0:
-            raise ValueError("contact.stiffness: required for a point foot (walker.foot_radius = 0), Hertz needs R > 0")
+        hertz = self.contact.materials is not None or self.dynamics == "compliant"
+        if self.contact.stiffness is None and hertz and self.walker.point_feet:
+            raise ValueError("contact.stiffness: required for point feet (every foot's radius is 0), Hertz needs R > 0")
         self._described_walker_checks()
         if self.friction.model != "none" and math.tan(abs(self.ground.slope)) > max(
             self.friction.mu_static, self.friction.mu_kinetic
@@ -320,17 +267,19 @@ class Config(Strict):
         return self
 
     def _described_walker_checks(self) -> None:
-        """A described walker's bodies all carry mass, and Hertz's stiffness has a round foot to work with."""
+        """A described walker's bodies all carry mass."""
         described = self.walker.description
         if described is None:
             return
-        if massless := described.massless_bodies():
+        massless = described.massless_bodies()
+        if self.dynamics == "rigid" and len(massless) < len(described.bodies):  # held by a locked joint, or light
+            one_stop = {j.child for j in described.joints if len(j.stops) == 1}
+            massless = [name for name in massless if name in one_stop]  # free while its joint swings: singular
+        if massless:
             raise ValueError(
                 f"walker.description.bodies.{massless[0]}.mass: a body needs mass (its own or a point mass)"
+                + ("; rigid: or a locked joint (two stops at one angle)" if self.dynamics == "rigid" else "")
             )
-        hertz = self.contact.materials is not None or self.dynamics == "compliant"
-        if self.contact.stiffness is None and hertz and max(foot.radius for foot in described.feet) == 0.0:
-            raise ValueError("contact.stiffness: required for point feet (every foot's radius is 0), Hertz needs R > 0")
 
     def _initial_keys_match(self) -> None:
         initial = self.simulation.initial

@@ -1,10 +1,13 @@
 """The walker registry: what each walker kind supports, declared once (as a propagator declares its capabilities).
 
 For each ``walker.kind``: the formulations it runs in under each dynamics (compliant: planar, minimal, spatial;
-rigid: the reduced planar model), whether it walks on ground profiles and takes pushes, and the studies it
-supports. The schema's cross-checks, the ground-profile rules and the studies' guards read :func:`refusal` and
-:func:`supports_study`, so a rule lives here and nowhere else. (It sits in the config layer because the schema
-reads it; the builders live in :mod:`biped_sim.walkers`.)
+rigid: the reduced planar model), whether it walks on ground profiles and takes pushes, the studies it
+supports, and what else differs between walkers (units, massless legs, the strike check). The schema's
+cross-checks, the ground-profile rules and the studies' guards read :func:`refusal`, :func:`supports_study` and
+:func:`capabilities`, so a rule lives here and nowhere else: nothing outside this module branches on a walker's
+kind (``tests/test_walker_model.py`` scans the package); what follows from a walker's structure (a wheel: one
+leg of several spokes) is read from its model instead. (It sits in the config layer because the schema reads it;
+the builders live in :mod:`biped_sim.walkers`.)
 """
 
 from __future__ import annotations
@@ -26,6 +29,10 @@ class WalkerCapabilities:
     profiles: bool  # ground profiles other than flat
     pushes: bool  # simulation.pushes
     studies: tuple[str, ...]  # names from STUDIES
+    nondimensional: bool = False  # written in units of g = l = hip mass = 1 (Garcia's): rigid gravity 1, no SI units
+    light_legs: bool = False  # legs of no mass: a strike sets the swing leg from the stance leg (Garcia's relations)
+    energy_per_kg: bool = False  # its mass is no parameter (the wheel's hub): energies per kg of it
+    strike_check: bool = False  # the plastic strike's stiff-contact check covers it (studies.convergence)
 
     @property
     def dynamics(self) -> tuple[str, ...]:
@@ -35,10 +42,12 @@ class WalkerCapabilities:
 
 WALKERS: dict[str, WalkerCapabilities] = {
     "compass": WalkerCapabilities(
-        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, STUDIES
+        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, STUDIES, strike_check=True
     ),
-    "simplest": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
-    "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES),
+    "simplest": WalkerCapabilities(
+        {"rigid": ("planar",)}, True, True, RIGID_STUDIES, nondimensional=True, light_legs=True
+    ),
+    "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES, energy_per_kg=True),
     # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
     "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ("basin",)),
     "description": WalkerCapabilities(

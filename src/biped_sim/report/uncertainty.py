@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.plots import COLUMN_WIDTH_IN, new_figure, save_figure, styled
 from biped_sim.studies.uncertainty.mfpt import MfptCurve
 from biped_sim.studies.uncertainty.sobol import SobolIndices, ranking
@@ -21,8 +22,8 @@ UNITS = {"steady_period": "s", "speed": "m/s", "step_length": "m", "energy_per_s
 
 
 def _unit(study: Uncertainty, name: str) -> str:
-    simplest = study.spec.config.walker.kind == "simplest"
-    return "nondim." if simplest else UNITS.get(name, "")
+    nondimensional = capabilities(study.spec.config.walker.kind).nondimensional
+    return "nondim." if nondimensional else UNITS.get(name, "")
 
 
 @styled

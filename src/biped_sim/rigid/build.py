@@ -5,16 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.walkers.describe import describe
-
-NONDIMENSIONAL_KINDS = ("simplest",)  # Garcia's walker is written in units of g = l = hip mass = 1
 
 
 def rigid_walker(config: Config) -> RigidWalker:
     """The rigid model of ``config.walker``."""
     kind = config.walker.kind
-    gravity = 1.0 if kind in NONDIMENSIONAL_KINDS else config.gravity
+    gravity = 1.0 if capabilities(kind).nondimensional else config.gravity  # Garcia's g = l = hip mass = 1
     return RigidWalker(config, describe(config), kind, gravity)
 
 

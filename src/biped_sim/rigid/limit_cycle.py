@@ -239,7 +239,7 @@ def scan_starts(walker: RigidWalker) -> list[tuple[str, np.ndarray]]:
     points = []
     for k in SCAN_RATES:
         rate = -k * scale
-        if walker.name == "rimless_wheel":
+        if walker.shift:  # a wheel: its section is the rate alone
             points.append((f"scan stance_rate {rate:.4g}", np.array([rate])))
             continue
         for angle in SCAN_ANGLES:
@@ -342,7 +342,7 @@ def _tried(labels: list[str], settle_steps: int) -> str:
 def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
     """Post-impact states typical of passive gaits (rates scaled by sqrt(g / l)), tried when no guess is given."""
     scale = math.sqrt(walker.gravity / walker.leg_length)
-    if walker.name == "rimless_wheel":
+    if walker.shift:  # a wheel: its section is the rate alone
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
     starts = ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
     if len(walker.section_names) >= 3:  # the legs just after a strike, as the walker's section places them

@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.build import NONDIMENSIONAL_KINDS, rigid_walker
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
 from biped_sim.rigid.step import RTOL
 from biped_sim.rigid.tree import RigidWalker
@@ -30,9 +31,10 @@ class RigidStart:
 def rigid_units(walker: RigidWalker) -> dict[str, str]:
     """This walker's units for each SI unit the outputs use ('s', 'm', 'm/s', 'rad', 'rad/s', 'J', '1')."""
     units = {unit: unit for unit in ("s", "m", "m/s", "rad", "rad/s", "J", "1")}
-    if walker.name in NONDIMENSIONAL_KINDS:
+    caps = capabilities(walker.name)
+    if caps.nondimensional:
         units.update(dict.fromkeys(("s", "m", "m/s", "rad/s", "J"), NONDIMENSIONAL))
-    elif walker.name == "rimless_wheel":
+    elif caps.energy_per_kg:
         units["J"] = "J/kg"  # the hub's mass is not a parameter: energies per kg of it
     return units
 

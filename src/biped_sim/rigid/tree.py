@@ -6,8 +6,9 @@ compass, Garcia's simplest walker, the rimless wheel, or a walker written as YAM
 * two alike legs (a leg: the bodies from the hip down), one foot on each, an arc or a point: the phases follow
   from the description: the swing leg's stops strike one after another (the kneed walker: its unlocked three-link
   swing ends at the knee strike), then the hip passes over the stance foot, then the heel strikes with every stop
-  of both legs locked through it, and the new swing leg's stops unlock at once. The stance leg's stops stay locked
-  (a straight stance leg, as Chen 2007 and McGeer 1990 model it);
+  of both legs locked through it (but those ``release_at_heel_strike`` lets go on the trailing leg: McGeer's free
+  trailing knee, whose rates join the section), and the new swing leg's stops unlock at once. The stance leg's
+  stops stay locked (a straight stance leg, as Chen 2007 and McGeer 1990 model it);
 * one body with N >= 2 point feet evenly spaced about its origin (the rimless wheel): the next spoke strikes.
 
 Massless legs (Garcia's simplest walker) are the limit of infinitesimal foot masses (:mod:`.tree_kernels`).

@@ -133,7 +133,8 @@ def _flat(w: dict[int, Vec], n: int) -> list[float]:
 
 def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, float, float, int]]:
     """(parent, child, limit, sign, active, leg) of every stop; a leg joint needs one stop, or two at one angle (a
-    locked joint: leg -1, never a phase), the hip none."""
+    locked joint: leg -1, never a phase), the hip none. ``active`` at a step's start: 1 held (the stance leg's), or
+    RELEASED (held, but let go through the heel strike: ``release_at_heel_strike``), 0 free (the swing leg's)."""
     locks, released = [], set()
     for j in d.joints:
         leg = next(i for i, leg in enumerate(d.legs) if j.child in leg)

@@ -10,10 +10,10 @@ the tree (:mod:`biped_sim.rigid.tree`). So its Jacobian column k is ``Rot(theta_
 * the flow is Kane's equations with the locked joint stops as constraints, ``[M A^T; A 0] [qdd; lambda] =
   [sum_i m_i J_i^T (g - Jdot_i qd); 0]``, ``M = sum_i m_i J_i^T J_i + diag(I_i)``, ``A`` the rows
   ``e_child - e_parent`` of the locked joints (their relative angle held at the stop);
-* a plastic impact (a stop strike, or the heel strike with both legs' stops locked through it) is the same
-  system with velocities: ``[M' A'^T; A' 0] [qd+; Lambda] = [sum_i m_i J_i'^T v_i- + I_i omega_i-; 0]``, the
-  primed quantities in the coordinates after it (the legs swapped at a heel strike), v- the bodies' velocities
-  before: the impulses act only at the new contact and at the locked joints.
+* a plastic impact (a stop strike, or the heel strike with both legs' stops locked through it, the RELEASED ones
+  aside) is the same system with velocities: ``[M' A'^T; A' 0] [qd+; Lambda] = [sum_i m_i J_i'^T v_i- + I_i
+  omega_i-; 0]``, the primed quantities in the coordinates after it (the legs swapped at a heel strike), v- the
+  bodies' velocities before: the impulses act only at the new contact and at the locked joints.
 
 The points are the bodies' centres of mass and the point masses (rows of mass, inertia, the coordinate its
 inertia turns with, and w). Two tables hold them: table 0 with the stance foot pinned (the flow), table 1 with

@@ -38,7 +38,7 @@ import numpy as np
 
 from biped_sim.config import LEG_KEYS, Config, derive
 from biped_sim.config.schema import MAX_STEPS
-from biped_sim.config.walker_registry import require_study
+from biped_sim.config.walker_registry import capabilities, require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
 from biped_sim.io.provenance import provenance
@@ -121,7 +121,8 @@ class BasinSpec:
     @property
     def garcia_section(self) -> bool:
         """The simplest walker over stance angle and rate: the swing leg as a heel strike leaves it."""
-        return self.config.walker.kind == "simplest" and {self.x.key, self.y.key} == {"stance_angle", "stance_rate"}
+        light_legs = capabilities(self.config.walker.kind).light_legs
+        return light_legs and {self.x.key, self.y.key} == {"stance_angle", "stance_rate"}
 
     def key(self) -> str:
         """What a finished row was computed for (resume only reuses rows of the same basin)."""

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import STATE_KEYS, Config, derive
-from biped_sim.config.walker_registry import require_study
+from biped_sim.config.walker_registry import capabilities, require_study
 from biped_sim.errors import ArgumentError
 from biped_sim.multibody.dispatch import measures
 from biped_sim.rigid.build import rigid_walker
@@ -65,7 +65,7 @@ def strike_violations(
 ) -> tuple[StrikeCheck | None, list[str]]:
     """:func:`rigid_strike_check` and its violations at the study's friction (None: ``MU_KINETIC``, ``MU_STATIC``);
     (None, []) for a walker other than the compass, which the check does not cover."""
-    if config.walker.kind != "compass":
+    if not capabilities(config.walker.kind).strike_check:
         return None, []
     check = rigid_strike_check(config, rigid, mu_kinetic)
     return check, check.violations(MU_STATIC if mu_static is None else mu_static)
@@ -183,7 +183,7 @@ def converge(
                 touchdown_difference=float(np.max(np.abs(touchdowns[-1] - rigid_touchdown))),
                 period_difference=float(result.step_periods[-1] - rigid.step_period),
                 settled=float(np.max(np.abs(touchdowns[-1] - touchdowns[-2]))),
-                slip=float(result.summary["slip_per_step"][-1]),
+                slip=float(result.step_summary()["slip_per_step"][-1]),
             )
         )
     return rigid, rows

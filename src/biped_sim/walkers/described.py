@@ -113,20 +113,6 @@ def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
 
 
-def standing_origins(tree: Tree) -> np.ndarray:
-    """(nb, 2): each body's origin from the hip with every angle zero (the legs along the slope normal)."""
-    origin = np.zeros((len(tree.names), 2))
-    for b in range(1, len(tree.names)):
-        origin[b] = origin[tree.parent[b]] + tree.joint_at[b]
-    return origin
-
-
-def leg_length(tree: Tree) -> float:
-    """Hip to the lowest foot bottom with every angle zero [m]: the walker's length scale."""
-    bottoms = standing_origins(tree)[tree.foot_body, 1] + tree.foot_centre[:, 1] - tree.foot_radius
-    return float(-np.min(bottoms))
-
-
 def _leg_feet(tree: Tree) -> list[list[int]]:
     """The feet of each leg."""
     return [[i for i, b in enumerate(tree.foot_body) if b in leg] for leg in tree.legs]
@@ -287,7 +273,7 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     if description is None:
         raise ConfigError("walker.description", "walker.kind: description needs walker.description")
     tree = resolve_tree(description)
-    length = leg_length(tree)
+    length = description.leg_length()
     radius = float(np.max(tree.foot_radius))
     stiffness = contact_stiffness(config, radius)
     total_mass = float(np.sum(tree.mass))

@@ -3,8 +3,8 @@
 * The Ishigami function (a = 7, b = 0.1; Ishigami and Homma 1990; analytic indices in Saltelli et al., Global
   Sensitivity Analysis: The Primer, 2008): S1 = 0.3139, S2 = 0.4424, S3 = 0, ST1 = 0.5576, ST3 = 0.2437, through
   the design and estimator code that walker runs use (:func:`.sampling.unit_design`, :func:`.sobol.saltelli_indices`).
-* Garcia's simplest walker depends on the slope alone: over slope and the (unused) leg inertia, the slope's total
-  index is 1 and the inertia's 0.
+* Garcia's simplest walker depends on the slope alone: over slope and the contact restitution (unused by the rigid
+  model), the slope's total index is 1 and the restitution's 0.
 * The mean steady period over a uniform slope distribution equals the average of the limit-cycle periods over it
   (Gauss-Legendre quadrature of Newton's cycles), within the sampling error.
 * The rimless wheel's MFPT on random slopes from simulated walks against its Markov chain at two roughness levels.
@@ -62,10 +62,10 @@ def _simplest(t_end: float = 40.0):
 
 
 def simplest_index_checks() -> list[Check]:
-    """Slope and the unused leg inertia: total indices 1 and 0."""
+    """Slope and the contact restitution, unused by the rigid model: total indices 1 and 0."""
     spec = UncertaintySpec(
         _simplest(),
-        (Distribution("ground.slope", "uniform", SLOPES), Distribution("walker.leg_inertia", "uniform", (0.001, 0.01))),
+        (Distribution("ground.slope", "uniform", SLOPES), Distribution("contact.restitution", "uniform", (0.2, 0.9))),
         WALKER_SAMPLES, "saltelli", seed=1,
     )  # fmt: skip
     study = run_study(spec, None)
@@ -85,7 +85,7 @@ def simplest_index_checks() -> list[Check]:
         ),
         Check(
             group,
-            "ST leg inertia (unused by the model)",
+            "ST contact restitution (unused by the model)",
             "0",
             f"{float(s['ST'][1]):.2e}",
             "1e-12",

@@ -33,7 +33,7 @@ from biped_sim.config import Config, derive
 from biped_sim.errors import ArgumentError
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.tasks import results_as_done
-from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, wheel_walks
+from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, walks_random_slopes, wheel_walks
 from biped_sim.studies.uncertainty.samples import run_formulation
 
 CONFIDENCE = 0.95
@@ -139,7 +139,7 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
     """ArgumentError naming the argument at fault."""
     if ground not in GROUNDS:
         raise ArgumentError("ground", f"unknown ground {ground!r}; expected one of {', '.join(GROUNDS)}")
-    if ground == "slope" and not (config.dynamics == "rigid" and config.walker.kind == "rimless_wheel"):
+    if ground == "slope" and not walks_random_slopes(config):
         raise ArgumentError("ground", "random slopes per step are walked by the rigid rimless wheel only")
     if not roughness or not all(math.isfinite(h) and h >= 0 for h in roughness):
         raise ArgumentError("roughness", "give non-negative roughness levels")

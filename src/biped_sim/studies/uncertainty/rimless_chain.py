@@ -39,6 +39,11 @@ CHAIN_NODES = 4000
 CHAIN_SPAN = 3.0  # the grid of apex rates reaches this many times the nominal apex rate
 
 
+def walks_random_slopes(config: Config) -> bool:
+    """Whether ``config`` is a rigid wheel (a walker of one leg with spokes), which walks random slopes per step."""
+    return config.dynamics == "rigid" and bool(rigid_walker(config).shift)
+
+
 @dataclass(frozen=True)
 class Wheel:
     """The wheel's numbers: half the inter-spoke angle, g / l and the nominal slope."""
@@ -50,9 +55,9 @@ class Wheel:
     @classmethod
     def of(cls, config: Config) -> Wheel:
         walker = rigid_walker(config)
-        if walker.name != "rimless_wheel":
+        if not walker.shift:
             raise TypeError("the Markov chain is the rimless wheel's")
-        return cls(0.5 * walker.shift, config.gravity / config.walker.leg_length, config.ground.slope)
+        return cls(0.5 * walker.shift, walker.gravity / walker.leg_length, config.ground.slope)
 
     def apex_map(self, x: np.ndarray, gamma: np.ndarray) -> np.ndarray:
         """The next apex rate of apex rates ``x`` on slopes ``gamma`` (NaN: the wheel falls)."""
@@ -90,7 +95,7 @@ def wheel_walks(config: Config, roughness: float, seeds: range, cap: int) -> tup
     """Walks of the compiled rigid wheel on random slopes, one per seed: (strikes, fell), ``fell`` False for a
     walk that reached the cap."""
     walker = rigid_walker(config)
-    if walker.name != "rimless_wheel":
+    if not walker.shift:
         raise TypeError("wheel_walks walks the rimless wheel")
     cw = compile_walker(walker)
     start = walker.state_from_legs(rigid_limit_cycle(config).fixed_point)
