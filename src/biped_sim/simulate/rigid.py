@@ -83,8 +83,6 @@ class RigidRunResult(RunResult):
     t_final: float  # last simulated time: t_end, the last strike (max_steps), or the fall
     time: np.ndarray  # (ns,)
     state: np.ndarray  # (ns, ny), the walker's reduced state, relabelled at each strike
-    energy: RigidEnergy
-    hip: np.ndarray  # (ns, 2)
     strike_time: np.ndarray  # (n,)
     strike_pre: np.ndarray  # (n, ny) just before each strike
     strike_post: np.ndarray  # (n, ny) just after, new stance leg first
@@ -93,6 +91,22 @@ class RigidRunResult(RunResult):
     rhs_evals: int
     accepted_steps: int
     wall_time_s: float
+    start: RigidStart  # with the trace, what the energy terms and the hip are computed from when asked
+    trace: RigidTrace
+
+    @cached_property
+    def _energy_and_hip(self) -> tuple[RigidEnergy, np.ndarray]:
+        return rigid_energy_and_hip(self.walker, self.start, self.trace, self.time, self.state)
+
+    @property
+    def energy(self) -> RigidEnergy:
+        """The energy terms at the samples (computed the first time something asks)."""
+        return self._energy_and_hip[0]
+
+    @property
+    def hip(self) -> np.ndarray:
+        """(ns, 2) the hip's position in the run's slope frame (computed the first time something asks)."""
+        return self._energy_and_hip[1]
 
     @cached_property
     def summary(self) -> dict[str, Any]:
@@ -277,7 +291,6 @@ def simulate_rigid(
     ny = len(start.state)
     times = np.concatenate(trace.times)
     states = np.vstack(trace.states)
-    energy, hip = rigid_energy_and_hip(walker, start, trace, times, states)
     return RigidRunResult(
         config=config,
         walker=walker,
@@ -287,8 +300,6 @@ def simulate_rigid(
         t_final=end.t_final,
         time=times,
         state=states,
-        energy=energy,
-        hip=hip,
         strike_time=np.array(trace.strike_time),
         strike_pre=np.array(trace.strike_pre).reshape(-1, ny),
         strike_post=np.array(trace.strike_post).reshape(-1, ny),
@@ -297,4 +308,6 @@ def simulate_rigid(
         rhs_evals=end.rhs_evals,
         accepted_steps=end.accepted_steps,
         wall_time_s=wall,
+        start=start,
+        trace=trace,
     )
