@@ -121,6 +121,13 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+def test_a_fit_whose_dask_scheduler_does_not_answer_leaves_nothing_behind(tmp_path: Path) -> None:
+    scheduler = f"tcp://127.0.0.1:{free_port()}"
+    code, line = one_line(start(*FIT, "--executor", "dask", "--scheduler", scheduler, "--out", "fit", cwd=tmp_path))
+    assert code == 2 and line.startswith(f"error: --scheduler: cannot connect to '{scheduler}'"), line
+    assert list(tmp_path.iterdir()) == []  # no checkpoint folder beside --out
+
+
 @pytest.fixture
 def dask_cluster(tmp_path: Path) -> Iterator[Cluster]:
     """A Dask scheduler and two single-threaded workers (no nanny: a killed worker stays dead) on this machine."""
