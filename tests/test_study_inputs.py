@@ -130,6 +130,7 @@ def _fit(tmp_path: Path, *args: str) -> tuple[int, str]:
         ((*PARAM, "--posterior", "10", "--walkers", "3"), "error: --walkers: must be even and at least 2"),
         ((*PARAM, "--posterior", "10", "--walkers", "0"), "error: --walkers: must be even and at least 2"),
         ((*PARAM, "--posterior", "10"), "error: --posterior: at least 160"),
+        ((*PARAM, "--walkers", "8"), "error: --walkers: only used with --posterior"),
         ((*PARAM, "--executor", "mpi"), "error: --executor: unknown executor 'mpi'"),
         ((*PARAM, "--quantity", "hip_height"), "error: --quantity: unknown quantity 'hip_height'; known: step_period"),
         ((*PARAM, "--skip-steps", "100000000"), "error: --skip-steps: reference step 7 is model step 100,000,007"),
