@@ -250,7 +250,7 @@ def test_animation_draws_the_profile(tmp_path: Path) -> None:
     fig = Figure()
     FigureCanvasAgg(fig)
     drawing = WalkerDrawing(load_run(tmp_path / "run"), fig)
-    surface = drawing.to_world.T @ np.vstack(drawing.ax.lines[0].get_data())  # back to the slope frame
+    surface = drawing.walker.world.T @ np.vstack(drawing.ax.lines[0].get_data())  # back to the slope frame
     riser = surface[:, np.isclose(surface[0], 0.45)]
     np.testing.assert_allclose(riser.T, [[0.45, 0.0], [0.45, -0.005]], atol=1e-12)
 

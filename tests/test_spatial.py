@@ -197,7 +197,7 @@ def test_spatial_run_directory(tmp_path) -> None:  # type: ignore[no-untyped-def
     FigureCanvasAgg(fig)
     drawing = WalkerDrawing(data, fig)
     drawing.draw(0)
-    assert len(drawing.legs) == 2 and len(drawing.arrows.U) == 4
+    assert len(drawing.walker.bodies) == 2 and len(drawing.arrows.U) == 4
     assert np.hypot(drawing.arrows.U, drawing.arrows.V).max() > 0  # feet on the ground carry the walker
 
 
