@@ -213,6 +213,39 @@ def test_bench_markdown_reports_the_uncertainty_rows_and_their_targets() -> None
     assert not met["Sobol indices, 4 keys, N = 256, 2 workers < 600 s"]
 
 
+def test_bench_markdown_reports_the_run_cost_rows_against_their_target() -> None:
+    result = made_up_result()
+    result["run_cost"] = {
+        "t_end": 10.0,
+        "repeats": 5,
+        "rows": [
+            {"label": "simulate, minimal", "target": 1.2, "simulate_ratio": 1.05, "with_measures_ratio": 1.3,
+             "met": True},
+            {"label": "uncertainty sample", "target": 1.2, "call_ratio": 1.4, "met": False},
+        ],
+    }  # fmt: skip
+    found = {name: (measured, ok) for name, measured, ok in targets(result)}
+    assert found["simulate, minimal <= 1.2x its integration"] == (
+        "1.05x (1.30x with every measure of its files)",
+        True,
+    )
+    assert found["uncertainty sample <= 1.2x its integration"] == ("1.40x", False)
+    assert "simulate, minimal <= 1.2x its integration" in markdown(result)
+
+
+@pytest.mark.slow
+def test_bench_times_a_run_and_a_study_evaluation_against_their_integration(short_bench: dict) -> None:
+    rows = {row["label"]: row for row in short_bench["run_cost"]["rows"]}
+    assert set(rows) == {
+        *(f"simulate, {kind}" for kind in ("planar", "minimal", "spatial", "rigid")),
+        "fit evaluation",
+        "uncertainty sample",
+    }
+    for row in rows.values():
+        ratio = row.get("simulate_ratio", row.get("call_ratio"))
+        assert row["integration_s"] > 0.0 and 0.5 < ratio < 20.0, row
+
+
 @pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="MuJoCo is the optional extra 'bench'")
 def test_mujoco_walker_matches_initial_state_and_walks_one_step() -> None:
     from biped_sim import load_config

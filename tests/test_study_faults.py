@@ -27,10 +27,11 @@ from .conftest import CLI, CONFIGS, DEFAULT_CONFIG, child_env
 pytestmark = pytest.mark.slow
 REFERENCE = CONFIGS / "references" / "synthetic_round_foot_periods.yaml"
 FIT = ["fit", str(DEFAULT_CONFIG), "--reference", str(REFERENCE), "--param", "walker.leg_inertia=0.0043:0.006"]
-SHORT = ["--set", "simulation.t_end=2"]
+SHORT = ["--set", "simulation.t_end=1"]  # a second of walking: a chunk of 16 samples in seconds
 UNCERTAINTY = ["uncertainty", str(CONFIGS / "simplest_walker.yaml"), "--param", "ground.slope=uniform:0.008:0.01",
                "-n", "8", "--json"]  # fmt: skip
-TIMEOUT_S = 300
+TIMEOUT_S = 600  # a loaded machine (the studies of other sessions) slows every process here
+Cluster = tuple[str, subprocess.Popen[bytes], list[subprocess.Popen[bytes]]]  # address, scheduler, workers
 
 
 def start(*args: str, cwd: Path) -> subprocess.Popen[str]:
@@ -120,8 +121,15 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+def test_a_fit_whose_dask_scheduler_does_not_answer_leaves_nothing_behind(tmp_path: Path) -> None:
+    scheduler = f"tcp://127.0.0.1:{free_port()}"
+    code, line = one_line(start(*FIT, "--executor", "dask", "--scheduler", scheduler, "--out", "fit", cwd=tmp_path))
+    assert code == 2 and line.startswith(f"error: --scheduler: cannot connect to '{scheduler}'"), line
+    assert list(tmp_path.iterdir()) == []  # no checkpoint folder beside --out
+
+
 @pytest.fixture
-def dask_cluster(tmp_path: Path) -> Iterator[tuple[str, subprocess.Popen[bytes], list[subprocess.Popen[bytes]]]]:
+def dask_cluster(tmp_path: Path) -> Iterator[Cluster]:
     """A Dask scheduler and two single-threaded workers (no nanny: a killed worker stays dead) on this machine."""
     pytest.importorskip("distributed")
     address = f"tcp://127.0.0.1:{free_port()}"
@@ -140,11 +148,11 @@ def dask_cluster(tmp_path: Path) -> Iterator[tuple[str, subprocess.Popen[bytes],
 
 
 def test_a_dask_scheduler_lost_during_a_study_is_one_line_and_a_rerun_resumes(
-    dask_cluster: tuple[str, subprocess.Popen[bytes], list[subprocess.Popen[bytes]]], tmp_path: Path
+    dask_cluster: Cluster, tmp_path: Path
 ) -> None:
     address, scheduler, _ = dask_cluster
     out = tmp_path / "u"
-    study = ["uncertainty", str(DEFAULT_CONFIG), *SHORT, "--param", "ground.slope=uniform:0.018:0.022", "-n", "32",
+    study = ["uncertainty", str(DEFAULT_CONFIG), *SHORT, "--param", "ground.slope=uniform:0.018:0.022", "-n", "64",
              "--json", "--out", str(out)]  # fmt: skip
     process = start(*study, "--executor", "dask", "--scheduler", address, cwd=tmp_path)
     wait_for(lambda: any((out / "samples").glob("*.json")), "the first chunk of samples")
@@ -156,16 +164,33 @@ def test_a_dask_scheduler_lost_during_a_study_is_one_line_and_a_rerun_resumes(
     assert json.loads(again.stdout)["chunks_reused"] >= 1
 
 
+def dask_sweep(address: str, sweep: Path, out: Path) -> subprocess.Popen[str]:
+    """The sweep CLI on the Dask cluster at ``address``."""
+    return start("sweep", str(sweep), "--out", str(out), "--executor", "dask", "--scheduler", address, cwd=out.parent)
+
+
+def test_a_dask_scheduler_lost_during_a_sweep_is_one_line_and_leaves_its_runs_pending(
+    dask_cluster: Cluster, tiny_sweep_dir: Path, tmp_path: Path
+) -> None:
+    address, scheduler, _ = dask_cluster
+    out = tmp_path / "dask"
+    process = dask_sweep(address, tiny_sweep_dir.parent / "tiny.yaml", out)
+    wait_for((out / "sweep.csv").is_file, "the sweep's table")
+    scheduler.kill()
+    assert one_line(process) == (1, f"error: {SCHEDULER_LOST}")
+    statuses = pd.read_csv(out / "sweep.csv")["status"]
+    assert set(statuses) <= {"walking", "pending"} and "pending" in set(statuses)
+    assert not list(out.rglob("error.json"))
+
+
 def test_a_dask_worker_killed_during_a_sweep_leaves_the_local_results(
-    dask_cluster: tuple[str, subprocess.Popen[bytes], list[subprocess.Popen[bytes]]],
-    tiny_sweep_dir: Path,
-    tmp_path: Path,
+    dask_cluster: Cluster, tiny_sweep_dir: Path, tmp_path: Path
 ) -> None:
     """The scheduler hands the killed worker's run to the other one: every run as the local processes made it."""
     address, _, workers = dask_cluster
     out = tmp_path / "dask"
     sweep = tiny_sweep_dir.parent / "tiny.yaml"
-    process = start("sweep", str(sweep), "--out", str(out), "--executor", "dask", "--scheduler", address, cwd=tmp_path)
+    process = dask_sweep(address, sweep, out)
     wait_for(lambda: any(out.glob("runs/*/summary.json")), "the sweep's first run")
     assert len(list(out.glob("runs/*/summary.json"))) < 8, "the sweep was over before the kill"
     workers[0].send_signal(signal.SIGKILL)

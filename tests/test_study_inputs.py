@@ -4,6 +4,7 @@ refused in one line naming the field or option, before any simulation and before
 from __future__ import annotations
 
 import copy
+import math
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -130,6 +131,7 @@ def _fit(tmp_path: Path, *args: str) -> tuple[int, str]:
         ((*PARAM, "--posterior", "10", "--walkers", "3"), "error: --walkers: must be even and at least 2"),
         ((*PARAM, "--posterior", "10", "--walkers", "0"), "error: --walkers: must be even and at least 2"),
         ((*PARAM, "--posterior", "10"), "error: --posterior: at least 160"),
+        ((*PARAM, "--walkers", "8"), "error: --walkers: only used with --posterior"),
         ((*PARAM, "--executor", "mpi"), "error: --executor: unknown executor 'mpi'"),
         ((*PARAM, "--quantity", "hip_height"), "error: --quantity: unknown quantity 'hip_height'; known: step_period"),
         ((*PARAM, "--skip-steps", "100000000"), "error: --skip-steps: reference step 7 is model step 100,000,007"),
@@ -228,3 +230,15 @@ def test_a_batch_interrupted_keeps_its_finished_evaluations_for_the_checkpoint(
     evaluator.save()
     assert evaluator.evaluations == 1 and list(evaluator.cache) == [evaluate.point_key([0.2])]
     assert len(evaluate.Evaluator(problem, None, checkpoint).cache) == 1
+
+
+def test_a_fit_that_never_reached_its_steps_prints_no_nan_error(capsys: pytest.CaptureFixture[str]) -> None:
+    from biped_sim.cli.fit_commands import _print
+
+    doc = {"parameters": {"walker.leg_inertia": 0.005}, "rms_error_s": math.nan, "rms_weighted_residual": 40.0,
+           "evaluations": 50, "simulations": 50, "evaluations_replayed": 0, "wall_time_s": 1.0,
+           "verdict": "not converged: the fitted walker never reaches reference step 7 (its run ended fell after 3 "
+           "model steps)", "identifiability": {"warnings": []}, "misfit": None}  # fmt: skip
+    _print(None, doc)
+    line = capsys.readouterr().out.splitlines()[0]
+    assert "nan" not in line and "never reaches reference step 7" in line

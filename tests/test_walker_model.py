@@ -139,13 +139,9 @@ PARAMETRISED = Path(__file__).parent / "data" / "kneed_parametrised.yaml"
 def test_a_mirrored_leg_with_named_parameters_is_chens_kneed_walker() -> None:
     config = load_config(PARAMETRISED)
     described = config.walker.description
-    assert described is not None and described.legs == [["thigh_1", "shank_1"], ["thigh_2", "shank_2"]]
-    assert [j.name for j in described.joints] == ["hip", "knee_1", "knee_2"]
-    assert config.initial_keys() == load_config(KNEED).initial_keys()
+    assert described == load_config(KNEED).walker.description  # the same walker, number for number
     written, bundled = rigid_limit_cycle(config), rigid_limit_cycle(load_config(KNEED))
-    assert written.converged and bundled.converged
-    assert written.fixed_point == pytest.approx(bundled.fixed_point, rel=1e-8, abs=1e-10)
-    assert written.step_period == pytest.approx(bundled.step_period, rel=1e-9)
+    assert written.converged and written.fixed_point == bundled.fixed_point  # bit for bit
 
 
 def test_a_parameter_sets_every_number_that_uses_it() -> None:
@@ -168,7 +164,7 @@ def test_every_study_addresses_a_named_parameter(tmp_path: Path) -> None:
     check_distributions(config, [parse_distribution(key, "uniform:0.45:0.55")])
     sweep = tmp_path / "sweep.yaml"
     sweep.write_text(f"name: thigh\nbase: {PARAMETRISED}\ngrid:\n  {key}: [0.45, 0.55]\n")
-    masses = [run.config.walker.description.bodies[2].mass for run in load_sweep(sweep).runs]  # type: ignore[union-attr]
+    masses = [run.config.walker.description.bodies[1].mass for run in load_sweep(sweep).runs]  # type: ignore[union-attr]
     assert masses == [0.45, 0.55]
 
 
@@ -238,7 +234,7 @@ def test_a_mirrored_leg_goes_with_bodies_off_the_legs_and_the_hips_own_fields() 
     walker = {"kind": "description", "parameters": parameters, "description": description}
     config = config_from_dict({"walker": walker, "contact": {"stiffness": 1e7}})
     described = config.walker.description
-    assert described is not None and [b.name for b in described.bodies] == ["leg_1", "leg_2", "torso"]
+    assert described is not None and [b.name for b in described.bodies] == ["leg_1", "leg_2", "torso"]  # pairs
     assert [(j.name, j.parent, j.child) for j in described.joints] == [
         ("pelvis", "leg_1", "leg_2"), ("waist", "leg_1", "torso")]  # fmt: skip
     assert described.joints[0].stops[0].angle == 1.0 and described.legs == [["leg_1"], ["leg_2"]]

@@ -108,7 +108,8 @@ def kernel(function: Callable[..., Any] | None = None, *, reference_counts: bool
 
 
 def implementation_of(kernel: Any) -> FunctionType:
-    """The compiled ``kernel``'s Python function, without its annotations, as an overload implementation.
+    """The compiled ``kernel``'s Python function (or a plain function's), without its annotations, as an overload
+    implementation.
 
     numba compiles the function an ``@overload`` returns as the implementation of the call, after
     checking that its parameters equal the typing function's, annotations included
@@ -116,7 +117,7 @@ def implementation_of(kernel: Any) -> FunctionType:
     forwarding wrapper) makes a generic call exactly a call of the kernel: no extra function layer,
     whose arguments would each cost a reference count at every right-hand-side evaluation.
     """
-    code = kernel.py_func
+    code = getattr(kernel, "py_func", kernel)  # a plain Python function (over kernels) is its own code
     return FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
 
 

@@ -32,7 +32,8 @@ TARGETS_S = {"global_fit": 60.0, "posterior": 600.0, "recovery_per_fit": 15.0}  
 RECOVERY_CASES, RECOVERY_SEED = 2, 27  # the check's seed: its first cases
 
 
-def _problem() -> Any:
+def fit_problem() -> Any:
+    """The global fit's problem: the default walker's two parameters against its own synthetic step periods."""
     base = load_config(CONFIG, ["simulation.t_end=3.5"])
     data = synthetic_reference_data(derive(base, HIDDEN), STEPS, 0.0, 0, decimals=5)
     data["std"] = [STD_S] * STEPS
@@ -42,7 +43,7 @@ def _problem() -> Any:
 
 def fit_bench(posterior: bool = True) -> dict[str, Any]:
     """The bench.json section ``fit``: wall times, evaluations and what was recovered."""
-    problem = _problem()
+    problem = fit_problem()
     out: dict[str, Any] = {"hidden": HIDDEN, "steps": STEPS, "workers": WORKERS}
     with tempfile.TemporaryDirectory(prefix="biped-sim-bench-fit-") as tmp:
         checkpoint = Path(tmp) / "fit.checkpoint.json"

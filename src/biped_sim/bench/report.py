@@ -109,6 +109,7 @@ def targets(result: dict[str, Any]) -> list[tuple[str, str, bool | None]]:
         label = f"recovery check ({pair}), per fit, 2 workers < {row['target_s_per_fit']:g} s"
         out.append((label, f"{row['wall_s_per_fit']:.1f} s", ok))
     out += uncertainty_targets(result.get("uncertainty"))
+    out += run_cost_targets(result.get("run_cost"))
     mj = result.get("mujoco") or {}
     best = fastest_accurate_row(result)
     if mj.get("available") and best is not None:
@@ -130,6 +131,18 @@ def uncertainty_targets(section: dict[str, Any] | None) -> list[tuple[str, str, 
         if row:
             ok = row["wall_s"] < row["target_s"]
             out.append((f"{label}, 2 workers < {row['target_s']:g} s", f"{row['wall_s']:.1f} s", ok))
+    return out
+
+
+def run_cost_targets(section: dict[str, Any] | None) -> list[tuple[str, str, bool | None]]:
+    """Issue 30's targets: a run, a fit evaluation and an uncertainty sample at most 1.2x their integration."""
+    out: list[tuple[str, str, bool | None]] = []
+    for row in (section or {}).get("rows", []):
+        ratio = row.get("simulate_ratio", row.get("call_ratio"))
+        measured = f"{ratio:.2f}x"
+        if "with_measures_ratio" in row:
+            measured += f" ({row['with_measures_ratio']:.2f}x with every measure of its files)"
+        out.append((f"{row['label']} <= {row['target']:g}x its integration", measured, row["met"]))
     return out
 
 

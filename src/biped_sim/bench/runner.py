@@ -8,7 +8,8 @@ the speed-up over the baseline (solve_ivp RK45 over the plain-Python RHS, :mod:`
 Fixed-step rows first search the largest step that keeps every step period within
 :data:`PERIOD_TOLERANCE` of the reference. Then: the RHS alone in absolute and in minimal
 coordinates (hence the loop overhead), compile and start-up times in fresh processes and sweep
-throughput with 1 and 2 workers (:mod:`.startup`), and MuJoCo.
+throughput with 1 and 2 workers (:mod:`.startup`), a run, a fit evaluation and an uncertainty sample against
+their own integration (:mod:`.run_cost`), and MuJoCo.
 
 :data:`CASES` is the list of rows: another formulation, method or walker is one more entry.
 """
@@ -34,6 +35,7 @@ from biped_sim.bench.baseline import integrate_baseline
 from biped_sim.bench.compile import cold_compile_per_group
 from biped_sim.bench.fit import fit_bench
 from biped_sim.bench.rigid_map import rigid_map_bench
+from biped_sim.bench.run_cost import run_cost_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
 from biped_sim.bench.uncertainty import uncertainty_bench
 from biped_sim.config import Config, load_config
@@ -355,6 +357,8 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     if settings.sweep_runs:
         result["sweep"] = sweep_throughput(settings.config_path, settings.sweep_runs, settings.t_end)
         log(f"sweep: {json.dumps(result['sweep'])}")
+    result["run_cost"] = run_cost_bench(base, settings.t_end, settings.repeats)
+    log(f"run cost: {json.dumps(result['run_cost'])}")
     result["rigid_map"] = rigid_map_bench(settings.basins)
     log(f"rigid map: {json.dumps(result['rigid_map'])}")
     if settings.fits:

@@ -143,6 +143,8 @@ def fit_command(
             raise ConfigError(option, f"must be at least {least}")
     if global_method not in GLOBAL_METHODS:
         raise ConfigError("--global", f"unknown method {global_method!r}; expected one of {', '.join(GLOBAL_METHODS)}")
+    if walkers is not None and posterior == 0:
+        raise ConfigError("--walkers", "only used with --posterior (the emcee sampler's walkers)")
     if reference is None:
         raise ConfigError("--reference", "required: a reference file of measured steps (see docs/experiments.md)")
     contest_key = parse_each(each) if each is not None else None

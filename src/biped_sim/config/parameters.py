@@ -162,9 +162,10 @@ LEG_PARTS = ("bodies", "point_masses", "joints", "feet")
 
 def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
     """A description whose ``leg`` (its bodies, point masses, joints and feet, hip first) is written once, as two
-    legs: each name suffixed ``_1`` and ``_2``, the second leg's hip body hinged to the first's at the hip (the
-    joint ``hip``, or the mapping ``hip`` for its other fields); the description's own bodies, point masses,
-    joints and feet (a torso, the hip's mass) follow. A description without ``leg`` is returned as it is."""
+    legs: each name suffixed ``_1`` and ``_2``, the two legs' parts in pairs (thigh_1, thigh_2, shank_1, ...), the
+    second leg's hip body hinged to the first's at the hip (the joint ``hip``, or the mapping ``hip`` for its other
+    fields); the description's own bodies, point masses, joints and feet (a torso, the hip's mass) follow. A
+    description without ``leg`` is returned as it is."""
     if not isinstance(description, dict) or "leg" not in description:
         return description
     leg, out = description["leg"], copy.deepcopy({k: v for k, v in description.items() if k not in ("leg", "hip")})
@@ -185,7 +186,8 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
     hip_body = f"{leg['bodies'][0].get('name')}"
     hip = {"name": "hip", **(description.get("hip") or {}), "parent": f"{hip_body}_1", "child": f"{hip_body}_2"}
     for part in LEG_PARTS:
-        out[part] = [*copies[0].get(part, []), *copies[1].get(part, []), *out.get(part, [])]
+        pairs = zip(copies[0].get(part, []), copies[1].get(part, []), strict=True)  # as hand-written: thigh_1, thigh_2
+        out[part] = [*(item for pair in pairs for item in pair), *out.get(part, [])]
     out["joints"] = [hip, *out["joints"]]
     out["legs"] = [[b["name"] for b in c["bodies"]] for c in copies]
     return out

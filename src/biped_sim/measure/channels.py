@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.integrate.driver import Integration
+from biped_sim.measure.loops import attitude_loop, contact_loop, hip_loop, violation_loop
 from biped_sim.multibody.dispatch import measures
 from biped_sim.walkers.model import BuiltModel
 
@@ -16,8 +17,9 @@ def violation_names(model: BuiltModel) -> tuple[str, ...]:
 
 def constraint_drift(model: BuiltModel, run: Integration) -> np.ndarray:
     """(ns, k): ||Phi||, ||Phidot|| (and, spatial, ||p.p - 1|| over the bodies) at each sample."""
-    m = measures(model.system)
-    return np.array([m.violation(y, model.system) for y in run.y]).reshape(len(run.t), len(m.violation_names))
+    out = np.empty((len(run.t), len(violation_names(model))))
+    violation_loop(run.y, model.system, out)
+    return out
 
 
 def contact_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
@@ -26,32 +28,26 @@ def contact_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarra
     Penetration, normal force, friction force and slip velocity along the slope (x); spatial
     formulations add the lateral (z) friction force and slip velocity.
     """
-    m = measures(model.system)
-    ns, nf = len(run.t), model.n_feet
-    out = {name: np.zeros((ns, nf)) for name in m.contact_names}
-    for i in range(ns):
-        for f in range(nf):
-            values = m.contact(run.y[i], model.system, run.modes[i], f)
-            for name, value in zip(m.contact_names, values, strict=True):
-                out[name][i, f] = value
-    return out
+    names = measures(model.system).contact_names
+    out = np.empty((len(names), len(run.t), model.n_feet))
+    contact_loop(run.y, run.modes, model.system, out)
+    return {name: out[k] for k, name in enumerate(names)}
 
 
 def hip_position(model: BuiltModel, run: Integration) -> np.ndarray:
     """(ns, 2) planar or (ns, 3) spatial position of joint 0 (the hip) in the slope frame."""
-    hip = measures(model.system).hip
-    return np.array([hip(y, model.system) for y in run.y]).reshape(len(run.t), -1)
+    out = np.empty((len(run.t), len(measures(model.system).hip(model.y0, model.system))))
+    hip_loop(run.y, model.system, out)
+    return out
 
 
 def attitude_channels(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
     """Spatial only (else empty): per-body pitch, roll (lateral rocking), yaw (heading drift) [rad] and pitch rate
     (the planar leg angle rate) [rad/s], (ns, nb) each."""
-    attitude = measures(model.system).attitude
-    if attitude is None:
+    if measures(model.system).attitude is None:
         return {}
-    ns, nb = len(run.t), model.n_bodies
-    values = np.array([[attitude(run.y[i], model.system, b) for b in range(nb)] for i in range(ns)])
-    values = values.reshape(ns, nb, 4)
+    values = np.empty((len(run.t), model.n_bodies, 4))
+    attitude_loop(run.y, model.system, values)
     return {"pitch": values[:, :, 0], "roll": values[:, :, 1], "yaw": values[:, :, 2], "pitch_rate": values[:, :, 3]}
 
 

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.integrate.driver import Integration
-from biped_sim.multibody.dispatch import formulation_of, measures
+from biped_sim.measure.loops import energy_loop
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.walkers.model import BuiltModel
 
 
@@ -33,8 +34,8 @@ class EnergyAudit:
 def energy_audit(model: BuiltModel, run: Integration) -> EnergyAudit:
     """Energy balance over the samples (the dissipated work is integrated as ODE states)."""
     ns = len(run.t)
-    energy = measures(model.system).mechanical_energy
-    terms = np.array([energy(run.y[i], model.system, run.modes[i]) for i in range(ns)]).reshape(ns, 3)
+    terms = np.empty((ns, 3))
+    energy_loop(run.y, run.modes, model.system, terms)
     layout = formulation_of(model.system).layout_of(model.system)
     w_normal = run.y[:, layout.work_normal]
     w_friction = run.y[:, layout.work_friction]

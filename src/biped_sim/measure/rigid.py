@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from biped_sim.config import LEG_KEYS
+from biped_sim.measure.loops import rigid_loop
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.start import RigidStart, touchdown_legs
 from biped_sim.rigid.tree import RigidWalker
@@ -100,7 +101,8 @@ def rigid_energy_and_hip(
     dissipated_by_step = np.concatenate([[0.0], np.cumsum(losses)])
     step_of_sample = np.concatenate(trace.sample_step)
     sample_origin = origin[step_of_sample]
-    terms = np.array([walker.energy(x) for x in states]).reshape(len(times), 2)
+    terms, hip = np.empty((len(times), 2)), np.empty((len(times), 2))
+    rigid_loop(walker.params, np.ascontiguousarray(states, dtype=np.float64), walker.n_points, terms, hip)
     kinetic = terms[:, 0]
     potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
     sample_level = np.concatenate([[0.0], trace.strike_levels])[step_of_sample] if trace.strike_levels else None
@@ -115,7 +117,6 @@ def rigid_energy_and_hip(
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it
     residual = kinetic + potential - energy_0 + dissipated - push_work
-    hip = np.array([walker.hip(x[: walker.n_q]) for x in states]).reshape(len(times), 2)
     hip[:, 0] += sample_origin
     if sample_level is not None:
         hip[:, 1] += sample_level

@@ -34,11 +34,22 @@ KERNEL_SIGNATURES: dict[str, tuple[str, ...]] = {
 }
 
 
+# the per-sample measures compiled loops reach through ``dispatch.system_<name>`` (the Measures fields of that name)
+MEASURE_SIGNATURES: dict[str, tuple[str, ...]] = {
+    "contact": ("y", "system", "modes", "foot"),
+    "mechanical_energy": ("y", "system", "modes"),
+    "violation": ("y", "system"),
+    "hip": ("y", "system"),
+    "attitude": ("y", "system", "body"),
+}
+
+
 class Measures(NamedTuple):
     """What post-processing measures of one state ``y`` of a formulation (Python side, per sample).
 
     Every callable takes ``(y, system, ...)``; the compiled functions behind them are the ones the
-    right-hand side uses (one source per equation).
+    right-hand side uses (one source per equation). Those named in ``MEASURE_SIGNATURES`` are plain Python
+    over compiled kernels (or kernels) that numba also compiles into the measure loops (``measure/loops.py``).
     """
 
     pitch: Callable[..., tuple[float, float]]  # (y, system, body): sagittal leg angle [rad] and rate [rad/s]

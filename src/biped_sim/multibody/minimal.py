@@ -60,7 +60,7 @@ from biped_sim.multibody.tree import (
     TREE,
     Star,
     Tree,
-    foot_motion,
+    contact_motion,
     hip_impulse,
     no_violation,
     pitch,
@@ -409,9 +409,7 @@ def tree_system(planar: PlanarSystem) -> MinimalSystem:
 def contact_channels(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, foot: int) -> tuple[float, ...]:
     """(penetration, normal force, friction force, slip velocity) of a foot (the right-hand side's equations)."""
     n = HIP + system.body_mass.shape[0]
-    ox, oy, vx, vy, om, cx, cy = foot_motion(y, system, foot)
-    if system.star:  # about the hip, as the star's right-hand side (foot_motion's origin is the hip plus zeros)
-        ox, oy, vx, vy = y[0], y[1], y[n], y[n + 1]
+    ox, oy, vx, vy, om, cx, cy = contact_motion(y, system, foot, system.topology)
     arc = foot_kinematics(y, system, foot)
     _, _, _, _, _, _, f_n, f_t = arc_forces(
         (ox, oy, vx, vy, om), cx, cy, system.foot_radius[foot], system.ground, arc,

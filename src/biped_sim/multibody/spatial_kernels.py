@@ -235,7 +235,11 @@ def audit(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspa
 
 # ---------------------------------------------------------------- post-processing (Python side)
 
-_NO_JACOBIAN = np.zeros((1, 1))  # constraint_violation evaluates residuals only
+
+@kernel
+def violation(y: np.ndarray, system: SpatialSystem) -> tuple[float, float, float]:
+    """:func:`~biped_sim.multibody.spatial.constraint_violation`'s norms (residuals only: no Jacobian is filled)."""
+    return constraint_violation(y, system, np.zeros((1, 1)))
 
 
 def pitch(y: np.ndarray, system: SpatialSystem, body: int) -> tuple[float, float]:
@@ -295,7 +299,7 @@ FORMULATION = Formulation(
     measures=Measures(
         pitch=pitch,
         mechanical_energy=mechanical_energy,
-        violation=lambda y, system: constraint_violation(y, system, _NO_JACOBIAN),
+        violation=violation,
         violation_names=("position", "velocity", "normalization"),
         contact=contact_channels,
         contact_names=(*CONTACT_NAMES, "friction_force_lateral", "slip_velocity_lateral"),

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
 from biped_sim.contact.stop import stop_torques, stops_energy
 from biped_sim.kernel import kernel
@@ -70,6 +71,27 @@ def foot_motion(y: np.ndarray, system: tuple, i: int) -> tuple[float, float, flo
     ox, oy, vx, vy = body_origin(y, system, b)
     fx, fy = system.foot_center[i, 0], system.foot_center[i, 1]
     return ox, oy, vx, vy, y[n + HIP + b], ox + c * fx - s * fy, oy + s * fx + c * fy
+
+
+@kernel
+def _star_motion(
+    y: np.ndarray, system: tuple, i: int, topology: Star
+) -> tuple[float, float, float, float, float, float, float]:
+    """:func:`foot_motion` about the hip, as a star's right-hand side takes it (its origin is the hip plus zeros)."""
+    _, _, _, _, om, cx, cy = foot_motion(y, system, i)
+    n = HIP + system.body_mass.shape[0]
+    return y[0], y[1], y[n], y[n + 1], om, cx, cy
+
+
+@kernel
+def _tree_motion(
+    y: np.ndarray, system: tuple, i: int, topology: Tree
+) -> tuple[float, float, float, float, float, float, float]:
+    return foot_motion(y, system, i)
+
+
+# the motion a foot's contact forces are computed with: about the hip for a star, its body's origin for a tree
+contact_motion = by_type("contact_motion", "topology", {Star: _star_motion, Tree: _tree_motion})
 
 
 @kernel

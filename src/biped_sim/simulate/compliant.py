@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
@@ -27,6 +27,7 @@ from biped_sim.measure.channels import (
 )
 from biped_sim.measure.energy import EnergyAudit, energy_audit
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 from biped_sim.walkers import BuiltModel
 
@@ -44,28 +45,55 @@ ENERGY_TERMS = (
 VIOLATION_UNITS = {"position": "m", "velocity": "m/s", "normalization": "1"}
 
 
-def _stops_dissipated(result: CompliantRunResult) -> dict[str, float]:
-    """{"stops": the joint stops' dissipated work [J]} for a walker with joint stops, else nothing."""
-    if result.model.system.stops.law.shape[0] == 0:
-        return {}
-    return {"stops": float(result.energy.dissipated_stops[-1] - result.energy.dissipated_stops[0])}
-
-
 @dataclass
 class CompliantRunResult(RunResult):
-    """A compliant simulation and what it measured."""
+    """A compliant simulation and what it measured.
+
+    The integration and its step table are computed by :func:`simulate_compliant`; everything measured over the
+    samples (energy audit, constraint drift, contact channels, hip, attitude) and the summary built from them
+    are computed the first time something asks (a study that reads the steps pays for no channel).
+    """
 
     config: Config
     model: BuiltModel
     run: Integration
     steps: StepTable
-    energy: EnergyAudit
-    violation: np.ndarray  # (ns, 2) ||Phi||, ||Phidot|| (spatial: (ns, 3), + ||p.p - 1||)
     wall_time_s: float
     status: str = "walking"  # the loop's: 'walking', 'fell', 'diverged' (integrate.blowup) or 'timeout'
     status_reason: str | None = None
     stop_time: float | None = None  # time of the fall, the divergence or the timeout
-    summary: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def t_final(self) -> float:
+        """The last simulated time [s]."""
+        return self.run.t_final
+
+    @cached_property
+    def energy(self) -> EnergyAudit:
+        """The energy audit at the samples."""
+        return energy_audit(self.model, self.run)
+
+    @cached_property
+    def violation(self) -> np.ndarray:
+        """(ns, 2) ||Phi||, ||Phidot|| (spatial: (ns, 3), + ||p.p - 1||) at the samples."""
+        return constraint_drift(self.model, self.run)
+
+    def energy_dissipated(self) -> dict[str, float]:
+        """The work dissipated over the run [J] by normal damping, friction and (walkers with joint stops) the
+        stops' damping: the integrated work states (no energy audit needed)."""
+        layout = formulation_of(self.model.system).layout_of(self.model.system)
+        work = {"normal": layout.work_normal, "friction": layout.work_friction, "stops": layout.work_stop}
+        y = self.run.y
+        return {name: float(y[-1, k] - y[0, k]) for name, k in work.items() if k is not None}
+
+    def peak_normal_force(self) -> float | None:
+        """The largest normal force of any foot at the samples [N] (None without samples)."""
+        return contact_peaks(self.contact)["peak_normal_force"]
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The summary.json content (plain JSON data)."""
+        return json_safe(summarize(self))
 
     @cached_property
     def contact(self) -> dict[str, np.ndarray]:
@@ -125,11 +153,7 @@ def summarize(result: CompliantRunResult) -> dict[str, Any]:
         "stop_time": result.stop_time,
         "t_end": run.t_final,
         **result.step_summary(),
-        "energy_dissipated": {
-            "normal": float(result.energy.dissipated_normal[-1] - result.energy.dissipated_normal[0]),
-            "friction": float(result.energy.dissipated_friction[-1] - result.energy.dissipated_friction[0]),
-            **_stops_dissipated(result),
-        },
+        "energy_dissipated": result.energy_dissipated(),
         **push_summary(config, [{"work": work} for work in result.run.pushes[:, 2]]),
         "energy_residual_max": float(np.max(np.abs(result.energy.residual))),
         "energy_residual_max_relative": float(np.max(np.abs(result.energy.residual)) / scale),
@@ -149,12 +173,9 @@ def summarize(result: CompliantRunResult) -> dict[str, Any]:
     }
 
 
-def simulate_compliant(
-    config: Config, model: BuiltModel, progress: Callable[[float], None] | None = None
-) -> CompliantRunResult:
-    """Integrate the built ``model`` of ``config`` and measure the gait; writes nothing."""
-    start = time.perf_counter()
-    run = integrate_model(
+def integrate_config(config: Config, model: BuiltModel, progress: Callable[[float], None] | None = None) -> Integration:
+    """The integration of a run: the built ``model`` of ``config`` over its time, pushes and budgets."""
+    return integrate_model(
         model.system,
         model.y0,
         model.modes0,
@@ -167,18 +188,23 @@ def simulate_compliant(
         pushes=ordered_pushes(config),
         checks=Scales(energy_scale(model, config), model.leg_length),
     )
+
+
+def simulate_compliant(
+    config: Config, model: BuiltModel, progress: Callable[[float], None] | None = None
+) -> CompliantRunResult:
+    """Integrate the built ``model`` of ``config`` and take its step table; writes nothing (the other measures
+    are computed when asked)."""
+    start = time.perf_counter()
+    run = integrate_config(config, model, progress)
     wall = time.perf_counter() - start
-    result = CompliantRunResult(
+    return CompliantRunResult(
         config=config,
         model=model,
         run=run,
         steps=step_table(model, run),
-        energy=energy_audit(model, run),
-        violation=constraint_drift(model, run),
         wall_time_s=wall,
         status=run.status,
         status_reason=run.stop_reason,
         stop_time=run.stop_time,
     )
-    result.summary = json_safe(summarize(result))
-    return result

@@ -2,8 +2,9 @@
 
 The two kinds of run differ in what they measure (contact and constraints against impacts), not in how
 they are used: the CLI, the sweep runner and the storage layer see only :class:`RunResult`. Derived
-channels are computed the first time they are asked for and cached, so that the summary, the trajectory
-file and the figures never compute them twice.
+channels (and a compliant run's summary) are computed the first time they are asked for and cached, so that
+a study reading the steps computes no channel, and the summary, the trajectory file and the figures never
+compute one twice.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ class RunResult(StepAccess, ABC):
 
     config: Config
     status: str  # 'walking', 'fell', 'diverged' or 'timeout'
+    status_reason: str | None
+    t_final: float  # the last simulated time
     steps: StepTable
     wall_time_s: float
     summary: dict[str, Any]
@@ -65,6 +68,14 @@ class RunResult(StepAccess, ABC):
     @abstractmethod
     def trajectory(self) -> TrajectoryFile:
         """The content of trajectory.h5."""
+
+    @abstractmethod
+    def energy_dissipated(self) -> dict[str, float]:
+        """The summary's ``energy_dissipated``: the work dissipated over the run, by mechanism."""
+
+    @abstractmethod
+    def peak_normal_force(self) -> float | None:
+        """The summary's ``peak_normal_force``: the largest normal contact force (None: none measured)."""
 
     @abstractmethod
     def integrity_text(self) -> str:

@@ -45,7 +45,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -82,8 +83,6 @@ class RigidRunResult(RunResult):
     t_final: float  # last simulated time: t_end, the last strike (max_steps), or the fall
     time: np.ndarray  # (ns,)
     state: np.ndarray  # (ns, ny), the walker's reduced state, relabelled at each strike
-    energy: RigidEnergy
-    hip: np.ndarray  # (ns, 2)
     strike_time: np.ndarray  # (n,)
     strike_pre: np.ndarray  # (n, ny) just before each strike
     strike_post: np.ndarray  # (n, ny) just after, new stance leg first
@@ -92,7 +91,27 @@ class RigidRunResult(RunResult):
     rhs_evals: int
     accepted_steps: int
     wall_time_s: float
-    summary: dict[str, Any] = field(default_factory=dict)
+    start: RigidStart  # with the trace, what the energy terms and the hip are computed from when asked
+    trace: RigidTrace
+
+    @cached_property
+    def _energy_and_hip(self) -> tuple[RigidEnergy, np.ndarray]:
+        return rigid_energy_and_hip(self.walker, self.start, self.trace, self.time, self.state)
+
+    @property
+    def energy(self) -> RigidEnergy:
+        """The energy terms at the samples (computed the first time something asks)."""
+        return self._energy_and_hip[0]
+
+    @property
+    def hip(self) -> np.ndarray:
+        """(ns, 2) the hip's position in the run's slope frame (computed the first time something asks)."""
+        return self._energy_and_hip[1]
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The summary.json content (plain JSON data), computed when asked."""
+        return json_safe(summarize_rigid(self))
 
     @property
     def units(self) -> dict[str, str]:
@@ -129,6 +148,15 @@ class RigidRunResult(RunResult):
             root_attrs={"dynamics": "rigid"},
         )
 
+    def energy_dissipated(self) -> dict[str, float]:
+        """The impacts' kinetic energy losses over the run; ``normal`` repeats it, ``friction`` is 0 (no slip)."""
+        impact = float(self.energy.dissipated_impact[-1]) if len(self.time) else 0.0
+        return {"impact": impact, "normal": impact, "friction": 0.0}
+
+    def peak_normal_force(self) -> float | None:
+        """None: the rigid model's contact forces are impulses."""
+        return None
+
     @property
     def post_impact_states(self) -> list[dict[str, float]]:
         """Leg angles and rates just after each strike (the Poincaré section of the rigid limit cycle)."""
@@ -161,7 +189,7 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
     return f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"
 
 
-def _walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:
+def walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:
     """Step from the start until t_end, max_steps, a fall or the wall-time budget."""
     walker = start.walker
     cw = compile_walker(walker)  # its buffers kept from step to step
@@ -222,7 +250,6 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     reduced coordinates satisfy the constraints by construction. Solver counters are the compiled DOP853's.
     """
     config, walker = result.config, result.walker
-    impact = float(result.energy.dissipated_impact[-1]) if len(result.time) else 0.0
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
@@ -230,13 +257,13 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
         "stop_time": result.stop_time,
         "t_end": result.t_final,
         **result.step_summary(),
-        "energy_dissipated": {"impact": impact, "normal": impact, "friction": 0.0},
+        "energy_dissipated": result.energy_dissipated(),
         **push_summary(config, [{"work": work, "ground_normal_impulse": ground} for _, work, ground in result.pushes]),
         "energy_residual_max": residual_max,
         "energy_residual_max_relative": residual_max / (walker.reference_mass * walker.gravity * walker.leg_length),
         "constraint_violation_max": {"position": 0.0, "velocity": 0.0},
         "max_penetration": None,
-        "peak_normal_force": None,
+        "peak_normal_force": result.peak_normal_force(),
         "rhs_evals": result.rhs_evals,
         "accepted_steps": result.accepted_steps,
         "wall_time_s": result.wall_time_s,
@@ -259,13 +286,12 @@ def simulate_rigid(
     start = start or rigid_start(config)
     walker = start.walker
     clock = time.perf_counter()
-    trace, end = _walk(config, start, progress)
+    trace, end = walk(config, start, progress)
     wall = time.perf_counter() - clock
     ny = len(start.state)
     times = np.concatenate(trace.times)
     states = np.vstack(trace.states)
-    energy, hip = rigid_energy_and_hip(walker, start, trace, times, states)
-    result = RigidRunResult(
+    return RigidRunResult(
         config=config,
         walker=walker,
         status=end.status,
@@ -274,8 +300,6 @@ def simulate_rigid(
         t_final=end.t_final,
         time=times,
         state=states,
-        energy=energy,
-        hip=hip,
         strike_time=np.array(trace.strike_time),
         strike_pre=np.array(trace.strike_pre).reshape(-1, ny),
         strike_post=np.array(trace.strike_post).reshape(-1, ny),
@@ -284,6 +308,6 @@ def simulate_rigid(
         rhs_evals=end.rhs_evals,
         accepted_steps=end.accepted_steps,
         wall_time_s=wall,
+        start=start,
+        trace=trace,
     )
-    result.summary = json_safe(summarize_rigid(result))
-    return result

@@ -87,7 +87,7 @@ def warm_up(config: Config) -> WarmUp | None:
     short = derive(config, {"simulation.t_end": t_end, "output.sample_rate": 1 / t_end})
     start = time.perf_counter()
     with recording_compilations() as compiled:
-        simulate(short)
+        simulate(short).trajectory()  # the run and every measure of its files (computed when asked)
     _WARMED.add(group)
     return WarmUp(*group, config.integrator.method, tuple(compiled), time.perf_counter() - start)
 

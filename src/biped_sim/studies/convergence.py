@@ -183,7 +183,7 @@ def converge(
                 touchdown_difference=float(np.max(np.abs(touchdowns[-1] - rigid_touchdown))),
                 period_difference=float(result.step_periods[-1] - rigid.step_period),
                 settled=float(np.max(np.abs(touchdowns[-1] - touchdowns[-2]))),
-                slip=float(result.summary["slip_per_step"][-1]),
+                slip=float(result.step_summary()["slip_per_step"][-1]),
             )
         )
     return rigid, rows

@@ -21,6 +21,7 @@ from biped_sim.sweep.pool import WorkerPool
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 EXECUTORS = ("local", "dask")
 SCHEDULER_LOST = "the Dask scheduler was lost; rerun resumes"
+QUIET_LOGGERS = ("distributed", "distributed.client", "tornado.application")  # while a Dask executor is open
 
 
 class SchedulerLostError(ConnectionError):
@@ -106,15 +107,17 @@ def dask_executor(jobs: int, scheduler: str | None) -> Iterator[Executor]:
 
 @contextlib.contextmanager
 def _client_log_quiet() -> Iterator[None]:
-    """Dask's client logs its failed reconnection to a lost scheduler as an error on stderr: the command says it
-    in its own one line (:class:`SchedulerLostError`) instead."""
-    logger = logging.getLogger("distributed.client")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL)
+    """Dask's client and tornado log a lost scheduler's closed connections as errors with tracebacks on stderr: the
+    command says it in its own one line (:class:`SchedulerLostError`) instead."""
+    loggers = [logging.getLogger(name) for name in QUIET_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
 
 
 def check_executor(kind: str, scheduler: str | None = None) -> None:

@@ -28,7 +28,7 @@ import inspect
 import json
 import traceback
 from collections.abc import Callable
-from concurrent.futures import Executor, Future, as_completed
+from concurrent.futures import CancelledError, Executor, Future, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -223,11 +223,12 @@ def _row(run: RunSpec, metrics: dict[str, Any]) -> dict[str, Any]:
 
 def _metrics(future: Future[dict[str, Any]], run: RunSpec, run_dir: Path) -> dict[str, Any]:
     """A finished task's metric columns; a task the executor could not run (e.g. its worker died) is recorded
-    as an error here, since its worker could not record it."""
+    as an error here, since its worker could not record it. A full disk stops the sweep, and so does a task the
+    executor cancelled (Dask's, when its scheduler is lost: the run is not at fault and stays pending)."""
     try:
         return future.result()
     except Exception as exc:
-        if disk_full(exc):
+        if disk_full(exc) or isinstance(exc, CancelledError):
             raise
         message = error_message(exc)
         record_error(run_dir, run.name, message, "".join(traceback.format_exception(exc)))

@@ -104,14 +104,13 @@ def outcome_of(result: Any) -> Outcome:
             x[1:] = [system_foot_contact(strike_y[k], system, int(steps.foot[k]))[2] for k in range(n)]
         else:  # a rigid run: the advances of its step table, from strike 1
             x[1:] = np.concatenate([[0.0], np.cumsum(steps.length[:-1])])
-    summary = result.summary
     return Outcome(
         times=(0.0, *map(float, steps.strike_time)),
         x=tuple(map(float, x)),
         stance=tuple(map(float, steps.stance_angle)),
         swing=tuple(map(float, steps.swing_angle)),
-        status=str(summary["status"]),
-        t_reached=float(summary["t_end"]),
+        status=str(result.status),
+        t_reached=float(result.t_final),
     )
 
 

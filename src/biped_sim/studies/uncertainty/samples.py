@@ -29,7 +29,7 @@ import numpy as np
 
 from biped_sim.config import Config, derive
 from biped_sim.errors import ConfigError
-from biped_sim.io.atomic import write_json_atomic
+from biped_sim.io.atomic import json_safe, write_json_atomic
 from biped_sim.studies.tasks import results_as_done
 
 CHUNK = 16
@@ -75,13 +75,17 @@ def sample_outputs(config: Config) -> dict[str, Any]:
     from biped_sim.simulate import simulate  # the engine: imported by the workers that run samples
 
     result = simulate(config)
-    s = result.summary
+    s = json_safe({  # the summary's entries it reads: the steps', no channel but the normal force
+        **result.step_summary(),
+        "energy_dissipated": result.energy_dissipated(),
+        "peak_normal_force": result.peak_normal_force(),
+    })  # fmt: skip
     lost = s["energy_dissipated"]
     energy = (lost["impact"] if "impact" in lost else lost["normal"]) + lost["friction"]
     slips = [v for v in (s.get("slip_per_step") or []) if v is not None]
     out: dict[str, Any] = {
         "status": result.status,
-        "reason": s.get("status_reason"),
+        "reason": result.status_reason,
         "n_steps": int(s["n_steps"]),
         "steady_period": _steady(s["step_periods"]),
         "speed": _number(s.get("mean_speed")),
