@@ -92,17 +92,20 @@ def test_profiling_compilations_charges_each_function_its_own_compile() -> None:
 def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles_nothing(
     short_run: RunResult, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile loads its code."""
+    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile, or of a rigid walker,
+    loads its code."""
     monkeypatch.setattr(warmup, "_WARMED", set())
     result = invoke("warmup")
     assert result.exit_code == 0, result.output
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
-        "planar explicit (dopri5)", "planar explicit (dopri5, on a profile)", "spatial explicit (dopri5)"
+        "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
+        "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
         simulate(default_walker("ground.profile={kind: random, seed: 3, roughness: 0.002}", t_end=0.05))
+        simulate(load_config(CONFIGS / "simplest_walker.yaml", ["simulation.max_steps=1"]))  # another rigid walker
     assert compiled == []
 
 
@@ -110,9 +113,9 @@ def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
     """Every compliant run of configs/ and configs/sweeps/ is in a group ``biped-sim warmup`` warms."""
     configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
     configs += [run.config for path in sorted((CONFIGS / "sweeps").glob("*.yaml")) for run in load_sweep(path).runs]
-    groups = {warmup.group_of(config) for config in configs if config.dynamics == "compliant"}
+    groups = {warmup.group_of(config) for config in configs}
     assert groups <= set(warmup.BUNDLED_GROUPS)
-    assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat")} <= groups
+    assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat"), (*warmup.RIGID, "flat")} <= groups
 
 
 def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
@@ -122,6 +125,7 @@ def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> 
     assert {"planar", "spatial", "minimal"} <= kinds
     assert {(kind, family, "flat") for kind in kinds for family in ("explicit", "stiff")} <= groups
     assert ("planar", "explicit", "profile") in groups and ("spatial", "explicit", "profile") not in groups
+    assert (*warmup.RIGID, "flat") in groups
 
 
 @pytest.mark.parametrize(

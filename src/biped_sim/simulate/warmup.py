@@ -3,7 +3,8 @@
 A compliant run needs the compiled code of its group only: its formulation's kernels and its
 integrator family's loop (every explicit method shares one compiled loop, Radau and BDF share the
 scipy driver's compiled right-hand side), specialised for its ground (the flat ground, or a profile).
-Every contact law is part of each group's kernels (the laws are dispatched at run time).
+Every contact law is part of each group's kernels (the laws are dispatched at run time). Every rigid run
+shares one group, the compiled step map (its walker is data), warmed by one step.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
 ``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
 ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
@@ -32,8 +33,12 @@ WARM_UP_TIME = 0.001  # [s] simulated by a warm-up run
 # a profile the warm-up's millisecond never reaches (its code is compiled all the same)
 WARM_UP_PROFILE = {"kind": "steps", "steps": [{"at": 100.0, "height": -0.01}]}
 GROUNDS = ("flat", "profile")
+RIGID = ("rigid", "step map")  # the group of every rigid run: one compiled step map for every walker
 # (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
-BUNDLED_GROUPS = (("planar", "explicit", "flat"), ("planar", "explicit", "profile"), ("spatial", "explicit", "flat"))
+# (the costliest first: the parallel warm-up ends sooner)
+BUNDLED_GROUPS = (
+    (*RIGID, "flat"), ("spatial", "explicit", "flat"), ("planar", "explicit", "profile"), ("planar", "explicit", "flat")
+)  # fmt: skip
 _WARMED: set[tuple[str, str, str]] = set()
 
 
@@ -41,8 +46,8 @@ _WARMED: set[tuple[str, str, str]] = set()
 class WarmUp:
     """What warming one group took: the functions numba compiled (none: all came from the cache), wall time."""
 
-    formulation: str
-    family: str  # 'explicit' or 'stiff'
+    formulation: str  # or 'rigid'
+    family: str  # 'explicit' or 'stiff' (or 'step map')
     ground: str  # 'flat' or 'profile'
     method: str  # the integrator the group was warmed with
     compiled: tuple[str, ...]
@@ -52,7 +57,8 @@ class WarmUp:
         """One line for the terminal."""
         how = f"compiled {len(self.compiled)} functions" if self.compiled else "loaded from the cache"
         ground = "" if self.ground == "flat" else f", on a {self.ground}"
-        return f"{self.formulation} {self.family} ({self.method}{ground}): {how} in {self.seconds:.1f} s"
+        method = "" if (self.formulation, self.family) == RIGID else f" ({self.method}{ground})"
+        return f"{self.formulation} {self.family}{method}: {how} in {self.seconds:.1f} s"
 
 
 def integrator_family(method: str) -> str:
@@ -66,25 +72,25 @@ def ground_of(config: Config) -> str:
 
 
 def group_of(config: Config) -> tuple[str, str, str]:
-    """A compliant run's group: (formulation, integrator family, ground)."""
+    """A run's group: (formulation, integrator family, ground); a rigid run's is ('rigid', 'step map', ground)."""
+    if config.dynamics == "rigid":
+        return (*RIGID, ground_of(config))
     return config.formulation.kind, integrator_family(config.integrator.method), ground_of(config)
 
 
 def warm_up(config: Config) -> WarmUp | None:
-    """Run ``config`` for a millisecond, once per process and (formulation, integrator family).
+    """Run ``config`` for a millisecond (a rigid one for one step), once per process and group.
 
-    Returns what it took, or None when there was nothing to do: a rigid run (its step map compiles, or loads
-    from the cache, at its first step; not warmed here) or a
-    group already warmed in this process.
+    Returns what it took, or None when there was nothing to do: a group already warmed in this process.
     """
-    if config.dynamics == "rigid":
-        return None
     group = group_of(config)
     if group in _WARMED:
         return None
-    # at least one step and one sample after the start, so that the short run passes the run's own checks
-    t_end = max(WARM_UP_TIME, config.integrator.dt)
-    short = derive(config, {"simulation.t_end": t_end, "output.sample_rate": 1 / t_end})
+    if config.dynamics == "rigid":
+        short = derive(config, {"simulation.max_steps": 1})
+    else:  # at least one step and one sample after the start, so that the short run passes the run's own checks
+        t_end = max(WARM_UP_TIME, config.integrator.dt)
+        short = derive(config, {"simulation.t_end": t_end, "output.sample_rate": 1 / t_end})
     start = time.perf_counter()
     with recording_compilations() as compiled:
         simulate(short).trajectory()  # the run and every measure of its files (computed when asked)
@@ -102,11 +108,11 @@ def warm_up_in_processes(configs: Sequence[Config], workers: int | None = None) 
 
     numba compiles one function at a time in a process (its compiler lock), so groups compile in parallel only
     in separate processes; each writes the on-disk cache, from which this process and every later one load.
-    A config whose group this process warmed already, or a rigid one, is None (nothing to do), as in warm_up.
+    A config whose group this process warmed already is None (nothing to do), as in warm_up.
     """
     groups: dict[tuple[str, str, str], Config] = {}  # the first config of each group still to warm
     for config in configs:
-        if config.dynamics == "compliant" and group_of(config) not in _WARMED:
+        if group_of(config) not in _WARMED:
             groups.setdefault(group_of(config), config)
     todo = list(groups.values())
     workers = min(len(todo), workers or available_cores())
@@ -122,8 +128,11 @@ def warm_up_in_processes(configs: Sequence[Config], workers: int | None = None) 
 def group_config(formulation: str, family: str, ground: str) -> Config:
     """The default walker (the schema's defaults) in a group: ConfigError if the group does not exist (a profile
     under a formulation that does not model it)."""
-    method = config_from_dict({}).integrator.method if family == "explicit" else STIFF_METHODS[0]
-    values: dict[str, object] = {"formulation.kind": formulation, "integrator.method": method}
+    if (formulation, family) == RIGID:
+        values: dict[str, object] = {"dynamics": "rigid"}
+    else:
+        method = config_from_dict({}).integrator.method if family == "explicit" else STIFF_METHODS[0]
+        values = {"formulation.kind": formulation, "integrator.method": method}
     if ground == "profile":
         values["ground.profile"] = WARM_UP_PROFILE
     return derive(config_from_dict({}), values)
@@ -131,10 +140,10 @@ def group_config(formulation: str, family: str, ground: str) -> Config:
 
 def warm_up_configs(every_group: bool = False) -> list[Config]:
     """The default walker in each of ``BUNDLED_GROUPS``; with ``every_group``, in every formulation x integrator
-    family x ground there is."""
+    family x ground there is, and rigid."""
     if not every_group:
         return [group_config(*group) for group in BUNDLED_GROUPS]
-    configs = []
+    configs = [group_config(*RIGID, "flat")]
     for kind in get_args(FormulationConfig.model_fields["kind"].annotation):
         for family in ("explicit", "stiff"):
             for ground in GROUNDS:
