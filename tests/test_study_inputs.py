@@ -177,7 +177,8 @@ def test_uncertainty_refuses_zero_samples_and_unknown_spec_keys(tmp_path: Path) 
     ("args", "expected"),
     [
         (("--seeds", "1000000000"), "error: --seeds: 1,000,000,000 walks"),
-        (("--cap", "1000000000"), "error: --cap: must be from 1 to 10,000 steps"),
+        (("--cap", "1000000000"), "error: --cap: must be from 1 to 100,000 steps on the slope ground"),
+        (("--cap", "20000", "--ground", "height"), "error: --cap: must be from 1 to 10,000 steps on the height ground"),
     ],
 )
 def test_mfpt_bounds_its_walks_and_names_its_options(tmp_path: Path, args: tuple[str, ...], expected: str) -> None:

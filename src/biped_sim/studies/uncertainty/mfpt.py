@@ -40,6 +40,7 @@ CONFIDENCE = 0.95
 SPACING = 0.1  # [leg lengths] between the random heights
 GROUNDS = ("height", "slope")
 MAX_CAP = 10_000  # steps of a walk: its random ground (2 leg lengths a step) and its samples stay within bounds
+MAX_WHEEL_CAP = 100_000  # steps of a wheel's walk on random slopes: no ground profile, a step map per strike
 TIME_PER_STEP = 10.0  # a height walk's t_end: this many sqrt(l / g) per step (it stops at the cap)
 
 
@@ -146,8 +147,9 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
     if seeds < 2:
         raise ArgumentError("seeds", "need at least 2 seeds")
     check_run_count(len(roughness) * seeds, "seeds", "walks (roughness levels x seeds)")
-    if not 1 <= cap <= MAX_CAP:
-        raise ArgumentError("cap", f"must be from 1 to {MAX_CAP:,} steps")
+    most = MAX_WHEEL_CAP if ground == "slope" else MAX_CAP
+    if not 1 <= cap <= most:
+        raise ArgumentError("cap", f"must be from 1 to {most:,} steps on the {ground} ground")
 
 
 def mfpt_curve(
