@@ -7,6 +7,7 @@ import errno
 import itertools
 import os
 import subprocess
+import threading
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -191,13 +192,20 @@ def test_a_sweep_with_a_diverged_run_exits_1_and_says_so(tmp_path: Path) -> None
 
 
 @contextmanager
-def full_disk_after(runs: int, monkeypatch: pytest.MonkeyPatch) -> Iterator[list[Path]]:
-    """Writing run directories fails with 'no space left' after ``runs`` of them; yields the directories tried."""
+def full_disk_after(
+    runs: int, monkeypatch: pytest.MonkeyPatch, stopping: threading.Event | None = None
+) -> Iterator[list[Path]]:
+    """Writing run directories fails with 'no space left' after ``runs`` of them; yields the directories tried.
+
+    With ``stopping``, a write after the first failed one waits for it to be set first.
+    """
     tried: list[Path] = []
     write = run_files.write_run_directory
 
     def writer(out_dir: Path, *args: object, **kwargs: object) -> None:
         tried.append(out_dir)
+        if stopping is not None and len(tried) > runs + 1:
+            assert stopping.wait(timeout=120), "the sweep did not stop its executor"
         if len(tried) > runs:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(out_dir / "trajectory.h5"))
         write(out_dir, *args, **kwargs)  # type: ignore[arg-type]
@@ -206,12 +214,26 @@ def full_disk_after(runs: int, monkeypatch: pytest.MonkeyPatch) -> Iterator[list
     yield tried
 
 
+class StoppedExecutor(ThreadPoolExecutor):
+    """One thread whose tasks past the first failed write wait until the sweep stops the executor (its queue
+    cancelled by then): the thread cannot outrun the sweep's reaction, however busy the machine."""
+
+    def __init__(self) -> None:
+        super().__init__(max_workers=1)
+        self.stopping = threading.Event()
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self.stopping.set()
+        super().shutdown(wait, cancel_futures=cancel_futures)
+
+
 def test_a_sweep_stops_at_the_first_full_disk(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     slopes = [0.01, 0.011, 0.012, 0.013, 0.014, 0.015]
     path = write_sweep(tmp_path, "full", set_={"simulation.t_end": 0.3}, grid={"ground.slope": slopes})
+    executor = StoppedExecutor()
     with (
-        full_disk_after(1, monkeypatch) as tried,
-        ThreadPoolExecutor(max_workers=1) as executor,
+        full_disk_after(1, monkeypatch, executor.stopping) as tried,
+        executor,
         pytest.raises(OSError, match="No space left"),
     ):
         run_sweep(load_sweep(path), tmp_path / "out", executor)
