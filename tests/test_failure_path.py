@@ -247,13 +247,15 @@ def test_the_sweep_command_on_a_full_disk_is_one_line_naming_the_path(
 ) -> None:
     path = write_sweep(tmp_path, "full", set_={"simulation.t_end": 0.3}, grid={"ground.slope": [0.01, 0.012, 0.014]})
 
+    executor = StoppedExecutor()
+
     @contextmanager
     def in_process(kind: str, jobs: int, scheduler: str | None = None) -> Iterator[ThreadPoolExecutor]:
-        with ThreadPoolExecutor(max_workers=1) as executor:  # the monkeypatched writer works in this process only
+        with executor:  # the monkeypatched writer works in this process only
             yield executor
 
     monkeypatch.setattr("biped_sim.sweep.make_executor", in_process)
-    with full_disk_after(0, monkeypatch) as tried:
+    with full_disk_after(0, monkeypatch, executor.stopping) as tried:
         result = invoke("sweep", str(path), "--out", str(tmp_path / "out"))
     assert result.exit_code == 1 and len(tried) <= 2
     assert one_line_error(result.stderr) == f"error: {tried[0] / 'trajectory.h5'}: No space left on device"
