@@ -11,7 +11,7 @@ Two grounds:
   (:mod:`.rimless_chain`).
 
 The estimate (:func:`mfpt_estimate`): a metastable walker has a constant chance p of falling at each step, so its
-first-passage time T, the step on which it falls (the falling step counted: the Markov chain's m = 1 + E m'), is
+first-passage time T, the step on which it falls (the falling step counted: the Markov chain's strikes plus one), is
 geometric with mean 1 / p >= 1. A walk that fell after s strikes has T = s + 1, one that reached the cap after s
 strikes T > s (censored); the likelihood p^k (1 - p)^S (k falls, S strikes in all) gives the MFPT (S + k) / k and
 its likelihood-ratio interval (the p within chi2_1(confidence) / 2 of the maximum), which stays at or above one

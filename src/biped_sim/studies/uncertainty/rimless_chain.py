@@ -11,9 +11,10 @@ strike keeps cos(2 alpha) of the angular rate, so the rate x_k at the top (phi =
     w^2 = x_k^2 + 2 (g / l) (1 - cos(gamma_k + alpha)),    w' = cos(2 alpha) w,
     x_{k+1}^2 = w'^2 - 2 (g / l) (1 - cos(gamma_k - alpha)),
 
-and the wheel falls (stops, rocking back) when x_{k+1}^2 < 0. Every strike before the fall is a step; the mean
-first-passage time from x is m(x) = 1 + E[m(x')], a fall ending it: on a grid of apex rates with the fall
-absorbing, m solves (I - Q) m = 1, Q the transient part of the transition matrix (each grid state's
+and the wheel falls (stops, rocking back) when x_{k+1}^2 < 0. A transition of the chain is a strike:
+m(x) = 1 + E[m(x')] counts the strikes from apex x to the fall (the last one followed by the stall), and the
+mean first-passage time, as the walks count it (the strikes and the falling step), is m + 1. On a grid of apex
+rates with the fall absorbing, m solves (I - Q) m = 1, Q the transient part of the transition matrix (each grid state's
 ``CHAIN_NODES`` equiprobable slopes, their next rates split linearly between the two nearest grid states).
 
 The walks step the compiled rigid model (:mod:`biped_sim.rigid.compiled`) one step at a time on the slope of
@@ -74,7 +75,7 @@ class Wheel:
 
 def chain_mfpt(wheel: Wheel, roughness: float) -> float:
     """The mean first-passage time from the nominal apex rate, by the Markov chain: the steps to the fall, the
-    falling step counted (the strikes before it, plus one)."""
+    falling step counted (the chain's strikes, plus the stall that ends the walk: see the module)."""
     x_star = wheel.nominal_apex_rate()
     grid = np.linspace(0.0, CHAIN_SPAN * x_star, CHAIN_STATES)
     gamma = wheel.slope + roughness * stats.norm.ppf((np.arange(CHAIN_NODES) + 0.5) / CHAIN_NODES)
@@ -88,7 +89,7 @@ def chain_mfpt(wheel: Wheel, roughness: float) -> float:
     np.add.at(q, (rows[alive], low), (1.0 - frac) / CHAIN_NODES)
     np.add.at(q, (rows[alive], low + 1), frac / CHAIN_NODES)
     m = np.linalg.solve(np.eye(CHAIN_STATES) - q, np.ones(CHAIN_STATES))
-    return float(np.interp(x_star, grid, m))
+    return float(np.interp(x_star, grid, m)) + 1.0
 
 
 def wheel_walks(config: Config, roughness: float, seeds: range, cap: int) -> tuple[np.ndarray, np.ndarray]:
