@@ -540,8 +540,10 @@ def test_an_interrupt_cancels_the_queue_and_leaves_a_consistent_sweep(
         name: "walking" if name in finished else "pending" for name in table["run"]
     }
     assert not list(out.rglob("error.json"))
-    # the frozen worker's run keeps its temporary summary (a resume clears it), and nothing else does
-    assert [Path(path).parent.parent for path in leftovers(out)] == [out / "runs"]
+    # the frozen worker's run keeps its temporary summary, and a run in flight when the sweep ended may keep its
+    # own (a resume clears them): temporaries of unfinished runs only, never of the table or the manifest
+    left = [Path(path).parent.parent for path in leftovers(out)]
+    assert left and set(left) == {out / "runs"}
     assert {Path(path).parent.name for path in leftovers(out)}.isdisjoint(finished)
 
 
