@@ -22,6 +22,7 @@ BUNDLED = {
     "rimless_wheel": ("rigid", "rimless_wheel", "planar"),
     "round_foot_walker": ("compliant", "compass", "planar"),
     "simplest_walker": ("rigid", "simplest", "planar"),
+    "torso_walker": ("compliant", "description", "planar"),
 }
 
 

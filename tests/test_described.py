@@ -122,15 +122,14 @@ def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
 
 
-def test_the_tree_formulation_agrees_with_absolute_coordinates_on_the_kneed_walker() -> None:
-    """On random states, the kneed walker's angular accelerations, stop work rates and feet agree in both."""
-    planar = build_model(_kneed()).system
+def formulations_agree(planar: PlanarSystem, count: int, seed: int) -> list[np.ndarray]:
+    """On ``count`` random states, the tree formulation's angular accelerations, work rates, feet and energies agree
+    with the absolute coordinates'; returns the absolute coordinates' right-hand sides."""
     minimal = tree_system(planar)
-    assert not minimal.star and minimal.stops.law.shape[0] == 2
     nb = planar.body_mass.shape[0]
     n = HIP + nb
-    pressed = 0
-    for y_planar, modes in _random_tree_states(planar, count=30, seed=3):
+    rates = []
+    for y_planar, modes in _random_tree_states(planar, count=count, seed=seed):
         y = tree_state(y_planar, planar)
         fast, full = np.zeros_like(y), np.zeros_like(y_planar)
         system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
@@ -143,7 +142,15 @@ def test_the_tree_formulation_agrees_with_absolute_coordinates_on_the_kneed_walk
             sum(measures(s).mechanical_energy(v, s, modes)) for s, v in ((planar, y_planar), (minimal, y))
         )
         assert e_minimal == pytest.approx(e_planar, rel=1e-12, abs=1e-12)
-        pressed += int(full[-1] != 0.0)
+        rates.append(full)
+    return rates
+
+
+def test_the_tree_formulation_agrees_with_absolute_coordinates_on_the_kneed_walker() -> None:
+    """On random states, the kneed walker's angular accelerations, stop work rates and feet agree in both."""
+    planar = build_model(_kneed()).system
+    assert not tree_system(planar).star and planar.stops.law.shape[0] == 2
+    pressed = sum(int(full[-1] != 0.0) for full in formulations_agree(planar, count=30, seed=3))
     assert pressed > 3  # the stops took part
 
 
@@ -192,8 +199,9 @@ def test_the_compass_described_builds_the_compass_system(offsets: tuple[str, ...
     )
     compass, built = build_compass(config, config.simulation.initial), build_model(described)
     for name in PlanarSystem._fields:
-        if name not in ("ground", "stops"):
+        if name not in ("ground", "stops", "elements"):
             assert np.array_equal(getattr(built.system, name), getattr(compass.system, name)), name
+    assert built.system.elements.law.shape[0] == compass.system.elements.law.shape[0] == 0
     np.testing.assert_allclose(built.y0, compass.y0, rtol=0, atol=1e-15)
     assert np.array_equal(built.modes0, compass.modes0)
 

@@ -20,8 +20,12 @@ from biped_sim.contact.joint_element import (
     make_elements,
 )
 from biped_sim.errors import ConfigError
+from biped_sim.multibody.minimal import tree_system
+from biped_sim.simulate import simulate
+from biped_sim.walkers import build_model
 
 from .conftest import CONFIGS
+from .test_described import formulations_agree
 
 TORSO = Path(__file__).parent / "data" / "torso_compass.yaml"
 SPRING = element_parameters("linear_spring", stiffness=12.0, rest_angle=0.3)
@@ -112,3 +116,33 @@ def test_a_broken_element_is_one_line_naming_the_field(edit: Any, message: str) 
 def test_a_walker_without_elements_has_none() -> None:
     described = load_config(CONFIGS / "kneed_walker.yaml").walker.description
     assert described is not None and described.joint_elements() == []
+
+
+# --- compliant dynamics ---------------------------------------------------------------------------------------------
+
+
+def test_the_tree_formulation_agrees_with_absolute_coordinates_with_joint_elements() -> None:
+    """On random states, the torso walker's accelerations, the elements' work rate and the energies agree in both
+    formulations (the elements' indices moved to the minimal state's angles)."""
+    planar = build_model(load_config(TORSO)).system
+    minimal = tree_system(planar)
+    assert not minimal.star and minimal.elements.law.shape[0] == 4
+    assert all(full[-1] > 0.0 for full in formulations_agree(planar, count=20, seed=5))  # W_element's rate
+
+
+@pytest.mark.parametrize("formulation", ["planar", "minimal"])
+def test_the_elements_close_the_energy_balance(formulation: str) -> None:
+    """The springs' energy (in the elastic term) and the dampers' work W_element close the audit to the tolerance
+    of the compass's audit (tests/test_conservation.py); without W_element it would stay open."""
+    tight = ["integrator.rtol=1e-9", "integrator.atol=1e-11", "simulation.t_end=1.0"]
+    result = simulate(load_config(TORSO, [f"formulation.kind={formulation}", *tight]))
+    audit = result.energy
+    m_g_l = result.model.total_mass * 9.81 * result.model.leg_length
+    dissipated = audit.dissipated_elements - audit.dissipated_elements[0]
+    assert dissipated[-1] > 1e-3 * m_g_l and np.max(audit.elastic) > 1e-2 * m_g_l  # the elements took part
+    assert np.max(np.abs(audit.residual)) < 1e-5 * m_g_l
+    assert np.max(np.abs(audit.residual - dissipated)) > 1e3 * np.max(np.abs(audit.residual))
+    assert result.summary["energy_dissipated"]["elements"] == pytest.approx(float(dissipated[-1]))
+    assert result.model.state_names()[-3:] == ["W_normal", "W_friction", "W_element"]  # no stops: W_element last
+    channels = {channel.path: channel.data for channel in result.trajectory().channels}
+    assert np.array_equal(channels["energy/dissipated_elements"], audit.dissipated_elements)

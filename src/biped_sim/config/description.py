@@ -47,6 +47,12 @@ class BodySpec(Strict):
         None, ge=0, description="Or its radius of gyration about the centre of mass [m]: inertia = mass r^2."
     )
     com: Vector2 = Field((0.0, 0.0), description="Centre of mass in the body frame [m]: (across + downhill, along).")
+    fall_angle: float | None = Field(
+        None,
+        gt=0,
+        description="A body off the legs (a torso): the walker has fallen when the body is this far from the slope "
+        "normal [rad] (none given: simulation.fall_leg_angle); the legs' bodies fall past simulation.fall_leg_angle.",
+    )
 
     @model_validator(mode="after")
     def _one_inertia(self) -> BodySpec:
@@ -226,6 +232,15 @@ class WalkerDescription(Strict):
             raise ValueError("joints: the bodies must form one tree hanging from the first body")
         self._legs_alike()
         self._latches_on_legs()
+        off_legs = self.off_leg_bodies()
+        if leg_body := next((b.name for b in self.bodies if b.fall_angle is not None and b.name not in off_legs), None):
+            raise ValueError(  # the full key: a validator's own dotted field is taken as it is
+                f"walker.description.bodies.{leg_body}.fall_angle: only a body off the legs (a torso) has its own; "
+                "the legs' bodies fall past simulation.fall_leg_angle"
+            )
+        keys = self.state_keys()
+        if clash := next((k for k in self.off_leg_keys() if keys.count(k) > 1), None):
+            raise ValueError(f"bodies: the state key {clash!r} of a body off the legs is a leg's too; rename the body")
         for joint, element, other in self.joint_elements():
             if other == joint.child:
                 raise ValueError(f"joints: element {element.name!r} of joint {joint.name!r} acts against its own body")
@@ -287,9 +302,20 @@ class WalkerDescription(Strict):
         return -min(origin[f.body][1] + f.centre[1] - f.radius for f in self.feet)
 
     def state_keys(self) -> tuple[str, ...]:
-        """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate.
+        """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate,
+        then each body off the legs by its name (:meth:`off_leg_keys`).
 
         A one-body leg keeps the README's keys (stance_angle, stance_rate, swing_angle, swing_rate); a kneed
-        leg gives stance_thigh_angle, stance_thigh_rate, stance_shank_angle, ...
+        leg gives stance_thigh_angle, stance_thigh_rate, stance_shank_angle, ...; a torso torso_angle, torso_rate.
         """
-        return leg_keys(len(self.legs), [""] if len(self.legs[0]) == 1 else self.roles())
+        return leg_keys(len(self.legs), [""] if len(self.legs[0]) == 1 else self.roles()) + self.off_leg_keys()
+
+    def off_leg_bodies(self) -> list[str]:
+        """The bodies on no leg (a torso), in the description's order."""
+        on_legs = {b for leg in self.legs for b in leg}
+        return [b.name for b in self.bodies if b.name not in on_legs]
+
+    def off_leg_keys(self) -> tuple[str, ...]:
+        """The initial-state keys of the bodies off the legs, ``<body>_angle`` and ``<body>_rate`` (optional in
+        ``simulation.initial``: a body whose keys are not given starts at angle 0, at rest)."""
+        return tuple(f"{name}_{what}" for name in self.off_leg_bodies() for what in ("angle", "rate"))

@@ -285,14 +285,22 @@ class Config(Strict):
         initial = self.simulation.initial
         if not isinstance(initial, dict):
             return
-        expected = self.initial_keys()
-        if set(initial) != set(expected) or len(expected) == len(LEG_KEYS):
-            raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}")
+        expected, optional = self.initial_keys(), self.optional_initial_keys()
+        required = set(expected) - set(optional)
+        if not required <= set(initial) <= set(expected) or set(initial) == set(LEG_KEYS):
+            also = f" (optional: {', '.join(optional)}; not given: 0)" if optional else ""
+            raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}{also}")
 
     def initial_keys(self) -> tuple[str, ...]:
         """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
         described = self.walker.description
         return described.state_keys() if described is not None else LEG_KEYS
+
+    def optional_initial_keys(self) -> tuple[str, ...]:
+        """The keys of ``simulation.initial`` that may be left out: those of a described walker's bodies off the
+        legs (a torso starts upright and at rest without them)."""
+        described = self.walker.description
+        return described.off_leg_keys() if described is not None else ()
 
     def hash(self) -> str:
         """SHA-256 (16 hex digits) of the canonical resolved config, output location excluded."""

@@ -9,7 +9,9 @@ walker's momentum about the joint is untouched. Every law has the signature
 dissipates [W] (>= 0), ``p`` the parameter vector of :func:`element_parameters` (columns STIFFNESS, REST_ANGLE,
 DAMPING); its stored energy is its own ``energy(theta, p)`` (0 for a law with no spring), the one source the
 compliant energy audit and the rigid model read. The dissipated power is integrated as a state of the ODE
-(the work W_joint), so the energy balance closes with elements as with contacts.
+(the work W_element, before W_stop), so the energy balance closes with elements as with contacts. A formulation
+adds the elements' torques with the stops' (:func:`joint_torques`) at the angles' indices in y and their energy
+to the elastic energy (:func:`joints_energy`).
 
 To add a law (a nonlinear spring, a preloaded one): one ``@kernel`` torque function and its energy below, and
 one line in :data:`JOINT_ELEMENT_LAWS` naming the parameters it reads; the schema's names and the compiled
@@ -26,7 +28,16 @@ import numpy as np
 from numba import literal_unroll
 
 from biped_sim.contact.registry import registered_functions
-from biped_sim.contact.stop import CHILD_ANGLE, CHILD_RATE, PARENT_ANGLE, PARENT_RATE
+from biped_sim.contact.stop import (
+    CHILD_ANGLE,
+    CHILD_RATE,
+    PARENT_ANGLE,
+    PARENT_RATE,
+    Stops,
+    joint_entry,
+    stop_torques,
+    stops_energy,
+)
 from biped_sim.kernel import kernel
 
 STIFFNESS, REST_ANGLE, DAMPING = range(3)
@@ -125,7 +136,8 @@ def element_energy(law: int, theta: float, p: np.ndarray) -> float:
 class JointElements(NamedTuple):
     """The joint elements of a system, as the kernels read them (ne rows)."""
 
-    index: np.ndarray  # (ne, 4) int64: CHILD_ANGLE, PARENT_ANGLE (the other body's), CHILD_RATE, PARENT_RATE in y
+    index: np.ndarray  # (ne, 4) int64: CHILD_ANGLE, PARENT_ANGLE (the other body's; -1: the ground), CHILD_RATE,
+    # PARENT_RATE in y
     law: np.ndarray  # (ne,) int64: the law's number in JOINT_ELEMENT_LAWS
     params: np.ndarray  # (ne, N_ELEMENT_PARAMS): element_parameters
 
@@ -144,22 +156,24 @@ NO_ELEMENTS = make_elements(np.zeros((0, 4)), np.zeros(0), np.zeros((0, N_ELEMEN
 
 @kernel
 def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
-    """(theta, thetadot) of element e: the child's angle and rate relative to the other body's."""
+    """(theta, thetadot) of element e: the child's angle and rate relative to the other body's (or to the slope
+    normal: the other body -1, the ground, as a stop's)."""
     index = elements.index
-    theta = y[index[e, CHILD_ANGLE]] - y[index[e, PARENT_ANGLE]]
-    return theta, y[index[e, CHILD_RATE]] - y[index[e, PARENT_RATE]]
+    theta = y[index[e, CHILD_ANGLE]] - joint_entry(y, index[e, PARENT_ANGLE])
+    return theta, y[index[e, CHILD_RATE]] - joint_entry(y, index[e, PARENT_RATE])
 
 
 @kernel
 def element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
     """Add every element's torques to the generalized forces ``force`` (indexed as the angles in y) and return
-    the power they dissipate (W_joint's rate)."""
+    the power they dissipate (W_element's rate)."""
     power = 0.0
     for e in range(elements.law.shape[0]):
         theta, theta_dot = relative_angle(y, elements, e)
         tau, p = element_torque(elements.law[e], theta, theta_dot, elements.params[e])
         force[elements.index[e, CHILD_ANGLE]] += tau
-        force[elements.index[e, PARENT_ANGLE]] -= tau
+        if elements.index[e, PARENT_ANGLE] >= 0:
+            force[elements.index[e, PARENT_ANGLE]] -= tau
         power += p
     return power
 
@@ -170,4 +184,28 @@ def elements_energy(y: np.ndarray, elements: JointElements) -> float:
     energy = 0.0
     for e in range(elements.law.shape[0]):
         energy += element_energy(elements.law[e], relative_angle(y, elements, e)[0], elements.params[e])
+    return energy
+
+
+@kernel
+def joint_torques(
+    y: np.ndarray, stops: Stops, elements: JointElements, modes: np.ndarray, first_row: int, force: np.ndarray,
+    ydot: np.ndarray, work: int,
+) -> None:  # fmt: skip
+    """Add the elements' and the stops' torques to the generalized forces ``force`` and write the rates of the work
+    they dissipate: W_element at ydot[work] (with elements), then W_stop (with stops; their modes: rows
+    first_row, ... of ``modes``). A system without either computes nothing here."""
+    if elements.law.shape[0] > 0:
+        ydot[work] = element_torques(y, elements, force)
+        work += 1
+    if stops.law.shape[0] > 0:
+        ydot[work] = stop_torques(y, stops, modes, first_row, force)
+
+
+@kernel
+def joints_energy(y: np.ndarray, stops: Stops, elements: JointElements, modes: np.ndarray, first_row: int) -> float:
+    """Energy stored in the stops (their modes: rows first_row, ... of ``modes``) and the elements' springs."""
+    energy = stops_energy(y, stops, modes, first_row)
+    if elements.law.shape[0] > 0:
+        energy += elements_energy(y, elements)
     return energy

@@ -42,8 +42,12 @@ NORMAL_MODEL, FRICTION_MODEL, SCUFFING_GUARD = 0, 1, 2
 # re-contact time [s] (0: every touchdown is a new impact; see remembered_impact_speed)
 IMPACT_FLOOR, FALL_HIP_HEIGHT, FALL_LEG_ANGLE, RECONTACT_TIME = 0, 1, 2, 3
 N_LIMITS = 4
-# what a formulation's fall kernel returns: standing, or which fall limit the state passed
-STANDING, HIP_TOO_LOW, LEG_TOO_FAR = 0, 1, 2
+# what a formulation's fall kernel returns: standing, or which fall limit the state passed (BODY_TOO_FAR + b: body b,
+# off the legs, past its own fall angle)
+STANDING, HIP_TOO_LOW, LEG_TOO_FAR, BODY_TOO_FAR = 0, 1, 2, 3
+# a system's body_falls: none (every body falls past limits[FALL_LEG_ANGLE] as a leg), or a row per body: its fall
+# angle [rad] and its code (LEG_TOO_FAR, or BODY_TOO_FAR + b off the legs), an exact small integer
+NO_BODY_FALLS = np.zeros((0, 2))
 # onset marks written by update_contact_modes
 TOUCHDOWN = 1  # the foot touched down and no other foot of its body was or did: one heel strike per body
 _WAS_TOUCHING = 2  # transient, inside one update
@@ -363,3 +367,12 @@ def update_contact_modes(
         if onset[i] == _WAS_TOUCHING:
             onset[i] = 0
     return changed
+
+
+@kernel
+def body_fall(angle: float, b: int, limits: np.ndarray, body_falls: np.ndarray) -> int:
+    """STANDING, or the fall code of body b at ``angle`` from the slope normal: past limits[FALL_LEG_ANGLE]
+    (LEG_TOO_FAR) when ``body_falls`` is empty (NO_BODY_FALLS), else past its own row's angle (its row's code)."""
+    if body_falls.shape[0] == 0:
+        return LEG_TOO_FAR if abs(angle) > limits[FALL_LEG_ANGLE] else STANDING
+    return int(body_falls[b, 1]) if abs(angle) > body_falls[b, 0] else STANDING

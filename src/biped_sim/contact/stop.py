@@ -100,7 +100,7 @@ NO_STOPS = make_stops(np.zeros((0, 4)), np.zeros((0, 3)), np.zeros(0), np.zeros(
 
 
 @kernel
-def _entry(y: np.ndarray, k: int) -> float:
+def joint_entry(y: np.ndarray, k: int) -> float:
     """y[k], or 0 for the ground (k = -1: its angle and rate)."""
     return y[k] if k >= 0 else 0.0
 
@@ -109,8 +109,8 @@ def _entry(y: np.ndarray, k: int) -> float:
 def stop_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, float]:
     """(delta, deltadot) of stop s: the relative angle past its limit [rad] and its approach rate [rad/s]."""
     index, side = stops.index, stops.limit[s, SIDE]
-    theta = _entry(y, index[s, CHILD_ANGLE]) - _entry(y, index[s, PARENT_ANGLE])
-    rate = _entry(y, index[s, CHILD_RATE]) - _entry(y, index[s, PARENT_RATE])
+    theta = joint_entry(y, index[s, CHILD_ANGLE]) - joint_entry(y, index[s, PARENT_ANGLE])
+    rate = joint_entry(y, index[s, CHILD_RATE]) - joint_entry(y, index[s, PARENT_RATE])
     return side * (theta - stops.limit[s, ANGLE]), side * rate
 
 

@@ -50,12 +50,18 @@ def start_checks(rec: Recorder, system: tuple, y: np.ndarray, modes: np.ndarray)
 
 @njit(cache=True, inline="always")
 def plus_dissipated(energy: float, y: np.ndarray, system: tuple) -> float:
-    """E + W: ``energy`` plus the work the feet's normal damping and friction (and, with joint stops, their
-    damping: W_stop) dissipated, the last entries of the state (``StateLayout`` of :mod:`biped_sim.multibody`)."""
+    """E + W: ``energy`` plus the work the feet's normal damping and friction (and, with joint elements and stops,
+    theirs: W_element, W_stop) dissipated, the last entries of the state (``StateLayout`` of
+    :mod:`biped_sim.multibody`), added in the state's order."""
     n = y.shape[0]
-    if system.stops.law.shape[0] == 0:
-        return energy + y[n - 2] + y[n - 1]
-    return energy + y[n - 3] + y[n - 2] + y[n - 1]
+    first = n - 2
+    if system.elements.law.shape[0] > 0:
+        first -= 1
+    if system.stops.law.shape[0] > 0:
+        first -= 1
+    for k in range(first, n):
+        energy += y[k]
+    return energy
 
 
 @njit(cache=True, inline="always")

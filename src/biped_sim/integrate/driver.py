@@ -27,11 +27,11 @@ from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
     DIVERGENCE_REASONS,
-    FALL_REASONS,
     FELL,
     RUNNING,
     TIMEOUT,
     Recorder,
+    fall_reason,
     make_recorder,
     with_room,
 )
@@ -70,6 +70,7 @@ class Integration:
     events: int
     sample_dt: float
     stop_reason: str | None = None  # why it fell, diverged or timed out
+    fall_code: int | None = None  # what fell (the fall kernel's code: recorder.fall_reason), when it fell
     pushes: np.ndarray = field(default_factory=lambda: np.zeros((0, len(PUSH_COLUMNS))))  # applied, PUSH_COLUMNS
 
 
@@ -223,6 +224,7 @@ def finish_integration(rec: Recorder, interval: float, max_strikes: int | None =
         events=int(st.n_events),
         sample_dt=interval,
         stop_reason=stop_reason(st),
+        fall_code=int(st.reason) if status == FELL else None,
     )
 
 
@@ -240,5 +242,5 @@ def stop_reason(st: np.record) -> str | None:
     if st.status == DIVERGED:
         return DIVERGENCE_REASONS.get(int(st.reason), "the integration failed").format(float(st.excess))
     if st.status == FELL:
-        return FALL_REASONS.get(int(st.reason))
+        return fall_reason(int(st.reason))
     return None

@@ -22,7 +22,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from biped_sim.contact.response import HIP_TOO_LOW, LEG_TOO_FAR, N_MODE_COLUMNS, TOUCHDOWN, TOUCHING, ContactBuffers
+from biped_sim.contact.response import (
+    BODY_TOO_FAR,
+    HIP_TOO_LOW,
+    LEG_TOO_FAR,
+    N_MODE_COLUMNS,
+    TOUCHDOWN,
+    TOUCHING,
+    ContactBuffers,
+)
 from biped_sim.kernel import kernel
 from biped_sim.multibody.events import system_approach_velocity, system_is_leading, system_update_modes
 
@@ -48,6 +56,18 @@ FALL_REASONS = {
     HIP_TOO_LOW: "the hip below simulation.fall_hip_height leg lengths above the ground",
     LEG_TOO_FAR: "a leg past simulation.fall_leg_angle from the slope normal",
 }
+
+
+def fall_reason(code: int, body_names: list[str] | None = None) -> str | None:
+    """Why a run fell, from its fall code: FALL_REASONS, or a body off the legs (BODY_TOO_FAR + its index, named
+    from ``body_names`` when given) past its fall angle."""
+    if code < BODY_TOO_FAR:
+        return FALL_REASONS.get(code)
+    body = code - BODY_TOO_FAR
+    name = repr(body_names[body]) if body_names is not None and body < len(body_names) else str(body)
+    return f"the body {name} (off the legs) past its fall_angle from the slope normal"
+
+
 LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)
 LOG_COLUMNS = 4  # time, foot, +1 touchdown / -1 lift-off, approach velocity deltadot
 LOOP_STATE = np.dtype(

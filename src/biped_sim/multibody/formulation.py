@@ -81,6 +81,7 @@ class StateLayout:
     base_coordinates: tuple[str, ...] = ()  # the system's own coordinates before the bodies', e.g. ("x_hip", "y_hip")
     base_rates: tuple[str, ...] = ()
     n_stops: int = 0  # joint stops (contact.stop): with any, y ends with the work W_stop their damping dissipated
+    n_elements: int = 0  # joint elements (contact.joint_element): with any, W_element (their work) before W_stop
 
     def __post_init__(self) -> None:
         if len(self.rates) != len(self.coordinates) or len(self.base_rates) != len(self.base_coordinates):
@@ -148,21 +149,28 @@ class StateLayout:
         return self.work_normal + 1
 
     @property
+    def work_element(self) -> int | None:
+        """Index in y of the work dissipated by the joint elements (None without elements)."""
+        return self.work_friction + 1 if self.n_elements else None
+
+    @property
     def work_stop(self) -> int | None:
-        """Index in y of the work dissipated by the joint stops' damping (None without stops)."""
-        return self.work_friction + 1 if self.n_stops else None
+        """Index in y of the work dissipated by the joint stops' damping (None without stops): y's last entry."""
+        return self.size - 1 if self.n_stops else None
 
     @property
     def size(self) -> int:
         """Length of y."""
-        return self.work_friction + (2 if self.n_stops else 1)
+        return self.work_friction + 1 + (1 if self.n_elements else 0) + (1 if self.n_stops else 0)
 
     def names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
-        """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``[, ``W_stop``])."""
+        """Names of the entries of y, in order (``x_stance``, ..., ``W_normal``, ``W_friction``[, ``W_element``]
+        [, ``W_stop``])."""
         coords = [*self.base_coordinates, *(f"{axis}_{body}" for body in body_names for axis in self.coordinates)]
         rates = [*self.base_rates, *(f"{axis}_{body}" for body in body_names for axis in self.rates)]
         bristles = [f"{state}_{foot}" for foot in foot_names for state in self.bristles]
-        return coords + rates + bristles + ["W_normal", "W_friction"] + (["W_stop"] if self.n_stops else [])
+        joints = (["W_element"] if self.n_elements else []) + (["W_stop"] if self.n_stops else [])
+        return coords + rates + bristles + ["W_normal", "W_friction"] + joints
 
 
 @dataclass(frozen=True)
@@ -191,19 +199,20 @@ class Formulation:
     # unchanged, rates jumped consistently with the constraints (simulation.pushes); None: no pushes
     hip_impulse: Callable[..., np.ndarray] | None = None
 
-    def layout(self, n_bodies: int, n_feet: int, n_stops: int = 0) -> StateLayout:
-        """The state layout of a system of this formulation with ``n_bodies`` bodies, ``n_feet`` feet and
-        ``n_stops`` joint stops."""
+    def layout(self, n_bodies: int, n_feet: int, n_stops: int = 0, n_elements: int = 0) -> StateLayout:
+        """The state layout of a system of this formulation with ``n_bodies`` bodies, ``n_feet`` feet, ``n_stops``
+        joint stops and ``n_elements`` joint elements."""
         return StateLayout(
             self.coordinates, self.rates, self.bristles, n_bodies, n_feet, self.base_coordinates, self.base_rates,
-            n_stops,
+            n_stops, n_elements,
         )  # fmt: skip
 
     def layout_of(self, system: Any) -> StateLayout:
         """The state layout of ``system``."""
         return self.layout(
-            int(system.body_mass.shape[0]), int(system.foot_body.shape[0]), int(system.stops.law.shape[0])
-        )
+            int(system.body_mass.shape[0]), int(system.foot_body.shape[0]), int(system.stops.law.shape[0]),
+            int(system.elements.law.shape[0]),
+        )  # fmt: skip
 
     def state_names(self, body_names: list[str], foot_names: list[str]) -> list[str]:
         """Names of the ODE state entries of a walker with these bodies and feet (and no joint stops), in order."""

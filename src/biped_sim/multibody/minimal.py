@@ -22,7 +22,7 @@ mass moves as r_b = r_h + a_b, v_b = v_h + omega_b e_b, and M(q) qdd = Q with th
 contact point P). It is solved by the Schur complement on the diagonal leg block: a 2x2 system for
 the hip acceleration, then each leg's angular acceleration. The feet, contact laws, events and
 energy audit are those of every formulation (:mod:`biped_sim.contact.response`); the state is
-y = [q | qd | z (one bristle per foot) | W_normal | W_friction (| W_stop)] (``FORMULATION.layout_of(system)``).
+y = [q | qd | z (one bristle per foot) | W_normal | W_friction (| W_element | W_stop)] (``FORMULATION.layout_of``).
 :func:`tree_system` and :func:`~biped_sim.multibody.tree.tree_state` convert a planar absolute-coordinate tree
 (the walker builders' output) into this formulation, so both describe the same walker by construction.
 """
@@ -35,17 +35,18 @@ from typing import NamedTuple
 import numpy as np
 
 from biped_sim.contact.ground import FLAT_GROUND, FlatGround, Ground, ProfileGround, ground_clearance
+from biped_sim.contact.joint_element import NO_ELEMENTS, JointElements
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
-    FALL_LEG_ANGLE,
     HIP_TOO_LOW,
     IMPACT_FLOOR,
-    LEG_TOO_FAR,
+    NO_BODY_FALLS,
     STANDING,
     arc_contact,
     arc_energy,
     arc_forces,
+    body_fall,
     ground_forces,
     is_loaded,
 )
@@ -62,6 +63,7 @@ from biped_sim.multibody.tree import (
     Tree,
     contact_motion,
     hip_impulse,
+    minimal_angles,
     no_violation,
     pitch,
     tree_energy,
@@ -79,7 +81,7 @@ class MinimalSystem(NamedTuple):
     body_com: np.ndarray  # (nb, 2) centre of mass from the body's origin (its joint to its parent), body frame
     body_parent: np.ndarray  # (nb,) int64: the parent body (-1: the root, body 0); parents before children
     body_joint: np.ndarray  # (nb, 2) the body's origin from its parent's, in the parent's frame (root: 0)
-    topology: Star | Tree  # STAR: every body hinged at the root's origin, no joint stops (the arrow solve); TREE
+    topology: Star | Tree  # STAR: every body hinged at the root's origin, no stops nor elements (arrow solve); TREE
     foot_body: np.ndarray  # (nf,) int64
     foot_center: np.ndarray  # (nf, 2) arc centre from its body's origin, body frame
     foot_radius: np.ndarray  # (nf,)
@@ -91,6 +93,8 @@ class MinimalSystem(NamedTuple):
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
     stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
+    elements: JointElements = NO_ELEMENTS  # contact.joint_element: springs and dampers between bodies' angles
+    body_falls: np.ndarray = NO_BODY_FALLS  # contact.response: each body's fall angle and code (none: as legs)
 
     @property
     def star(self) -> bool:
@@ -355,13 +359,14 @@ def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -
 
 @kernel
 def fall(y: np.ndarray, system: MinimalSystem) -> int:
-    """HIP_TOO_LOW: hip below the height limit over the ground under it; LEG_TOO_FAR: a body rotated past the
-    leg-angle limit; else STANDING."""
+    """HIP_TOO_LOW: hip below the height limit over the ground under it; LEG_TOO_FAR (or a body's own code,
+    ``body_falls``): a body rotated past its fall angle; else STANDING."""
     if ground_clearance(y[0], y[1], system.ground) < system.limits[FALL_HIP_HEIGHT]:
         return HIP_TOO_LOW
     for b in range(system.body_mass.shape[0]):
-        if abs(y[HIP + b]) > system.limits[FALL_LEG_ANGLE]:
-            return LEG_TOO_FAR
+        code = body_fall(y[HIP + b], b, system.limits, system.body_falls)
+        if code != STANDING:
+            return code
     return STANDING
 
 
@@ -377,21 +382,18 @@ def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspa
 
 def tree_system(planar: PlanarSystem) -> MinimalSystem:
     """The same walker as the planar tree ``planar`` (:func:`tree_origins`) in minimal coordinates; a star
-    without joint stops is flagged for the arrow solve. The stops' indices move to the minimal state's angles."""
+    without joint stops or elements is flagged for the arrow solve. The stops' and the elements' indices move to
+    the minimal state's angles."""
     parent, origin, joint = tree_origins(planar)
-    n, nb = HIP + planar.body_mass.shape[0], planar.body_mass.shape[0]
-    stops = planar.stops
-    body = (
-        stops.index % (3 * nb) - 2
-    ) // 3  # planar: angle 3 b + 2, rate 3 nb + 3 b + 2; minimal: HIP + b, n + HIP + b
-    index = np.where(stops.index >= 0, HIP + body + np.array([0, 0, n, n]), -1)
+    stops, elements = planar.stops, planar.elements
+    plain = stops.law.shape[0] == 0 and elements.law.shape[0] == 0
     return MinimalSystem(
         body_mass=planar.body_mass.copy(),
         body_inertia=planar.body_inertia.copy(),
         body_com=-origin,
         body_parent=parent,
         body_joint=joint,
-        topology=STAR if bool(np.all(joint == 0.0)) and stops.law.shape[0] == 0 else TREE,
+        topology=STAR if bool(np.all(joint == 0.0)) and plain else TREE,
         foot_body=planar.foot_body.copy(),
         foot_center=planar.foot_center - origin[planar.foot_body],
         foot_radius=planar.foot_radius.copy(),
@@ -402,7 +404,9 @@ def tree_system(planar: PlanarSystem) -> MinimalSystem:
         switches=planar.switches.copy(),
         limits=planar.limits.copy(),
         ground=planar.ground,
-        stops=stops._replace(index=index),
+        stops=stops._replace(index=minimal_angles(stops.index, planar.body_mass.shape[0])),
+        elements=elements._replace(index=minimal_angles(elements.index, planar.body_mass.shape[0])),
+        body_falls=planar.body_falls.copy(),
     )
 
 

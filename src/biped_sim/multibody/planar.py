@@ -10,13 +10,13 @@ ground, index -1, with s_b a fixed point). Forward dynamics solves the augmented
 by its Schur complement (M is diagonal): (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs,
 solved with an in-place Cholesky factorisation, then qdd = M^-1 (Q - Phi_q^T lambda).
 
-The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction (| W_stop)]
+The ODE state is y = [q (3 nb) | qd (3 nb) | z (nf, LuGre bristles) | W_normal | W_friction (| W_element | W_stop)]
 (named offsets: ``FORMULATION.layout_of(system)``): the dissipated work is integrated with the
 motion, so that the energy balance E(t) - E(0) + W(t) = 0 is an independent check of the
 integration. The feet are arcs against the system's ``ground`` (the slope line, or a profile:
 :mod:`biped_sim.contact.ground`); what the ground does with them (normal force, dissipation, scuffing
-guard) is :mod:`biped_sim.contact.response`; a joint stop's torque (:mod:`biped_sim.contact.stop`) acts on
-the angles of its joint's two bodies.
+guard) is :mod:`biped_sim.contact.response`; a joint stop's torque (:mod:`biped_sim.contact.stop`) and a joint
+element's (:mod:`biped_sim.contact.joint_element`) act on the angles of their two bodies.
 
 Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
 with the Python-side measurements and the formulation record :data:`FORMULATION`.
@@ -30,18 +30,19 @@ from typing import NamedTuple
 import numpy as np
 
 from biped_sim.contact.ground import FLAT_GROUND, Ground, ground_clearance
+from biped_sim.contact.joint_element import NO_ELEMENTS, JointElements, joint_torques, joints_energy
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
-    FALL_LEG_ANGLE,
     HIP_TOO_LOW,
     IMPACT_FLOOR,
-    LEG_TOO_FAR,
+    NO_BODY_FALLS,
     STANDING,
     arc_contact,
     arc_energy,
     arc_forces,
+    body_fall,
 )
-from biped_sim.contact.stop import NO_STOPS, Stops, stop_torques, stops_energy
+from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import kernel
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
@@ -66,6 +67,8 @@ class PlanarSystem(NamedTuple):
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
     stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
+    elements: JointElements = NO_ELEMENTS  # contact.joint_element: springs and dampers between bodies' angles
+    body_falls: np.ndarray = NO_BODY_FALLS  # contact.response: each body's fall angle and code (none: as legs)
 
 
 class Workspace(NamedTuple):
@@ -245,15 +248,14 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
         w_friction += p_f
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
-    stops = system.stops
-    if stops.law.shape[0] > 0:
-        ydot[2 * n + nf + 2] = stop_torques(y, stops, modes, nf, force)
+    joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + nf + 2)
     constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
 @kernel
 def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) -> tuple[float, float, float]:
-    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet."""
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet, the pressed stops and the
+    joint elements."""
     nb = system.body_mass.shape[0]
     n = 3 * nb
     kinetic = 0.0
@@ -267,7 +269,11 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = _foot_arc(y, system, i)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic + stops_energy(y, system.stops, modes, system.foot_body.shape[0])
+    return (
+        kinetic,
+        potential,
+        elastic + joints_energy(y, system.stops, system.elements, modes, system.foot_body.shape[0]),
+    )
 
 
 @kernel
@@ -284,16 +290,17 @@ def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, fl
 
 @kernel
 def fall(y: np.ndarray, system: PlanarSystem) -> int:
-    """HIP_TOO_LOW: hip (joint 0) below the height limit over the ground under it; LEG_TOO_FAR: a body past the
-    leg-angle limit; else STANDING."""
+    """HIP_TOO_LOW: hip (joint 0) below the height limit over the ground under it; LEG_TOO_FAR (or a body's own code,
+    ``body_falls``): a body past its fall angle; else STANDING."""
     if system.joint_bodies.shape[0] > 0:
         jp = system.joint_points[0]
         _, _, hip_x, hip_y = _body_point(y, system.joint_bodies[0, 0], jp[0], jp[1])
         if ground_clearance(hip_x, hip_y, system.ground) < system.limits[FALL_HIP_HEIGHT]:
             return HIP_TOO_LOW
     for b in range(system.body_mass.shape[0]):
-        if abs(y[3 * b + 2]) > system.limits[FALL_LEG_ANGLE]:
-            return LEG_TOO_FAR
+        code = body_fall(y[3 * b + 2], b, system.limits, system.body_falls)
+        if code != STANDING:
+            return code
     return STANDING
 
 

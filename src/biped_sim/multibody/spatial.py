@@ -40,6 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from biped_sim.contact.joint_element import NO_ELEMENTS, JointElements
 from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import kernel
 from biped_sim.multibody.euler_parameters import (
@@ -83,6 +84,7 @@ class SpatialSystem(NamedTuple):
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
     stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
+    elements: JointElements = NO_ELEMENTS  # contact.joint_element: none in 3D yet (the state layout reads it)
 
 
 class Workspace(NamedTuple):

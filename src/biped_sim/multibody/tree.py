@@ -16,9 +16,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
-from biped_sim.contact.stop import stop_torques, stops_energy
 from biped_sim.kernel import kernel
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
@@ -194,7 +194,7 @@ def tree_rhs(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, ydot: np.ndarray, topology: Tree
 ) -> None:
     """Right-hand side of a tree: M(q) qdd = Q by Cholesky, Q the gravity, the velocity products, the feet
-    and the joint stops (module docstring)."""
+    and the joint stops and elements (module docstring)."""
     table = work.table
     nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
     n = HIP + nb
@@ -213,8 +213,7 @@ def tree_rhs(
     w_normal, w_friction = _tree_foot_forces(y, system, modes, table, q, ydot)
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
-    if system.stops.law.shape[0] > 0:
-        ydot[2 * n + nf + 2] = stop_torques(y, system.stops, modes, nf, q)
+    joint_torques(y, system.stops, system.elements, modes, nf, q, ydot, 2 * n + nf + 2)
     cholesky_solve(mass, q, n)
     for k in range(n):
         ydot[n + k] = q[k]
@@ -238,7 +237,19 @@ def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree)
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = foot_motion(y, system, i)
         elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic + stops_energy(y, system.stops, modes, system.foot_body.shape[0])
+    return (
+        kinetic,
+        potential,
+        elastic + joints_energy(y, system.stops, system.elements, modes, system.foot_body.shape[0]),
+    )
+
+
+def minimal_angles(index: np.ndarray, nb: int) -> np.ndarray:
+    """Indices of bodies' angles and rates in a planar state (angle 3 b + 2, rate 3 nb + 3 b + 2; -1: the ground)
+    as in the minimal state (HIP + b, n + HIP + b), columns angle, angle, rate, rate (contact.stop's)."""
+    n = HIP + nb
+    body = (index % (3 * nb) - 2) // 3
+    return np.where(index >= 0, HIP + body + np.array([0, 0, n, n]), -1)
 
 
 def tree_origins(planar: PlanarSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

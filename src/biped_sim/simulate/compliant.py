@@ -13,6 +13,7 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.integrate.blowup import Scales
 from biped_sim.integrate.driver import Integration, integrate_model
+from biped_sim.integrate.recorder import fall_reason
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
@@ -79,10 +80,11 @@ class CompliantRunResult(RunResult):
         return constraint_drift(self.model, self.run)
 
     def energy_dissipated(self) -> dict[str, float]:
-        """The work dissipated over the run [J] by normal damping, friction and (walkers with joint stops) the
-        stops' damping: the integrated work states (no energy audit needed)."""
+        """The work dissipated over the run [J] by normal damping, friction and (walkers with joint stops or
+        elements) the stops' damping and the elements: the integrated work states (no energy audit needed)."""
         layout = formulation_of(self.model.system).layout_of(self.model.system)
-        work = {"normal": layout.work_normal, "friction": layout.work_friction, "stops": layout.work_stop}
+        work = {"normal": layout.work_normal, "friction": layout.work_friction, "stops": layout.work_stop,
+                "elements": layout.work_element}  # fmt: skip
         y = self.run.y
         return {name: float(y[-1, k] - y[0, k]) for name, k in work.items() if k is not None}
 
@@ -117,8 +119,9 @@ class CompliantRunResult(RunResult):
         run, model = self.run, self.model
         channels = [Channel(f"contact/{name}", values, CHANNEL_UNITS[name]) for name, values in self.contact.items()]
         channels.append(Channel("contact/modes", run.modes, "armed (1/0), touching (1/0), impact velocity (m/s)"))
-        stops = ("dissipated_stops",) if model.system.stops.law.shape[0] else ()  # W_stop, for walkers with stops
-        channels += [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in (*ENERGY_TERMS, *stops)]
+        joints = [name for name, rows in (("dissipated_stops", model.system.stops), ("dissipated_elements",
+                  model.system.elements)) if rows.law.shape[0]]  # fmt: skip  # W_stop, W_element: walkers with them
+        channels += [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in (*ENERGY_TERMS, *joints)]
         channels += [
             Channel(f"constraints/{name}", self.violation[:, k], VIOLATION_UNITS[name])
             for k, name in enumerate(violation_names(model))
@@ -205,6 +208,6 @@ def simulate_compliant(
         steps=step_table(model, run),
         wall_time_s=wall,
         status=run.status,
-        status_reason=run.stop_reason,
+        status_reason=run.stop_reason if run.fall_code is None else fall_reason(run.fall_code, model.body_names),
         stop_time=run.stop_time,
     )

@@ -105,18 +105,20 @@ def stops_level(config: Config, k: int) -> dict[str, Any]:
 
 def touchdown_states(result: CompliantRunResult) -> list[dict[str, float]]:
     """Each heel strike's state by the walker's initial-state keys; 'stance' is the leg that just touched down
-    (the compass: :attr:`heel_strike_states`; a described walker: every body of both legs, hip down)."""
+    (the compass: :attr:`heel_strike_states`; a described walker: every body of both legs, hip down, then the
+    bodies off the legs)."""
     described = result.config.walker.description
     if described is None:
         return result.heel_strike_states
     model, run = result.model, result.run
     pitch = measures(model.system).pitch
     legs = [[model.body_names.index(body) for body in leg] for leg in described.legs]
+    off_legs = [model.body_names.index(body) for body in described.off_leg_bodies()]
     states = []
     for k in range(len(run.strike_t)):
         struck = int(model.system.foot_body[run.strike_foot[k]])
         stance = next(i for i, leg in enumerate(legs) if struck in leg)
-        bodies = [b for leg in (legs[stance], legs[1 - stance]) for b in leg]
+        bodies = [b for leg in (legs[stance], legs[1 - stance]) for b in leg] + off_legs
         values = [v for b in bodies for v in pitch(run.strike_y[k], model.system, b)]
         states.append(dict(zip(described.state_keys(), values, strict=True)))
     return states

@@ -1,15 +1,15 @@
 """The compliant walker built from its description (``walker.kind: description``): any planar tree of bodies.
 
-The description (:class:`~biped_sim.config.description.WalkerDescription`) gives bodies in frames whose
-origin is the joint to the parent (the root's: the hip), joints placing a child's origin in its parent's
-frame, one-sided joint stops, feet on bodies and the legs. :func:`resolve_tree` folds the point masses into
-their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first;
-:func:`build_described` makes the planar absolute-coordinate system of it (each body at its centre of mass,
-a revolute joint per child, the hip joint first, each stop a compliant contact of
-:mod:`biped_sim.contact.stop` with the law, stiffness and restitution it names and ``contact.exponent``, a
-latching stop released by its leg's foot) and starts it rolling on its stance leg's foot (:func:`tree_start`),
-the stance leg's latches engaged as the rigid model's stance knee is locked. ``formulation.kind: minimal`` converts
-that system (:func:`~biped_sim.walkers.model.minimal_model`), so both formulations describe one walker.
+The description (:class:`~biped_sim.config.description.WalkerDescription`) gives bodies in frames whose origin is the
+joint to the parent (the root's: the hip), joints placing a child's origin in its parent's frame, one-sided joint stops
+and passive elements (springs, dampers), feet on bodies and the legs. :func:`resolve_tree` folds the point masses into
+their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first; :func:`build_described`
+makes the planar absolute-coordinate system of it (each body at its centre of mass, a revolute joint per child, the hip
+joint first, each stop a compliant contact of :mod:`biped_sim.contact.stop` with the law, stiffness and restitution it
+names and ``contact.exponent``, a latching stop released by its leg's foot; each joint element a row of
+:mod:`biped_sim.contact.joint_element`) and starts it rolling on its stance leg's foot (:func:`tree_start`), the stance
+leg's latches engaged as the rigid model's stance knee is locked. ``formulation.kind: minimal`` converts that system
+(:func:`~biped_sim.walkers.model.minimal_model`), so both formulations describe one walker.
 """
 
 from __future__ import annotations
@@ -22,9 +22,10 @@ import numpy as np
 
 from biped_sim.config import Config, InitialState
 from biped_sim.config.description import WalkerDescription
+from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, JointElements, element_parameters, make_elements
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.profile import profile_ground
-from biped_sim.contact.response import IMPACT_SPEED, TOUCHING
+from biped_sim.contact.response import BODY_TOO_FAR, IMPACT_SPEED, LEG_TOO_FAR, NO_BODY_FALLS, TOUCHING
 from biped_sim.contact.stop import FOOT, HELD, LATCHED, NOT_LATCHING, Stops, make_stops
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
@@ -49,6 +50,8 @@ class Tree:
     com: np.ndarray  # (nb, 2) centre of mass in the body frame (from the origin)
     inertia: np.ndarray  # (nb,) about the centre of mass
     stops: list[tuple[int, int, str, float, str, float, float, bool]]  # parent, child, side, angle, law, K, e, latch
+    elements: list[tuple[int, int, str, np.ndarray]]  # child, the body it acts against, law, parameter vector
+    fall_angle: list[float | None]  # per body: its own fall angle (a body off the legs), else None
     foot_body: np.ndarray  # (nf,) int
     foot_centre: np.ndarray  # (nf, 2) in the body frame
     foot_radius: np.ndarray  # (nf,)
@@ -100,11 +103,16 @@ def resolve_tree(description: WalkerDescription) -> Tree:
         com=np.array([f[1] for f in folded]),
         inertia=np.array([f[2] for f in folded]),
         stops=sorted(stops, key=lambda s: s[1]),
+        elements=[
+            (index[joint.child], index[other], e.law, element_parameters(e.law, **e.values()))
+            for joint, e, other in description.joint_elements()
+        ],
         foot_body=np.array([index[f.body] for f in feet], dtype=np.int64),
         foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
         foot_radius=np.array([f.radius for f in feet]),
         foot_names=[f.name for f in feet],
         legs=[[index[b] for b in leg] for leg in description.legs],
+        fall_angle=[next(b.fall_angle for b in description.bodies if b.name == name) for name in names],
     )
 
 
@@ -144,6 +152,30 @@ def planar_stops(tree: Tree, config: Config, length: float) -> Stops:
     ]
     laws = [NORMAL_LAWS[law].index for *_, law, _, _, _ in tree.stops]
     return make_stops(np.array(rows), np.array(limits), np.array(laws), np.array(params), latch_feet(tree))
+
+
+def planar_elements(tree: Tree) -> JointElements:
+    """The joint elements: indices of their two bodies' angles and rates in the planar state, laws, parameters."""
+    nb = len(tree.names)
+    rows = [[3 * c + 2, 3 * a + 2, 3 * nb + 3 * c + 2, 3 * nb + 3 * a + 2] for c, a, _, _ in tree.elements]
+    laws = [JOINT_ELEMENT_LAWS[law].index for _, _, law, _ in tree.elements]
+    return make_elements(np.array(rows), np.array(laws), np.array([p for *_, p in tree.elements]))
+
+
+def fall_angles(tree: Tree, config: Config) -> np.ndarray:
+    """(nb,): the angle from the slope normal past which each body has fallen [rad]: a leg's body
+    ``simulation.fall_leg_angle``, a body off the legs its own ``fall_angle`` (by default the same)."""
+    return np.array([config.simulation.fall_leg_angle if angle is None else angle for angle in tree.fall_angle])
+
+
+def body_falls(tree: Tree, config: Config) -> np.ndarray:
+    """The system's ``body_falls``: none when every body is on a leg (each falls as a leg), else per body its fall
+    angle and code (LEG_TOO_FAR, or BODY_TOO_FAR + b for body b off the legs: the run's reason names it)."""
+    on_legs = {b for leg in tree.legs for b in leg}
+    if len(on_legs) == len(tree.names):
+        return NO_BODY_FALLS
+    codes = [LEG_TOO_FAR if b in on_legs else BODY_TOO_FAR + b for b in range(len(tree.names))]
+    return np.column_stack([fall_angles(tree, config), np.array(codes, dtype=np.float64)])
 
 
 def latch_feet(tree: Tree) -> np.ndarray:
@@ -204,12 +236,14 @@ def planar_tree_system(tree: Tree, config: Config, stiffness: float, length: flo
         limits=contact_limits(config, length),
         ground=profile_ground(config.ground.profile, gamma),
         stops=planar_stops(tree, config, length),
+        elements=planar_elements(tree),
+        body_falls=body_falls(tree, config),
     )
 
 
 def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: list[str]) -> np.ndarray:
-    """(nb, 2): each body's angle and rate from the initial-state ``keys`` (stance leg, then swing leg, hip down;
-    a body on no leg starts at 0, at rest)."""
+    """(nb, 2): each body's angle and rate from the initial-state ``keys`` (stance leg, then swing leg, hip down,
+    then the bodies off the legs, ``<name>_angle`` and ``<name>_rate``, 0 when not given)."""
     values = initial.model_dump() if isinstance(initial, InitialState) else dict(initial)
     state = np.zeros((len(tree.names), 2))
     per_leg = 2 * len(tree.legs[0])
@@ -217,6 +251,9 @@ def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: l
         for k, b in enumerate(bodies):
             offset = leg * per_leg + 2 * k
             state[b] = values[keys[offset]], values[keys[offset + 1]]
+    on_legs = {b for leg in tree.legs for b in leg}
+    for b in (b for b in range(len(tree.names)) if b not in on_legs):
+        state[b] = values.get(f"{tree.names[b]}_angle", 0.0), values.get(f"{tree.names[b]}_rate", 0.0)
     return state
 
 
@@ -230,9 +267,12 @@ def tree_start(
     stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError when
     the walker would start fallen.
     """
+    limits = fall_angles(tree, config)
     for b in range(len(tree.names)):
-        if abs(angles[b, 0]) >= config.simulation.fall_leg_angle:
-            raise ConfigError("simulation.initial", "a body beyond simulation.fall_leg_angle: the walker starts fallen")
+        if abs(angles[b, 0]) >= limits[b]:
+            raise ConfigError(
+                "simulation.initial", f"the body {tree.names[b]!r} beyond its fall angle: the walker starts fallen"
+            )
     foot = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
     contact = np.array([0.0, -static_penetration])
     nb = len(tree.names)
@@ -272,8 +312,6 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     description = config.walker.description
     if description is None:
         raise ConfigError("walker.description", "walker.kind: description needs walker.description")
-    if description.joint_elements():
-        raise ConfigError("walker.description.joints", "joint elements: compliant dynamics does not take them yet")
     tree = resolve_tree(description)
     length = description.leg_length()
     radius = float(np.max(tree.foot_radius))
