@@ -16,6 +16,7 @@ from biped_sim.studies.friction_checks import (
     creep_speed,
     dry_coefficients,
     dry_limit_parameters,
+    frictionless_row,
     incline_cases,
     incline_row,
     regularised_band,
@@ -72,6 +73,11 @@ def test_a_case_off_its_tolerance_or_not_shrinking_fails_its_row() -> None:
     assert not off.passed and not incline_row([off]).passed
     assert not dataclasses.replace(case, slip=1.5 * case.creep).passed  # it must creep at the law's creep speed
     assert incline_row([case]).passed and "\n" not in str(incline_row([case]))
+
+
+def test_without_friction_every_body_slides_at_g_sin_without_spin() -> None:
+    row = frictionless_row()
+    assert row.passed, row
 
 
 @pytest.mark.slow

@@ -80,7 +80,8 @@ ROLL_MARGIN, SLIDE_MARGIN = 0.9, 1.1  # needed friction over the dry static coef
 NUMERICAL_FLOOR = 1e-6  # [m/s^2] below this an error is the integrator's, not the law's
 LATERAL_SPEED = 0.5  # [m/s] the sphere in space rolling across the slope
 SPATIAL_AGREEMENT = 1e-8  # [m/s^2] the sphere in space against the planar sphere: two formulations at rtol 1e-10
-CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")
+CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")  # "none": frictionless_row
+FRICTIONLESS_SLOPE = 0.3  # [rad]
 
 
 def dry_limit_parameters(scale: float) -> np.ndarray:
@@ -284,6 +285,20 @@ def incline_row(cases: list[InclineCase]) -> Check:
     )  # fmt: skip
 
 
+def frictionless_row() -> Check:
+    """Without friction (law "none", its own dry limit) every body slides at g sin(theta) and does not spin."""
+    p, slope = dry_limit_parameters(1.0), FRICTIONLESS_SLOPE
+    expected = GRAVITY * math.sin(slope)
+    worst = 0.0
+    for body in BODIES:
+        motion = _mean_motion(body, final_state(*planar_body(body, "none", p, slope)))
+        worst = max(worst, abs(motion["measured"] - expected), abs(motion.get("measured_spin", 0.0)))
+    return Check(
+        GROUP, f"none: sphere, disc and block slide without spin ({math.degrees(slope):.2f} deg)",
+        f"a {expected:.4f}, R alpha 0 m/s^2", f"max err {worst:.1e}", f"{NUMERICAL_FLOOR:g}", worst <= NUMERICAL_FLOOR,
+    )  # fmt: skip
+
+
 def incline_cases(law: str) -> list[list[InclineCase]]:
     """Every body rolling (sticking) and sliding under ``law``, each at every scale of SCALES."""
     return [[case(law, body, scale) for scale in SCALES] for body in BODIES for case in (rolling_case, sliding_case)]
@@ -292,7 +307,7 @@ def incline_cases(law: str) -> list[list[InclineCase]]:
 def incline_checks() -> list[Check]:
     """The validation rows: every law, body and regime; the sphere in space."""
     planar = [incline_row(cases) for law in CHECKED_LAWS for cases in incline_cases(law)]
-    return planar + [row for law in CHECKED_LAWS for row in spatial_rows(law)]
+    return [frictionless_row(), *planar, *(row for law in CHECKED_LAWS for row in spatial_rows(law))]
 
 
 @dataclass(frozen=True)
