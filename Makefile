@@ -4,8 +4,9 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CONFIG ?= configs/round_foot_walker.yaml
-# pytest-xdist processes for the fast tier (auto: one per core)
+# pytest-xdist processes for the fast tier (auto: one per core) and for the slow tier's parallel-safe tests
 TEST_WORKERS ?= auto
+SLOW_WORKERS ?= 2
 
 .PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
 
@@ -43,9 +44,12 @@ OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CO
 test-older-cpu: $(WARMED)  ## the fast tier as on an older (AVX2) CPU
 	$(OLDER_CPU) $(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
+# the slow tier in SLOW_WORKERS processes (by module, as the fast tier), then its serial tests alone: those that
+# time themselves or kill processes on deadlines (marked serial)
 validate: $(WARMED)        ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -n $(SLOW_WORKERS) -m 'slow and not serial'
+	$(BIN)/python -m pytest -q -m 'slow and serial'
 
 bench: $(WARMED)           ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench

@@ -1,0 +1,421 @@
+"""Every friction law's dry limit against mechanics' exact answers on an incline (issue 28, item 7).
+
+A sphere (I = 2/5 m R^2), a disc (I = 1/2 m R^2) and a block (two small round feet, no rolling) rest on a
+slope of angle theta and are let go. With dry (Coulomb) friction of static and kinetic coefficients mu_s and
+mu_k, and k = I / (m R^2), mechanics gives (x downhill, spin in the rolling sense):
+
+* rolling without slip while the friction it needs, k / (1 + k) tan(theta) of the normal force (2/7 tan for
+  the sphere, 1/3 tan for the disc), is at most mu_s: a = g sin(theta) / (1 + k) (5/7 and 2/3 g sin) and
+  R alpha = a; the block sticks (a = 0) while tan(theta) <= mu_s;
+* sliding past it: a = g (sin(theta) - mu_k cos(theta)) and R alpha = mu_k g cos(theta) / k.
+
+The bodies are the project's own engine (one free body of :class:`~biped_sim.multibody.planar.PlanarSystem`,
+the same compiled loop, contact response and laws as a walker's foot; the sphere in space is one body of
+:class:`~biped_sim.multibody.spatial.SpatialSystem` with a sphere foot), on the default normal law, stiffness
+(Hertz, default materials) and restitution, started at rest at the static penetration.
+
+Each law is a regularised family whose dry limit is ``scale -> 0`` (:func:`dry_limit_parameters`); each case
+runs at two scales. Its dry coefficients are read from the law itself: mu_k its value in fast sliding, mu_s
+its peak over the slip speed (:func:`friction_coefficient`; the laws without stiction have mu_s = mu_k).
+The needed friction is set to 0.9 mu_s (rolling, sticking) and 1.1 mu_s (sliding). The measured accelerations
+are the mean ones from rest, 2 x(T) / T^2 and 2 R phi(T) / T^2, and their tolerances follow from the
+regularisation:
+
+* rolling (sticking): the body creeps at the slip speed v_c where the law gives the needed friction (0 for
+  LuGre, whose bristles hold a slip of at most d = mu_s / sigma0); the centre then runs ahead of rolling by
+  k / (1 + k) of the slip, so |a - a_roll| <= 2 k / (1 + k) (v_c T + d) / T^2 (1 / (1 + k) for R alpha);
+* sliding: the law differs from dry friction only while the slip crosses its regularised band, which the slip
+  (growing at least at s_min = g (sin - mu_s cos (1 + 1/k))) crosses in the time I / s_min, I the integral of
+  |mu(v) - mu_k| over the slip speed (LuGre adds the time its bristles take to load over their length
+  d and their damping's sigma1 d); so |a - a_dry| <= 2 g cos(theta) (I / s_min) / T (divided by k for R alpha).
+
+Both shrink with the scale (proportionally; LuGre's bristle time as its square root): the check also wants the
+measured error to shrink. The sphere in space, rolling straight down, is the plane problem by symmetry (the
+plane through the fall line and the centre is a mirror plane): it must give the planar sphere's numbers and
+no lateral motion; rolling with a lateral velocity it keeps that velocity and rolls down at 5/7 g sin.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+from biped_sim.config import BaumgarteConfig, ContactConfig, IntegratorConfig, MaterialsConfig
+from biped_sim.contact.friction import (
+    FRICTION_LAWS,
+    MU_S,
+    SIGMA0,
+    SIGMA1,
+    VS,
+    friction_parameters,
+    lugre_bristle_rate,
+    lugre_friction,
+)
+from biped_sim.contact.normal import NORMAL_LAWS, hertz_stiffness, normal_parameters
+from biped_sim.integrate.driver import integrate_model
+from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.multibody.spatial import SpatialSystem
+from biped_sim.studies.checks import Check
+from biped_sim.walkers.model import standing_start
+
+GRAVITY = 9.81  # [m/s^2]
+MASS = 1.0  # [kg]
+RADIUS = 0.1  # [m] sphere and disc
+BLOCK_HALF_LENGTH, BLOCK_HALF_HEIGHT, BLOCK_FOOT_RADIUS = 0.1, 0.02, 0.005  # [m]
+MU_KINETIC, MU_STATIC = 0.3, 0.4
+BASE_SPEED = 1e-3  # [m/s] the regularisation speed at scale 1
+SCALES = (1.0, 0.1)
+DURATION = 1.0  # [s] from rest
+ROLL_MARGIN, SLIDE_MARGIN = 0.9, 1.1  # needed friction over the dry static coefficient
+NUMERICAL_FLOOR = 1e-6  # [m/s^2] below this an error is the integrator's, not the law's
+LATERAL_SPEED = 0.5  # [m/s] the sphere in space rolling across the slope
+INTEGRATOR = IntegratorConfig(method="dopri5", rtol=1e-10, atol=1e-13, max_step=1e-3)
+CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")
+
+
+def dry_limit_parameters(scale: float) -> np.ndarray:
+    """Parameters of every law at ``scale`` of its regularisation (one vector: each law reads what it names).
+
+    The dry limit is scale -> 0: Coulomb and Threlfall v0 = scale 1e-3 m/s; Ambrosio v0 likewise, v1 = 10 v0;
+    Bengisu-Akay v_s = scale 1e-3 m/s, decay 1/xi = 10 v_s; Brown-McPhee v_t0 = scale 1e-3 m/s, no viscous
+    term; LuGre v_s = scale 1e-3 m/s, sigma0 = 1e4 / scale [1/m] (bristle length ~ scale), sigma1 = 20 /
+    sqrt(scale) [s/m] (the bristles' damping ratio kept) and no viscous sigma2.
+    """
+    v = BASE_SPEED * scale
+    return friction_parameters(
+        MU_KINETIC, MU_STATIC, v, 10.0 * v, v, 1.0 / (10.0 * v), 0.0, 1e4 / scale, 20.0 / math.sqrt(scale), 0.0
+    )
+
+
+def friction_coefficient(law: str, speed: float, p: np.ndarray) -> float:
+    """|F_T| / F_N in steady sliding at slip ``speed`` > 0, from the law's own compiled functions.
+
+    LuGre: its steady state, the bristle deflection z at which the bristle rate vanishes (the rate is linear
+    in z, so z = -rate(v, 0) / (rate(v, 1) - rate(v, 0))) and F_T from its force law with zdot = 0.
+    """
+    if FRICTION_LAWS[law].stateful:
+        rate0 = lugre_bristle_rate(speed, 0.0, p)
+        z = -rate0 / (lugre_bristle_rate(speed, 1.0, p) - rate0)
+        return -lugre_friction(speed, z, 0.0, 1.0, p)
+    return -FRICTION_LAWS[law].function(speed, 1.0, p)
+
+
+def _speed_grid(p: np.ndarray) -> np.ndarray:
+    return np.geomspace(1e-6 * p[VS], 1e4 * p[VS], 4001)
+
+
+def dry_coefficients(law: str, p: np.ndarray) -> tuple[float, float]:
+    """(mu_s, mu_k) of the law's dry limit: its peak over the slip speed and its value in fast sliding."""
+    grid = _speed_grid(p)
+    mu = np.array([friction_coefficient(law, v, p) for v in grid])
+    return float(mu.max()), float(mu[-1])
+
+
+def creep_speed(law: str, ratio: float, p: np.ndarray) -> float:
+    """The slip speed at which the law gives ``ratio`` of the normal force on its rising branch (it holds a
+    body that needs that much friction by creeping at it); 0 for LuGre, whose bristles hold without slip."""
+    if FRICTION_LAWS[law].stateful:
+        return 0.0
+    grid = _speed_grid(p)
+    mu = np.array([friction_coefficient(law, v, p) for v in grid])
+    peak = int(np.argmax(mu >= ratio))  # the first grid speed past the needed friction
+    return brentq(lambda v: friction_coefficient(law, v, p) - ratio, 0.0, grid[peak], xtol=1e-15, rtol=1e-13)
+
+
+def regularised_band(law: str, p: np.ndarray) -> float:
+    """The integral over the slip speed of |mu(v) - mu_k| [m/s]: how much the law's sliding differs from dry."""
+    _, mu_k = dry_coefficients(law, p)
+    top = _speed_grid(p)[-1]
+    points = [p[VS] * f for f in (1.0, 10.0, 100.0)]
+    value, _ = quad(lambda v: abs(friction_coefficient(law, v, p) - mu_k), 0.0, top, points=points, limit=400)
+    return value
+
+
+@dataclass(frozen=True)
+class Body:
+    """A test body: ``inertia_ratio`` k = I / (m R^2) about its centre (inf: the block, which cannot roll)."""
+
+    name: str
+    inertia_ratio: float
+
+    @property
+    def rolls(self) -> bool:
+        return math.isfinite(self.inertia_ratio)
+
+    @property
+    def share(self) -> float:
+        """k / (1 + k): the needed friction per unit tan(theta) when rolling, and the centre's part of a slip."""
+        return self.inertia_ratio / (1.0 + self.inertia_ratio) if self.rolls else 1.0
+
+
+SPHERE, DISC, BLOCK = Body("sphere", 0.4), Body("disc", 0.5), Body("block", math.inf)
+BODIES = (SPHERE, DISC, BLOCK)
+
+
+@dataclass(frozen=True)
+class InclineCase:
+    """One run's expected and measured mean accelerations (m/s^2, R alpha for the spin) and their tolerance."""
+
+    law: str
+    body: str
+    regime: str  # "rolls" (the block: sticks) or "slides"
+    scale: float
+    slope: float  # [rad]
+    expected: float
+    measured: float
+    tolerance: float
+    expected_spin: float  # R alpha in the rolling sense; nan for the block
+    measured_spin: float
+    spin_tolerance: float
+    slip: float  # slip speed at the end [m/s]
+    creep: float  # the law's creep speed at the needed friction (rolling) [m/s]
+    allowance: float = 0.0  # the part of the tolerance that is not the regularisation's (the block's lean)
+
+    @property
+    def error(self) -> float:
+        """|measured - expected| of the acceleration [m/s^2]."""
+        return abs(self.measured - self.expected)
+
+    @property
+    def spin_error(self) -> float:
+        """|measured - expected| of R alpha [m/s^2]; 0 for the block."""
+        return abs(self.measured_spin - self.expected_spin) if math.isfinite(self.expected_spin) else 0.0
+
+    @property
+    def passed(self) -> bool:
+        """Both errors within their tolerances (and the integrator's floor)."""
+        spin_ok = not math.isfinite(self.expected_spin) or self.spin_error <= self.spin_tolerance + NUMERICAL_FLOOR
+        return self.error <= self.tolerance + NUMERICAL_FLOOR and spin_ok
+
+
+def _contact(radius: float, load: float) -> tuple[np.ndarray, float, float]:
+    """(normal law parameters, static penetration under ``load`` [N], impact speed floor) of the default contact."""
+    contact, m = ContactConfig(), MaterialsConfig()
+    stiffness = hertz_stiffness(
+        m.foot.youngs_modulus, m.foot.poisson_ratio, m.ground.youngs_modulus, m.ground.poisson_ratio, radius
+    )
+    normal = normal_parameters(contact.model, stiffness, contact.exponent, contact.restitution, None, MASS)
+    exponent = 1.0 if contact.model == "kelvin_voigt" else contact.exponent
+    return normal, (load / stiffness) ** (1.0 / exponent), contact.impact_velocity_floor
+
+
+def _switches(law: str) -> np.ndarray:
+    return np.array([NORMAL_LAWS[ContactConfig().model].index, FRICTION_LAWS[law].index, 0], dtype=np.int64)
+
+
+def _limits(floor: float) -> np.ndarray:
+    """Impact speed floor; no fall limits; every touchdown a new impact (the body never leaves the ground)."""
+    return np.array([floor, -math.inf, math.inf, 0.0])
+
+
+def planar_body(
+    body: Body, law: str, p: np.ndarray, slope: float, bristles: float = 0.0
+) -> tuple[PlanarSystem, np.ndarray, np.ndarray]:
+    """(system, y0, modes0): ``body`` at rest on the slope at its static penetration, one planar free body, each
+    foot's bristle deflection (LuGre) ``bristles``."""
+    if body.rolls:
+        centres, radius, inertia = np.zeros((1, 2)), RADIUS, body.inertia_ratio * MASS * RADIUS**2
+        bottom = RADIUS
+    else:
+        a, b, radius = BLOCK_HALF_LENGTH, BLOCK_HALF_HEIGHT, BLOCK_FOOT_RADIUS
+        centres, inertia, bottom = np.array([[-a, radius - b], [a, radius - b]]), MASS * (a * a + b * b) / 3.0, b
+    feet = centres.shape[0]
+    normal, penetration, floor = _contact(radius, MASS * GRAVITY * math.cos(slope) / feet)
+    system = PlanarSystem(
+        body_mass=np.array([MASS]),
+        body_inertia=np.array([inertia]),
+        joint_bodies=np.zeros((0, 2), dtype=np.int64),
+        joint_points=np.zeros((0, 4)),
+        foot_body=np.zeros(feet, dtype=np.int64),
+        foot_center=centres,
+        foot_radius=np.full(feet, radius),
+        foot_partner=np.full(feet, -1, dtype=np.int64),
+        gravity=np.array([GRAVITY * math.sin(slope), -GRAVITY * math.cos(slope)]),
+        baumgarte=np.zeros(2),
+        normal_params=normal,
+        friction_params=p,
+        switches=_switches(law),
+        limits=_limits(floor),
+    )
+    q = np.array([[0.0, bottom - penetration, 0.0]])
+    y0, modes0 = standing_start(system, q, np.zeros((1, 3)), tuple(range(feet)), floor)
+    y0[6 : 6 + feet] = bristles  # after x, y, phi and their rates
+    return system, y0, modes0
+
+
+def spatial_sphere(
+    law: str, p: np.ndarray, slope: float, lateral_speed: float, bristles: float = 0.0
+) -> tuple[SpatialSystem, np.ndarray, np.ndarray]:
+    """(system, y0, modes0): the sphere in space at rest on the slope, or rolling across it at ``lateral_speed``
+    (spinning about the fall line at lateral_speed / R: no slip); its downhill bristle deflection ``bristles``."""
+    inertia = SPHERE.inertia_ratio * MASS * RADIUS**2 * np.eye(3)
+    normal, penetration, floor = _contact(RADIUS, MASS * GRAVITY * math.cos(slope))
+    baumgarte = BaumgarteConfig()
+    system = SpatialSystem(
+        body_mass=np.array([MASS]),
+        body_inertia=inertia[None],
+        body_inertia_inv=np.linalg.inv(inertia)[None],
+        con_type=np.zeros(0, dtype=np.int64),
+        con_bodies=np.zeros((0, 2), dtype=np.int64),
+        con_vecs=np.zeros((0, 7)),
+        con_row=np.zeros(0, dtype=np.int64),
+        foot_body=np.zeros(1, dtype=np.int64),
+        foot_center=np.zeros((1, 3)),
+        foot_axis=np.zeros((1, 3)),  # a sphere
+        foot_radius=np.array([RADIUS]),
+        foot_partner=np.array([-1], dtype=np.int64),
+        gravity=np.array([GRAVITY * math.sin(slope), -GRAVITY * math.cos(slope), 0.0]),
+        baumgarte=np.array([baumgarte.alpha, baumgarte.beta]),
+        normal_params=normal,
+        friction_params=p,
+        switches=_switches(law),
+        limits=_limits(floor),
+    )
+    q = np.array([[0.0, RADIUS - penetration, 0.0, 1.0, 0.0, 0.0, 0.0]])
+    # Euler parameter rates of the spin omega = (lateral_speed / R, 0, 0) at p = (1, 0, 0, 0): pdot = (0, omega / 2)
+    qd = np.array([[0.0, 0.0, lateral_speed, 0.0, 0.5 * lateral_speed / RADIUS, 0.0, 0.0]])
+    y0, modes0 = standing_start(system, q, qd, (0,), floor)
+    y0[14] = bristles  # after r, p and their rates: the foot's x bristle
+    return system, y0, modes0
+
+
+def _final_state(system: PlanarSystem | SpatialSystem, y0: np.ndarray, modes0: np.ndarray) -> np.ndarray:
+    """The state at DURATION; RuntimeError when the engine did not run to it."""
+    run = integrate_model(system, y0, modes0, INTEGRATOR, t_end=DURATION, sample_rate=10.0 / DURATION)
+    if run.status != "walking" or not math.isclose(run.t[-1], DURATION):
+        raise RuntimeError(f"friction check: the run stopped ({run.status}: {run.stop_reason}) at {run.t[-1]:.4g} s")
+    return run.y[-1]
+
+
+def slope_for(body: Body, ratio: float) -> float:
+    """The slope on which ``body`` needs ``ratio`` of its normal force as friction to roll (the block: to stick)."""
+    return math.atan(ratio / body.share)
+
+
+def bristle_length(law: str, p: np.ndarray) -> float:
+    """The slip LuGre's bristles hold before sliding, mu_s / sigma0 [m]; 0 for the laws without state."""
+    return p[MU_S] / p[SIGMA0] if FRICTION_LAWS[law].stateful else 0.0
+
+
+def _band_time(law: str, p: np.ndarray, slip_rate: float) -> float:
+    """The time [s] the law's sliding differs from dry friction, in units of mu: its band crossed at
+    ``slip_rate``; LuGre adds its bristles' loading over their length d (sqrt(2 d / rate)) and damping sigma1 d."""
+    band = regularised_band(law, p) / slip_rate
+    if FRICTION_LAWS[law].stateful:
+        d = bristle_length(law, p)
+        band += p[MU_S] * math.sqrt(2.0 * d / slip_rate) + p[SIGMA1] * d
+    return band
+
+
+def settled_bristles(law: str, ratio: float, p: np.ndarray) -> float:
+    """LuGre's bristle deflection carrying ``ratio`` of the normal force at rest, ratio / sigma0; 0 for the others.
+
+    A body set down on the slope slowly (the bristles loaded with it) starts there. Let go with relaxed bristles
+    (a step load) LuGre breaks away below mu_s: the bristles overshoot (damping ratio about 0.5) while the slip
+    runs past v_s, so g(v) falls towards mu_k during the loading: the rate-dependent break-away of the
+    paper (:mod:`.lugre_checks`), which a step load takes to its limit.
+    """
+    return ratio / p[SIGMA0] if FRICTION_LAWS[law].stateful else 0.0
+
+
+def block_lean(law: str, ratio: float, slope: float) -> float:
+    """How far [m] the block's centre moves as it leans on its compliant feet under the friction's moment.
+
+    The friction ratio N at the feet, b below the centre, tilts the block by phi = ratio N b / (2 k a^2), k the
+    linearised normal stiffness n N_i / delta_i of each foot (a apart from the centre), moving the centre by b phi.
+    """
+    load = MASS * GRAVITY * math.cos(slope)
+    _, penetration, _ = _contact(BLOCK_FOOT_RADIUS, load / 2.0)
+    exponent = 1.0 if ContactConfig().model == "kelvin_voigt" else ContactConfig().exponent
+    stiffness = exponent * (load / 2.0) / penetration
+    a, b = BLOCK_HALF_LENGTH, BLOCK_HALF_HEIGHT
+    return b * ratio * load * b / (2.0 * stiffness * a * a)
+
+
+def rolling_case(law: str, body: Body, scale: float) -> InclineCase:
+    """``body`` on the slope where it needs ROLL_MARGIN of the law's static coefficient: it rolls (sticks)."""
+    p = dry_limit_parameters(scale)
+    mu_s, _ = dry_coefficients(law, p)
+    ratio = ROLL_MARGIN * mu_s
+    slope = slope_for(body, ratio)
+    y = _final_state(*planar_body(body, law, p, slope, settled_bristles(law, ratio, p)))
+    k, T = body.inertia_ratio, DURATION
+    creep = creep_speed(law, ratio, p)
+    slip_distance = creep * T + bristle_length(law, p)
+    if body.rolls:
+        expected, spin, slip = GRAVITY * math.sin(slope) / (1.0 + k), -2.0 * RADIUS * y[2] / T**2, y[3] + y[5] * RADIUS
+        spin_tolerance = 2.0 / (1.0 + k) * slip_distance / T**2
+        lean = 0.0
+    else:
+        expected, spin, slip, spin_tolerance = 0.0, math.nan, y[3], math.nan
+        lean = 2.0 * block_lean(law, ratio, slope) / T**2
+    return InclineCase(
+        law, body.name, "rolls", scale, slope, expected, 2.0 * y[0] / T**2,
+        2.0 * body.share * slip_distance / T**2 + lean, expected if body.rolls else math.nan, spin, spin_tolerance,
+        slip, creep, lean,
+    )  # fmt: skip
+
+
+def sliding_case(law: str, body: Body, scale: float) -> InclineCase:
+    """``body`` on the slope where it would need SLIDE_MARGIN of the law's static coefficient: it slides."""
+    p = dry_limit_parameters(scale)
+    mu_s, mu_k = dry_coefficients(law, p)
+    slope = slope_for(body, SLIDE_MARGIN * mu_s)
+    y = _final_state(*planar_body(body, law, p, slope))
+    s, c, T = math.sin(slope), math.cos(slope), DURATION
+    slip_rate = GRAVITY * (s - mu_s * c / body.share)  # the slowest: the law at its peak
+    tolerance = 2.0 * GRAVITY * c * _band_time(law, p, slip_rate) / T
+    if body.rolls:
+        k = body.inertia_ratio
+        expected_spin, spin, slip = mu_k * GRAVITY * c / k, -2.0 * RADIUS * y[2] / T**2, y[3] + y[5] * RADIUS
+        spin_tolerance = tolerance / k
+    else:
+        expected_spin, spin, slip, spin_tolerance = math.nan, math.nan, y[3], math.nan
+    return InclineCase(
+        law, body.name, "slides", scale, slope, GRAVITY * (s - mu_k * c), 2.0 * y[0] / T**2, tolerance,
+        expected_spin, spin, spin_tolerance, slip, math.nan,
+    )  # fmt: skip
+
+
+GROUP = "Friction dry limits on an incline"
+
+
+def shrinks(base: InclineCase, fine: InclineCase) -> bool:
+    """Whether the finer regularisation's errors are at most half the base's, or within what is not the law's."""
+    floor = fine.allowance + NUMERICAL_FLOOR
+    return all(f <= max(0.5 * b, floor) for b, f in ((base.error, fine.error), (base.spin_error, fine.spin_error)))
+
+
+def incline_row(cases: list[InclineCase]) -> Check:
+    """One report row: a law, a body and a regime at every scale of SCALES (errors as the regularisation shrinks)."""
+    first = cases[0]
+    verb = first.regime if first.body != BLOCK.name else ("sticks" if first.regime == "rolls" else "slides")
+    margin = ROLL_MARGIN if first.regime == "rolls" else SLIDE_MARGIN
+    expected = f"a {first.expected:.4f}"
+    obtained = "a err " + " -> ".join(f"{c.error:.1e}" for c in cases)
+    tolerance = " -> ".join(f"{c.tolerance + NUMERICAL_FLOOR:.1e}" for c in cases)
+    if math.isfinite(first.expected_spin):
+        expected += f", R alpha {first.expected_spin:.4f}"
+        obtained += "; R alpha err " + " -> ".join(f"{c.spin_error:.1e}" for c in cases)
+        tolerance += "; " + " -> ".join(f"{c.spin_tolerance + NUMERICAL_FLOOR:.1e}" for c in cases)
+    scales = " -> ".join(f"{c.scale:g}" for c in cases)
+    passed = all(c.passed for c in cases) and all(shrinks(a, b) for a, b in itertools.pairwise(cases))
+    return Check(
+        GROUP, f"{first.law}: {first.body} {verb} at {margin:g} mu_s ({math.degrees(first.slope):.2f} deg; "
+        f"regularisation x {scales})", expected + " m/s^2", obtained, tolerance, passed,
+    )  # fmt: skip
+
+
+def incline_cases(law: str) -> list[list[InclineCase]]:
+    """Every body rolling (sticking) and sliding under ``law``, each at every scale of SCALES."""
+    return [[case(law, body, scale) for scale in SCALES] for body in BODIES for case in (rolling_case, sliding_case)]
+
+
+def incline_checks() -> list[Check]:
+    """The validation rows: every law, body and regime."""
+    return [incline_row(cases) for law in CHECKED_LAWS for cases in incline_cases(law)]
