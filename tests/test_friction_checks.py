@@ -21,6 +21,7 @@ from biped_sim.studies.friction_checks import (
     regularised_band,
     rolling_case,
     shrinks,
+    spatial_rows,
 )
 from biped_sim.studies.lugre_checks import breakaway_check, presliding_checks, steady_state_check
 
@@ -83,3 +84,10 @@ def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
 def test_lugre_presliding_hysteresis_and_breakaway_follow_the_model() -> None:
     checks = [*presliding_checks(), breakaway_check()]
     assert all(check.passed for check in checks), [check for check in checks if not check.passed]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law", CHECKED_LAWS)
+def test_the_sphere_in_space_is_the_planar_sphere_and_rolls_across(law: str) -> None:
+    rows = spatial_rows(law)
+    assert all(row.passed for row in rows), [row for row in rows if not row.passed]
