@@ -70,6 +70,7 @@ def test_a_case_off_its_tolerance_or_not_shrinking_fails_its_row() -> None:
     assert not incline_row([case, fine]).passed
     off = dataclasses.replace(case, measured=case.expected + 2.0 * case.tolerance + 1e-3)
     assert not off.passed and not incline_row([off]).passed
+    assert not dataclasses.replace(case, slip=1.5 * case.creep).passed  # it must creep at the law's creep speed
     assert incline_row([case]).passed and "\n" not in str(incline_row([case]))
 
 
