@@ -14,6 +14,7 @@ from biped_sim.studies.friction_checks import (
     SCALES,
     SPHERE,
     creep_speed,
+    dead_band,
     dry_coefficients,
     dry_limit_parameters,
     frictionless_row,
@@ -51,6 +52,13 @@ def test_creep_speeds_are_the_closed_forms_of_each_law() -> None:
     }
     for law, speed in closed.items():
         assert creep_speed(law, r, p) == pytest.approx(speed, rel=1e-10, abs=1e-16), law
+
+
+def test_only_ambrosio_has_a_dead_band_and_it_is_v0() -> None:
+    p = dry_limit_parameters(1.0)
+    bands = {law: dead_band(law, p) for law in CHECKED_LAWS}
+    assert bands.pop("ambrosio") == pytest.approx(1e-3, rel=1e-12)
+    assert set(bands.values()) == {0.0}
 
 
 @pytest.mark.parametrize("law", [law for law in CHECKED_LAWS if law != "lugre"])
