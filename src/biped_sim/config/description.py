@@ -9,9 +9,11 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from biped_sim.config.base import NormalModelName, Strict
+from biped_sim.contact.joint_element import ELEMENT_PARAMETERS, JOINT_ELEMENT_LAWS
 
 Vector2 = tuple[float, float]
 SIDES = ("stance", "swing")
+JointElementName = Literal[tuple(JOINT_ELEMENT_LAWS)]  # type: ignore[valid-type]
 MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
 
 
@@ -95,6 +97,39 @@ class StopSpec(Strict):
     )
 
 
+class ElementSpec(Strict):
+    """A passive element of a joint (:mod:`biped_sim.contact.joint_element`): a torque between the joint's child
+    and its parent (or ``against``, another body) from their relative angle theta = child angle - its angle."""
+
+    name: str = Field(..., min_length=1, description="Element name, unique on its joint (dotted keys use it).")
+    law: JointElementName = Field(..., description="The element's law: linear_spring or linear_damper.")
+    stiffness: float | None = Field(
+        None, ge=0, description="A spring's stiffness k [N m/rad]: tau = -k (theta - theta_0)."
+    )
+    rest_angle: float | None = Field(None, description="A spring's rest angle theta_0 [rad] (none given: 0).")
+    damping: float | None = Field(None, ge=0, description="A damper's coefficient c [N m s/rad]: tau = -c thetadot.")
+    against: str | None = Field(
+        None,
+        description="The body the element acts against instead of the joint's parent, usually one hinged at the "
+        "same point (a torso's spring to the other leg); the torque is a couple on the two bodies either way.",
+    )
+
+    @model_validator(mode="after")
+    def _the_law_s_parameters(self) -> ElementSpec:
+        law = JOINT_ELEMENT_LAWS[self.law]
+        for name in law.needs:
+            if getattr(self, name) is None:
+                raise ValueError(f"{name}: a {self.law} needs it")
+        for name in ELEMENT_PARAMETERS:
+            if getattr(self, name) is not None and name not in law.reads:
+                raise ValueError(f"{name}: a {self.law} reads only {', '.join(law.reads)}")
+        return self
+
+    def values(self) -> dict[str, float | None]:
+        """The law's parameters by name (for :func:`~biped_sim.contact.joint_element.element_parameters`)."""
+        return {name: getattr(self, name) for name in ELEMENT_PARAMETERS}
+
+
 class JointSpec(Strict):
     """A revolute joint: the child body's origin at ``at`` in the parent's frame, free about the plane normal."""
 
@@ -104,9 +139,15 @@ class JointSpec(Strict):
     child: str = Field(..., description="Child body.")
     at: Vector2 = Field((0.0, 0.0), description="The child's origin in the parent frame [m].")
     stops: list[StopSpec] = Field(default_factory=list, description="One-sided limits of the relative angle.")
+    elements: list[ElementSpec] = Field(
+        default_factory=list, description="Passive elements (springs, dampers) acting across the joint."
+    )
 
     @model_validator(mode="after")
     def _one_stop_per_side(self) -> JointSpec:
+        names = [e.name for e in self.elements]
+        if len(set(names)) != len(names):
+            raise ValueError("elements: names must be unique on a joint")
         sides = [stop.side for stop in self.stops]
         if len(set(sides)) != len(sides):
             raise ValueError("stops: at most one stop per side")
@@ -171,6 +212,7 @@ class WalkerDescription(Strict):
             ("feet", [f.body for f in self.feet]),
             ("joints", [j.parent for j in self.joints] + [j.child for j in self.joints]),
             ("legs", [b for leg in self.legs for b in leg]),
+            ("joints", [e.against for j in self.joints for e in j.elements if e.against is not None]),
         ):
             if unknown := [b for b in bodies if b not in names]:
                 raise ValueError(f"{field_name}: unknown body {unknown[0]!r}")
@@ -184,7 +226,15 @@ class WalkerDescription(Strict):
             raise ValueError("joints: the bodies must form one tree hanging from the first body")
         self._legs_alike()
         self._latches_on_legs()
+        for joint, element, other in self.joint_elements():
+            if other == joint.child:
+                raise ValueError(f"joints: element {element.name!r} of joint {joint.name!r} acts against its own body")
         return self
+
+    def joint_elements(self) -> list[tuple[JointSpec, ElementSpec, str]]:
+        """Every joint's passive elements with the body each acts against (its ``against``, or the joint's parent),
+        in the joints' order."""
+        return [(j, e, e.against or j.parent) for j in self.joints for e in j.elements]
 
     def _latches_on_legs(self) -> None:
         """A latching stop holds a joint within one leg (a knee): it is released by that leg's foot."""

@@ -272,6 +272,8 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     description = config.walker.description
     if description is None:
         raise ConfigError("walker.description", "walker.kind: description needs walker.description")
+    if description.joint_elements():
+        raise ConfigError("walker.description.joints", "joint elements: compliant dynamics does not take them yet")
     tree = resolve_tree(description)
     length = description.leg_length()
     radius = float(np.max(tree.foot_radius))
