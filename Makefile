@@ -4,10 +4,11 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 CONFIG ?= configs/round_foot_walker.yaml
-# pytest-xdist processes for the fast tier (auto: one per core)
+# pytest-xdist processes for the fast tier (auto: one per core) and for the slow tier's parallel-safe tests
 TEST_WORKERS ?= auto
+SLOW_WORKERS ?= 2
 
-.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
+.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden docs clean
 
 # installed: the package and its test extras; warmed: also the compiled code of the bundled configs' groups
 WARMED := $(VENV)/.warmed
@@ -43,9 +44,12 @@ OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CO
 test-older-cpu: $(WARMED)  ## the fast tier as on an older (AVX2) CPU
 	$(OLDER_CPU) $(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
+# the slow tier in SLOW_WORKERS processes (by module, as the fast tier), then its serial tests alone: those that
+# time themselves or kill processes on deadlines (marked serial)
 validate: $(WARMED)        ## long physics checks: the validation report, then the slow test tier (-m slow)
 	$(BIN)/biped-sim validate
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -n $(SLOW_WORKERS) -m 'slow and not serial'
+	$(BIN)/python -m pytest -q -m 'slow and serial'
 
 bench: $(WARMED)           ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench
@@ -57,14 +61,23 @@ sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its rep
 golden: $(WARMED)          ## re-record tests/data/golden_summaries.json (after a change that moves numbers on purpose)
 	$(BIN)/python -m tests.record_golden
 
+DOCS_STAMP := $(VENV)/.installed-docs
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP) $(WARMED)  ## the documentation site into docs/_build/html (tutorials executed; warnings are errors)
+	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
+
 lint: $(STAMP)
-	$(BIN)/ruff check src tests
-	$(BIN)/ruff format --check src tests
+	$(BIN)/ruff check src tests docs
+	$(BIN)/ruff format --check src tests docs
 	$(BIN)/lint-imports
 
 format: $(STAMP)
-	$(BIN)/ruff format src tests
-	$(BIN)/ruff check --fix src tests
+	$(BIN)/ruff format src tests docs
+	$(BIN)/ruff check --fix src tests docs
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .ruff_cache docs/_build docs/tutorials docs/api/generated

@@ -71,6 +71,12 @@ def one_line_error(stderr: str) -> str:
     return lines[0]
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """The ``serial`` mark (beside pyproject's ``slow``): ``make validate`` runs these slow tests alone, after the
+    others have run in parallel, because they time themselves or kill processes on deadlines."""
+    config.addinivalue_line("markers", "serial: a slow test that make validate runs alone, not beside others")
+
+
 # Modules that share an expensive session fixture (tiny_sweep_dir: eight runs on two worker processes): xdist runs
 # them on one worker, which computes it once; every other module is a unit of its own, so that its module-scoped
 # fixtures are computed once too. pytest-xdist's loadgroup would do this with marks, but groups nothing with

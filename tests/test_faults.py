@@ -495,6 +495,7 @@ def six_runs(tmp_path: Path) -> Iterator[Path]:
 
 
 @pytest.mark.slow
+@pytest.mark.serial
 def test_killing_one_worker_fails_only_its_run_and_resume_runs_it_again(six_runs: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     process, _, frozen = start_sweep(six_runs, out)
@@ -510,6 +511,7 @@ def test_killing_one_worker_fails_only_its_run_and_resume_runs_it_again(six_runs
 
 
 @pytest.mark.slow
+@pytest.mark.serial
 @pytest.mark.parametrize(
     ("stop", "code", "word"),
     [
@@ -548,6 +550,7 @@ def test_an_interrupt_cancels_the_queue_and_leaves_a_consistent_sweep(
 
 
 @pytest.mark.slow
+@pytest.mark.serial
 def test_two_ctrl_c_in_a_row_still_end_with_130(six_runs: Path, tmp_path: Path) -> None:
     """The second arrives once the first has stopped the sweep, as it exits: the exit code stays 130."""
     process, _, _ = start_sweep(six_runs, tmp_path / "out")
@@ -560,6 +563,7 @@ def test_two_ctrl_c_in_a_row_still_end_with_130(six_runs: Path, tmp_path: Path) 
 
 
 @pytest.mark.slow
+@pytest.mark.serial
 def test_workers_die_with_their_parent(six_runs: Path, tmp_path: Path) -> None:
     process, workers, _ = start_sweep(six_runs, tmp_path / "out")
     assert len(workers) == 2
