@@ -23,7 +23,7 @@ import numpy as np
 from biped_sim.config import Config, WalkerDescription
 from biped_sim.config.description import angles_then_rates
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.tree_build import Tree, off_leg_keys, tree_locks, tree_params
+from biped_sim.rigid.tree_build import Tree, tree_locks, tree_params
 from biped_sim.rigid.tree_kernels import (
     PAST,
     RELEASED,
@@ -65,7 +65,7 @@ class RigidWalker:
         self.name, self.description, self.config, self.gravity = name, description, config, gravity
         self.params = tree_params(config, description, gravity)
         self.n_q = int(self.params[0])
-        self.state_names = angles_then_rates(description.state_keys() + off_leg_keys(description))
+        self.state_names = angles_then_rates(description.state_keys())
         self.slope, self.fall_leg_angle = config.ground.slope, config.simulation.fall_leg_angle
         self.leg_length, self.foot_radius = float(self.params[1]), float(self.params[2])
         self.reference_mass = float(sum(self.params[self._row(0, i)] for i in range(self.n_points)))

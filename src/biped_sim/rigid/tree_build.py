@@ -78,14 +78,6 @@ class Tree:
         return w
 
 
-def off_leg_keys(d: WalkerDescription) -> tuple[str, ...]:
-    """The initial-state keys of the bodies off the legs (a torso: torso_angle, torso_rate) that the description's
-    own keys lack."""
-    legs, keys = {b for leg in d.legs for b in leg}, d.state_keys()
-    extra = [f"{b.name}_{what}" for b in d.bodies if b.name not in legs for what in ("angle", "rate")]
-    return tuple(key for key in extra if key not in keys)
-
-
 def _wheel_spacing(d: WalkerDescription) -> float:
     """The angle between a one-body walker's consecutive feet (ConfigError unless they are N >= 2 point feet evenly
     spaced on a circle about the body's origin, counted around it, the centre of mass at the origin)."""
