@@ -7,7 +7,8 @@ Calibrating against measured periods, with a posterior
 data fix each key, and, in the Bayesian mode, a posterior by emcee's ensemble sampler, whose likelihood weighs
 each step by the standard error of its measured mean.
 
-Tiny here: Garcia's simplest walker (rigid: each evaluation walks a few compiled steps in milliseconds), its slope to be recovered from seven step periods with synthetic noise. The worked example of
+Tiny here: Garcia's simplest walker (rigid: each evaluation walks a few compiled steps in milliseconds), its
+slope to be recovered from seven step periods with synthetic noise. The worked example of
 ``docs/experiments.md`` fits the compliant default walker's leg inertia and hip mass the same way (minutes).
 """
 
