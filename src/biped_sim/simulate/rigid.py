@@ -71,7 +71,7 @@ from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, w
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "dissipated_elements", "push_work", "residual")
 
 
-@dataclass
+@dataclass(repr=False)  # RunResult.__repr__: one line, not every array
 class RigidRunResult(RunResult):
     """A rigid simulation and what it measured."""
 

@@ -32,14 +32,16 @@ regularisation:
 Both shrink with the scale (proportionally; LuGre's bristle time as its square root): the check also wants the
 measured error to shrink. The sphere in space, rolling straight down, is the plane problem by symmetry (the
 plane through the fall line and the centre is a mirror plane): it must give the planar sphere's numbers and
-no lateral motion; rolling with a lateral velocity it keeps that velocity and rolls down at 5/7 g sin.
+no lateral motion; rolling with a lateral velocity it keeps that velocity and rolls down at 5/7 g sin. Sliding
+with sidespin on flat ground (a slip along neither axis) its slip keeps its direction until it rolls, at
+v0 - 2/7 s0 whatever the law (:func:`flat_slide_row`): the check of the slip-vector form of the laws in space.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.integrate import quad
@@ -65,6 +67,7 @@ from biped_sim.studies.incline import (
     SPHERE,
     Body,
     block_lean,
+    contact_slip,
     final_state,
     planar_body,
     rolling_angle,
@@ -80,7 +83,11 @@ ROLL_MARGIN, SLIDE_MARGIN = 0.9, 1.1  # needed friction over the dry static coef
 NUMERICAL_FLOOR = 1e-6  # [m/s^2] below this an error is the integrator's, not the law's
 LATERAL_SPEED = 0.5  # [m/s] the sphere in space rolling across the slope
 SPATIAL_AGREEMENT = 1e-8  # [m/s^2] the sphere in space against the planar sphere: two formulations at rtol 1e-10
-CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")
+CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")  # "none": frictionless_row
+FRICTIONLESS_SLOPE = 0.3  # [rad]
+# the sphere sliding on flat ground with sidespin: centre velocity and angular velocity (slope frame), so that its
+# first slip (1.3, 0.3) m/s is along neither axis nor its velocity
+FLAT_VELOCITY, FLAT_SPIN = (1.0, 0.0, 0.5), (2.0, 0.0, 3.0)
 
 
 def dry_limit_parameters(scale: float) -> np.ndarray:
@@ -153,11 +160,11 @@ class InclineCase:
     expected: float
     measured: float
     tolerance: float
-    expected_spin: float  # R alpha in the rolling sense; nan for the block
-    measured_spin: float
-    spin_tolerance: float
-    slip: float  # slip speed at the end [m/s]
-    creep: float  # the law's creep speed at the needed friction (rolling) [m/s]
+    expected_spin: float = math.nan  # R alpha in the rolling sense; nan for the block
+    measured_spin: float = math.nan
+    spin_tolerance: float = math.nan
+    slip: float = math.nan  # rolling (sticking): the slip speed at the end [m/s]
+    creep: float = math.nan  # rolling (sticking): the law's creep speed at the needed friction [m/s]
     allowance: float = 0.0  # the part of the tolerance that is not the regularisation's (the block's lean)
 
     @property
@@ -171,10 +178,15 @@ class InclineCase:
         return abs(self.measured_spin - self.expected_spin) if math.isfinite(self.expected_spin) else 0.0
 
     @property
+    def creeps_as_the_law_says(self) -> bool:
+        """Rolling (sticking): the final slip speed is the law's creep speed (within 1 %, or 1e-6 m/s)."""
+        return not math.isfinite(self.creep) or abs(self.slip - self.creep) <= 0.01 * self.creep + 1e-6
+
+    @property
     def passed(self) -> bool:
-        """Both errors within their tolerances (and the integrator's floor)."""
+        """Both errors within their tolerances (and the integrator's floor), the slip the law's creep."""
         spin_ok = not math.isfinite(self.expected_spin) or self.spin_error <= self.spin_tolerance + NUMERICAL_FLOOR
-        return self.error <= self.tolerance + NUMERICAL_FLOOR and spin_ok
+        return self.error <= self.tolerance + NUMERICAL_FLOOR and spin_ok and self.creeps_as_the_law_says
 
 
 def bristle_length(law: str, p: np.ndarray) -> float:
@@ -203,28 +215,33 @@ def settled_bristles(law: str, ratio: float, p: np.ndarray) -> float:
     return ratio / p[SIGMA0] if FRICTION_LAWS[law].stateful else 0.0
 
 
+def _mean_motion(body: Body, y: np.ndarray) -> dict[str, float]:
+    """The mean accelerations from rest to the final planar state ``y`` (2 x / T^2, 2 R phi / T^2 in the rolling
+    sense) and the contact point's final slip speed."""
+    T = DURATION
+    if not body.rolls:
+        return {"measured": 2.0 * y[0] / T**2, "slip": y[3]}
+    return {"measured": 2.0 * y[0] / T**2, "measured_spin": -2.0 * RADIUS * y[2] / T**2, "slip": y[3] + y[5] * RADIUS}
+
+
 def rolling_case(law: str, body: Body, scale: float) -> InclineCase:
     """``body`` on the slope where it needs ROLL_MARGIN of the law's static coefficient: it rolls (sticks)."""
     p = dry_limit_parameters(scale)
-    mu_s, _ = dry_coefficients(law, p)
-    ratio = ROLL_MARGIN * mu_s
+    ratio = ROLL_MARGIN * dry_coefficients(law, p)[0]
     slope = slope_for(body, ratio)
     y = final_state(*planar_body(body, law, p, slope, settled_bristles(law, ratio, p)))
     k, T = body.inertia_ratio, DURATION
     creep = creep_speed(law, ratio, p)
-    slip_distance = creep * T + bristle_length(law, p)
-    if body.rolls:
-        expected, spin, slip = GRAVITY * math.sin(slope) / (1.0 + k), -2.0 * RADIUS * y[2] / T**2, y[3] + y[5] * RADIUS
-        spin_tolerance = 2.0 / (1.0 + k) * slip_distance / T**2
-        lean = 0.0
-    else:
-        expected, spin, slip, spin_tolerance = 0.0, math.nan, y[3], math.nan
-        lean = 2.0 * block_lean(ratio, slope) / T**2
-    return InclineCase(
-        law, body.name, "rolls", scale, slope, expected, 2.0 * y[0] / T**2,
-        2.0 * body.share * slip_distance / T**2 + lean, expected if body.rolls else math.nan, spin, spin_tolerance,
-        slip, creep, lean,
+    slip_distance = creep * T + bristle_length(law, p)  # the most the contact slips
+    case = InclineCase(
+        law, body.name, "rolls", scale, slope, 0.0, creep=creep, **_mean_motion(body, y),
+        tolerance=2.0 * body.share * slip_distance / T**2,
     )  # fmt: skip
+    if not body.rolls:
+        lean = 2.0 * block_lean(ratio, slope) / T**2
+        return replace(case, tolerance=case.tolerance + lean, allowance=lean)
+    a = GRAVITY * math.sin(slope) / (1.0 + k)
+    return replace(case, expected=a, expected_spin=a, spin_tolerance=2.0 / (1.0 + k) * slip_distance / T**2)
 
 
 def sliding_case(law: str, body: Body, scale: float) -> InclineCase:
@@ -233,19 +250,16 @@ def sliding_case(law: str, body: Body, scale: float) -> InclineCase:
     mu_s, mu_k = dry_coefficients(law, p)
     slope = slope_for(body, SLIDE_MARGIN * mu_s)
     y = final_state(*planar_body(body, law, p, slope))
-    s, c, T = math.sin(slope), math.cos(slope), DURATION
+    s, c = math.sin(slope), math.cos(slope)
     slip_rate = GRAVITY * (s - mu_s * c / body.share)  # the slowest: the law at its peak
-    tolerance = 2.0 * GRAVITY * c * _band_time(law, p, slip_rate) / T
-    if body.rolls:
-        k = body.inertia_ratio
-        expected_spin, spin, slip = mu_k * GRAVITY * c / k, -2.0 * RADIUS * y[2] / T**2, y[3] + y[5] * RADIUS
-        spin_tolerance = tolerance / k
-    else:
-        expected_spin, spin, slip, spin_tolerance = math.nan, math.nan, y[3], math.nan
-    return InclineCase(
-        law, body.name, "slides", scale, slope, GRAVITY * (s - mu_k * c), 2.0 * y[0] / T**2, tolerance,
-        expected_spin, spin, spin_tolerance, slip, math.nan,
-    )  # fmt: skip
+    tolerance = 2.0 * GRAVITY * c * _band_time(law, p, slip_rate) / DURATION
+    motion = _mean_motion(body, y)
+    del motion["slip"]  # no creep to compare it with
+    case = InclineCase(law, body.name, "slides", scale, slope, GRAVITY * (s - mu_k * c), tolerance=tolerance, **motion)
+    if not body.rolls:
+        return case
+    k = body.inertia_ratio
+    return replace(case, expected_spin=mu_k * GRAVITY * c / k, spin_tolerance=tolerance / k)
 
 
 GROUP = "Friction dry limits on an incline"
@@ -277,6 +291,20 @@ def incline_row(cases: list[InclineCase]) -> Check:
     )  # fmt: skip
 
 
+def frictionless_row() -> Check:
+    """Without friction (law "none", its own dry limit) every body slides at g sin(theta) and does not spin."""
+    p, slope = dry_limit_parameters(1.0), FRICTIONLESS_SLOPE
+    expected = GRAVITY * math.sin(slope)
+    worst = 0.0
+    for body in BODIES:
+        motion = _mean_motion(body, final_state(*planar_body(body, "none", p, slope)))
+        worst = max(worst, abs(motion["measured"] - expected), abs(motion.get("measured_spin", 0.0)))
+    return Check(
+        GROUP, f"none: sphere, disc and block slide without spin ({math.degrees(slope):.2f} deg)",
+        f"a {expected:.4f}, R alpha 0 m/s^2", f"max err {worst:.1e}", f"{NUMERICAL_FLOOR:g}", worst <= NUMERICAL_FLOOR,
+    )  # fmt: skip
+
+
 def incline_cases(law: str) -> list[list[InclineCase]]:
     """Every body rolling (sticking) and sliding under ``law``, each at every scale of SCALES."""
     return [[case(law, body, scale) for scale in SCALES] for body in BODIES for case in (rolling_case, sliding_case)]
@@ -285,7 +313,7 @@ def incline_cases(law: str) -> list[list[InclineCase]]:
 def incline_checks() -> list[Check]:
     """The validation rows: every law, body and regime; the sphere in space."""
     planar = [incline_row(cases) for law in CHECKED_LAWS for cases in incline_cases(law)]
-    return planar + [row for law in CHECKED_LAWS for row in spatial_rows(law)]
+    return [frictionless_row(), *planar, *(row for law in CHECKED_LAWS for row in spatial_rows(law))]
 
 
 @dataclass(frozen=True)
@@ -308,7 +336,10 @@ def spatial_case(law: str, regime: str) -> SpatialCase:
     planar = (rolling_case if regime != "slides" else sliding_case)(law, SPHERE, 1.0)
     ratio = ROLL_MARGIN * dry_coefficients(law, p)[0] if regime != "slides" else 0.0
     across = LATERAL_SPEED if regime == "rolls across" else 0.0
-    states = sampled_states(*spatial_sphere(law, p, planar.slope, across, settled_bristles(law, ratio, p)), 400.0)
+    sphere = spatial_sphere(
+        law, p, planar.slope, (0.0, 0.0, across), (across / RADIUS, 0.0, 0.0), settled_bristles(law, ratio, p)
+    )
+    states = sampled_states(*sphere, 400.0)
     y = states[-1]
     a = 2.0 * y[0] / T**2
     if across:
@@ -319,6 +350,43 @@ def spatial_case(law: str, regime: str) -> SpatialCase:
     spin = 2.0 * RADIUS * rolling_angle(states) / T**2
     tilt = max(abs(y[2]), abs(y[4]), abs(y[5]))
     return SpatialCase(law, regime, (planar.measured, planar.measured_spin), (a, spin), tilt, SPATIAL_AGREEMENT)
+
+
+def dead_band(law: str, p: np.ndarray) -> float:
+    """The largest slip speed at which the law gives no friction (Ambrosio: v0; 0 for the others), to rounding."""
+    grid = _speed_grid(p)
+    idle = np.flatnonzero([friction_coefficient(law, v, p) <= 0.0 for v in grid])
+    if idle.size == 0:
+        return 0.0
+    low, high = grid[idle[-1]], grid[min(idle[-1] + 1, grid.size - 1)]
+    for _ in range(60):  # bisect the edge of the band between two grid speeds
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if friction_coefficient(law, middle, p) <= 0.0 else (low, middle)
+    return float(high)
+
+
+def flat_slide_row(law: str) -> Check:
+    """The sphere sliding with sidespin on flat ground: its slip keeps its first direction (any isotropic law
+    decelerates it along itself) until it rolls, at v0 - 2/7 s0 whatever the law (the angular momentum about the
+    contact plane's line under the centre is kept: friction acts in that plane at depth R). A law with a dead
+    band stops slipping anywhere in it, so the final velocity may differ by 2/7 of the band."""
+    p = dry_limit_parameters(1.0)
+    states = sampled_states(*spatial_sphere(law, p, 0.0, FLAT_VELOCITY, FLAT_SPIN), 200.0)
+    slips = np.array([contact_slip(y) for y in states])
+    expected = np.array(FLAT_VELOCITY)[[0, 2]] - SPHERE.share * slips[0]
+    error = float(np.linalg.norm(states[-1][[7, 9]] - expected))
+    sliding = np.linalg.norm(slips, axis=1) > 1e-3 * np.linalg.norm(slips[0])
+    moving, first = slips[sliding], slips[0]
+    cross = moving[:, 0] * first[1] - moving[:, 1] * first[0]  # the 2D cross product: |s| |s0| sin(turn)
+    turned = np.abs(cross) / (np.linalg.norm(moving, axis=1) * np.linalg.norm(first))
+    tolerance = SPHERE.share * dead_band(law, p) + NUMERICAL_FLOOR
+    return Check(
+        "Friction dry limits: the sphere in space",
+        f"{law}: sliding with sidespin on flat ground keeps its slip's direction, then rolls at v0 - 2/7 s0",
+        f"({expected[0]:.4f}, {expected[1]:.4f}) m/s; slip direction fixed",
+        f"error {error:.1e} m/s; slip turns {turned.max():.1e} rad", f"{tolerance:.1e} m/s; 1e-9 rad",
+        error <= tolerance and turned.max() <= 1e-9,
+    )  # fmt: skip
 
 
 def spatial_rows(law: str) -> list[Check]:
@@ -339,8 +407,9 @@ def spatial_rows(law: str) -> list[Check]:
         Check(
             group, f"{law}: rolling across at {LATERAL_SPEED} m/s keeps its lateral speed",
             f"a {across.planar[0]:.4f} m/s^2, lateral speed constant",
-            f"a err {error:.1e}; lateral speed change / T {change:.1e} m/s^2",
-            f"{across.tolerance + NUMERICAL_FLOOR:.1e}; {NUMERICAL_FLOOR:g}",
-            error <= across.tolerance + NUMERICAL_FLOOR and change <= NUMERICAL_FLOOR,
+            f"a err {error:.1e}; lateral speed change / T {change:.1e} m/s^2, |z - w0 T| {across.lateral:.1e} m",
+            f"{across.tolerance + NUMERICAL_FLOOR:.1e}; {NUMERICAL_FLOOR:g}; 1e-9",
+            error <= across.tolerance + NUMERICAL_FLOOR and change <= NUMERICAL_FLOOR and across.lateral <= 1e-9,
         ),
+        flat_slide_row(law),
     ]  # fmt: skip
