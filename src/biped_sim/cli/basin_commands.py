@@ -1,4 +1,4 @@
-"""``biped-sim basin``: the basin of attraction of a walker over two initial-state keys."""
+"""``biped-sim basin``: the basin of attraction of a walker over two initial-state keys (or one and a parameter)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,10 @@ from rich.console import Console
 from biped_sim.cli.common import ConfigArgument, SetOption, app, load, user_errors
 from biped_sim.io.output import check_writable_dir
 
-AxisOption = "KEY=LO:HI:N, KEY a simulation.initial key (e.g. stance_angle=0:0.4:41)."
+AxisOption = (
+    "KEY=LO:HI:N, KEY a simulation.initial key (e.g. stance_angle=0:0.4:41) or, on one axis, a named parameter "
+    "(walker.parameters.NAME)."
+)
 
 
 @app.command("basin")

@@ -11,6 +11,12 @@ a tolerance (``--tolerance``, default ``CONVERGED_TOLERANCE``; max over the four
 period-1 gait: the rigid walker's
 post-impact fixed point, the compliant walker's touchdown state. A cell that falls records after how many steps.
 
+One axis may be a named parameter of the walker (``walker.parameters.NAME``, a preset's field or a described
+walker's parameter) instead of an initial-state key: the grid is then the basin's slice along the other key for
+each value of the parameter, every cell walked by the walker with that value, and a cell converges when it
+ends near the gait of its own parameter value (each value's gait found from the config's start, as the
+config's own; a value with none has no converged cells). Two parameters are a sweep, not a basin.
+
 The slice: for the simplest walker over stance_angle and stance_rate, the swing leg starts as a heel strike
 leaves it (Garcia's relations phi = 2 theta, phidot = thetadot (1 - cos 2 theta), i.e. swing_angle = -theta,
 swing_rate = thetadot cos 2 theta), so the map is Schwab and Wisse's post-impact section. For every other
@@ -50,6 +56,7 @@ from biped_sim.studies.limit_cycle import limit_cycle
 from biped_sim.studies.tasks import results_as_done
 
 KEY_PREFIX = "simulation.initial."
+PARAMETER_PREFIX = "walker.parameters."
 DEFAULT_STEPS = 30
 CONVERGED_TOLERANCE = 1e-4  # rad and rad/s (the simplest walker: nondimensional)
 FELL, WALKS, CONVERGED = 0, 1, 2
@@ -60,7 +67,8 @@ STEP_TIME_ALLOWANCE = 10.0  # a compliant cell's t_end: this many sqrt(l / g) pe
 
 @dataclass(frozen=True)
 class GridAxis:
-    """One axis of the grid: an initial-state key and N evenly spaced values from LO to HI."""
+    """One axis of the grid: an initial-state key (or ``walker.parameters.NAME``) and N evenly spaced values from LO
+    to HI."""
 
     key: str
     lo: float
@@ -71,15 +79,28 @@ class GridAxis:
     def values(self) -> np.ndarray:
         return np.linspace(self.lo, self.hi, self.n)
 
+    @property
+    def is_parameter(self) -> bool:
+        """Whether the axis is a named parameter of the walker (not an initial-state key)."""
+        return self.key.startswith(PARAMETER_PREFIX)
+
+    @property
+    def config_key(self) -> str:
+        """The axis's full dotted config key."""
+        return self.key if self.is_parameter else KEY_PREFIX + self.key
+
 
 def parse_axis(name: str, text: str) -> GridAxis:
-    """``KEY=LO:HI:N`` (KEY a simulation.initial key, with or without the prefix); ArgumentError naming ``name``
-    (the axis: ``x`` or ``y``)."""
+    """``KEY=LO:HI:N`` (KEY a simulation.initial key, with or without the prefix, or ``walker.parameters.NAME``);
+    ArgumentError naming ``name`` (the axis: ``x`` or ``y``)."""
     key, sep, rest = text.partition("=")
     key = key.strip().removeprefix(KEY_PREFIX)
-    if not sep or not key.endswith(("_angle", "_rate")):
+    parameter = key.startswith(PARAMETER_PREFIX) and len(key) > len(PARAMETER_PREFIX)
+    if not sep or not (parameter or key.endswith(("_angle", "_rate"))):
         raise ArgumentError(
-            name, f"expected KEY=LO:HI:N with KEY a key of {KEY_PREFIX[:-1]} ({', '.join(LEG_KEYS)}, ...)"
+            name,
+            f"expected KEY=LO:HI:N with KEY a key of {KEY_PREFIX[:-1]} ({', '.join(LEG_KEYS)}, ...) or "
+            f"{PARAMETER_PREFIX}NAME",
         )
     parts = rest.split(":")
     try:
@@ -105,18 +126,43 @@ class BasinSpec:
         require_study(self.config.walker.kind, "basin", "a basin walks the walker from a grid of starts")
         if self.x.key == self.y.key:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
+        if self.x.is_parameter and self.y.is_parameter:
+            raise ArgumentError("y", "two parameters make a sweep (biped-sim sweep): one axis is an initial-state key")
         if isinstance(self.config.simulation.initial, str):
             raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its keys")
-        for axis, key in (("x", self.x.key), ("y", self.y.key)):
-            if key not in self.config.initial_keys():
+        for axis, grid in (("x", self.x), ("y", self.y)):
+            if grid.is_parameter:
+                self._check_parameter(axis, grid)
+            elif grid.key not in self.config.initial_keys():
                 raise ArgumentError(
-                    axis, f"{key} is not a key of simulation.initial ({', '.join(self.config.initial_keys())})"
+                    axis, f"{grid.key} is not a key of simulation.initial ({', '.join(self.config.initial_keys())})"
                 )
         check_run_count(self.x.n * self.y.n, "y", "cells (x times y values)")
         if not 1 <= self.steps <= MAX_STEPS:
             raise ArgumentError("steps", f"must be from 1 to {MAX_STEPS:.0e}")
         if not (math.isfinite(self.tolerance) and self.tolerance > 0):
             raise ArgumentError("tolerance", "must be a positive number")
+
+    def _check_parameter(self, axis: str, grid: GridAxis) -> None:
+        """ArgumentError naming ``axis`` when the walker has no such parameter or refuses an end of its range."""
+        for value in (grid.lo, grid.hi):
+            try:
+                derive(self.config, {grid.key: value})
+            except ConfigError as exc:
+                raise ArgumentError(axis, f"{grid.key}={value:g}: {exc}") from None
+
+    @property
+    def parameter_axis(self) -> GridAxis | None:
+        """The axis that is a named parameter, if one is."""
+        return next((grid for grid in (self.x, self.y) if grid.is_parameter), None)
+
+    def cell_config(self, x_value: float, y_value: float) -> Config:
+        """The config a cell's walker has: the config's own, or with the parameter axis's value."""
+        if self.x.is_parameter:
+            return derive(self.config, {self.x.key: float(x_value)})
+        if self.y.is_parameter:
+            return derive(self.config, {self.y.key: float(y_value)})
+        return self.config
 
     @property
     def garcia_section(self) -> bool:
@@ -135,7 +181,9 @@ class BasinSpec:
         """The initial-state keys of the cell at (x_value, y_value)."""
         initial = self.config.simulation.initial
         legs = dict(initial) if isinstance(initial, dict) else initial.model_dump()  # type: ignore[union-attr]
-        legs[self.x.key], legs[self.y.key] = float(x_value), float(y_value)
+        for grid, value in ((self.x, x_value), (self.y, y_value)):
+            if not grid.is_parameter:
+                legs[grid.key] = float(value)
         if self.garcia_section:
             theta, rate = legs["stance_angle"], legs["stance_rate"]
             legs["swing_angle"], legs["swing_rate"] = -theta, rate * math.cos(2.0 * theta)
@@ -148,33 +196,47 @@ class RowTask:
 
     spec: BasinSpec
     row: int
-    target: dict[str, float] | None  # the gait's state that converged cells end near (None: no gait found)
+    targets: list[dict[str, float] | None]  # per column, the gait state converged cells end near (None: no gait)
 
 
 def _close(legs: dict[str, float], target: dict[str, float] | None, tolerance: float) -> bool:
     return target is not None and max(abs(legs[k] - target[k]) for k in target) <= tolerance
 
 
-def _rigid_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:
-    walker = rigid_walker(task.spec.config)
-    starts = np.array([walker.state_from_legs(legs) for legs in cells])
-    walked = walk_starts(walker, starts, task.spec.steps)
-    outcome = []
-    for status, last in zip(walked.status, walked.last, strict=True):
-        if status != STRIKE:
-            outcome.append(FELL)
+def _rigid_row(task: RowTask, cells: list[tuple[Config, dict[str, float]]]) -> tuple[list[int], list[int]]:
+    """Each cell walked by the rigid step map: one batch per walker (the row's, or each cell's own parameter)."""
+    outcome, taken = [], []
+    for config, batch in _batches(cells):
+        walker = rigid_walker(config)
+        walked = walk_starts(walker, np.array([walker.state_from_legs(legs) for legs in batch]), task.spec.steps)
+        for status, last in zip(walked.status, walked.last, strict=True):
+            target = task.targets[len(outcome)]
+            if status != STRIKE:
+                outcome.append(FELL)
+            else:
+                outcome.append(CONVERGED if _close(walker.legs_state(last), target, task.spec.tolerance) else WALKS)
+        taken += [int(s) for s in walked.steps]
+    return outcome, taken
+
+
+def _batches(cells: list[tuple[Config, dict[str, float]]]) -> list[tuple[Config, list[dict[str, float]]]]:
+    """The cells in runs of one config, in order."""
+    batches: list[tuple[Config, list[dict[str, float]]]] = []
+    for config, legs in cells:
+        if batches and batches[-1][0] is config:
+            batches[-1][1].append(legs)
         else:
-            outcome.append(CONVERGED if _close(walker.legs_state(last), task.target, task.spec.tolerance) else WALKS)
-    return outcome, [int(s) for s in walked.steps]
+            batches.append((config, [legs]))
+    return batches
 
 
-def _compliant_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[int], list[int]]:
+def _compliant_row(task: RowTask, cells: list[tuple[Config, dict[str, float]]]) -> tuple[list[int], list[int]]:
     from biped_sim.simulate import simulate  # the compliant engine: imported only by workers that need it
 
-    config, steps = task.spec.config, task.spec.steps
-    t_end = STEP_TIME_ALLOWANCE * steps * math.sqrt(config.walker.leg_length / config.gravity)
+    steps = task.spec.steps
     outcome, taken = [], []
-    for legs in cells:
+    for config, legs in cells:
+        t_end = STEP_TIME_ALLOWANCE * steps * math.sqrt(config.walker.leg_length / config.gravity)
         try:
             result = simulate(derive(config, {"simulation.initial": legs, "simulation.max_steps": steps,
                                               "simulation.t_end": t_end}))  # fmt: skip
@@ -188,7 +250,7 @@ def _compliant_row(task: RowTask, cells: list[dict[str, float]]) -> tuple[list[i
         if result.status != "walking" or strikes < steps:
             outcome.append(FELL)
         else:
-            outcome.append(CONVERGED if _close(last, task.target, task.spec.tolerance) else WALKS)
+            outcome.append(CONVERGED if _close(last, task.targets[len(outcome)], task.spec.tolerance) else WALKS)
         taken.append(min(strikes, steps))
     return outcome, taken
 
@@ -197,7 +259,8 @@ def basin_row(task: RowTask) -> dict[str, Any]:
     """Walk every cell of one row (runs in a worker): {'row', 'outcome', 'steps'}."""
     spec = task.spec
     y_value = spec.y.values[task.row]
-    cells = [spec.cell_legs(x_value, y_value) for x_value in spec.x.values]
+    row_config = spec.cell_config(spec.x.lo, y_value) if not spec.x.is_parameter else None
+    cells = [(row_config or spec.cell_config(x, y_value), spec.cell_legs(x, y_value)) for x in spec.x.values]
     row = _rigid_row if spec.config.dynamics == "rigid" else _compliant_row
     outcome, steps = row(task, cells)
     return {"row": task.row, "outcome": outcome, "steps": steps}
@@ -214,6 +277,7 @@ class Basin:
     wall_time_s: float = 0.0
     rows_reused: int = 0
     notes: list[str] = field(default_factory=list)
+    parameter_gaits: list[dict[str, float] | None] = field(default_factory=list)  # per value of a parameter axis
 
     @property
     def fixed_point(self) -> dict[str, float] | None:
@@ -233,6 +297,7 @@ class Basin:
             "fraction_converged": float(np.count_nonzero(self.outcome == CONVERGED)) / n_cells,
             "converged_tolerance": self.spec.tolerance,
             "fixed_point": self.fixed_point,
+            "parameter_gaits": self.parameter_gaits,
             "wall_time_s": self.wall_time_s,
             "rows_reused": self.rows_reused,
             "notes": self.notes,
@@ -246,12 +311,38 @@ def gait_target(spec: BasinSpec, cycle: LimitCycle | None) -> dict[str, float] |
     return cycle.fixed_point if spec.config.dynamics == "rigid" else cycle.touchdown
 
 
-def find_gait(spec: BasinSpec) -> LimitCycle | None:
+def find_gait(config: Config) -> LimitCycle | None:
     """The period-1 gait from the config's start (None when there is none to find)."""
     try:
-        return limit_cycle(spec.config)
+        return limit_cycle(config)
     except (ConfigError, StepFailedError):
         return None
+
+
+def _parameter_gait(task: tuple[BasinSpec, int]) -> tuple[int, dict[str, float] | None]:
+    """(i, the gait state of the parameter axis's i-th value) (runs in a worker)."""
+    spec, i = task
+    grid = spec.parameter_axis
+    assert grid is not None
+    return i, gait_target(spec, find_gait(derive(spec.config, {grid.key: float(grid.values[i])})))
+
+
+def parameter_gaits(spec: BasinSpec, executor: Executor | None) -> list[dict[str, float] | None]:
+    """The gait state of each value of the parameter axis, on ``executor`` ([] without a parameter axis)."""
+    grid = spec.parameter_axis
+    if grid is None:
+        return []
+    gaits: list[dict[str, float] | None] = [None] * grid.n
+    for i, gait in results_as_done(_parameter_gait, [(spec, i) for i in range(grid.n)], executor):
+        gaits[i] = gait
+    return gaits
+
+
+def column_targets(spec: BasinSpec, row: int, target: dict[str, float] | None, gaits: list[Any]) -> list[Any]:
+    """The gait each cell of ``row`` converges to: its parameter value's, or the config's."""
+    if spec.x.is_parameter:
+        return list(gaits)
+    return [gaits[row] if spec.y.is_parameter else target] * spec.x.n
 
 
 def _row_path(out_dir: Path, row: int) -> Path:
@@ -273,10 +364,11 @@ def finished_rows(spec: BasinSpec, out_dir: Path) -> dict[int, dict[str, Any]]:
 
 
 def _rows(
-    spec: BasinSpec, pending: list[int], target: dict[str, float] | None, executor: Executor | None
+    spec: BasinSpec, pending: list[int], target: dict[str, float] | None, gaits: list[Any], executor: Executor | None
 ) -> Iterator[dict[str, Any]]:
     """The finished rows' records as they come: from ``executor``, or computed here when it is None."""
-    return results_as_done(basin_row, [RowTask(spec, row, target) for row in pending], executor)
+    tasks = [RowTask(spec, row, column_targets(spec, row, target, gaits)) for row in pending]
+    return results_as_done(basin_row, tasks, executor)
 
 
 def map_basin(
@@ -289,13 +381,15 @@ def map_basin(
     finished rows are recorded in ``out_dir/cells`` as they come and reused by a rerun.
     ``progress(done, total)`` after each row."""
     clock = time.perf_counter()
-    cycle = find_gait(spec)
+    cycle = find_gait(spec.config)
     target = gait_target(spec, cycle)
     done = finished_rows(spec, out_dir) if out_dir is not None else {}
+    pending = [row for row in range(spec.y.n) if row not in done]
+    gaits = parameter_gaits(spec, executor)
     reused = len(done)
     if out_dir is not None:
         (out_dir / CELLS_DIR).mkdir(parents=True, exist_ok=True)
-    for result in _rows(spec, [row for row in range(spec.y.n) if row not in done], target, executor):
+    for result in _rows(spec, pending, target, gaits, executor):
         record = {"key": spec.key(), **result}
         if out_dir is not None:
             write_json_atomic(_row_path(out_dir, record["row"]), record)
@@ -311,9 +405,11 @@ def map_basin(
         if spec.garcia_section
         else "slice: the two keys vary, the other initial keys as configured",
     ]
-    if target is None:
+    if (grid := spec.parameter_axis) is not None:
+        notes.append(f"each value of {grid.key} converges to its own gait, found from the config's start")
+    if target is None and grid is None:
         notes.append("no period-1 gait found from the config's start: no cell counts as converged")
-    return Basin(spec, outcome, steps, cycle, time.perf_counter() - clock, reused, notes)
+    return Basin(spec, outcome, steps, cycle, time.perf_counter() - clock, reused, notes, gaits)
 
 
 def write_basin(basin: Basin, out_dir: Path) -> list[Path]:
@@ -330,14 +426,15 @@ def write_basin(basin: Basin, out_dir: Path) -> list[Path]:
             f.create_dataset("y", data=spec.y.values)
             f.create_dataset("outcome", data=basin.outcome)
             f.create_dataset("steps", data=basin.steps)
-            f["x"].attrs["key"] = KEY_PREFIX + spec.x.key
-            f["y"].attrs["key"] = KEY_PREFIX + spec.y.key
+            f["x"].attrs["key"] = spec.x.config_key
+            f["y"].attrs["key"] = spec.y.config_key
             f["outcome"].attrs["codes"] = json.dumps(dict(enumerate(OUTCOMES)))
             for name, value in (doc["fixed_point"] or {}).items():
                 f.attrs[f"fixed_point_{name}"] = value
             for name in ("n_cells", "fraction_walking", "fraction_converged", "converged_tolerance", "steps"):
                 f.attrs[name] = doc[name]
             f.attrs["notes"] = json.dumps(basin.notes)
+            f.attrs["parameter_gaits"] = json.dumps(basin.parameter_gaits)
             f.attrs["config"] = json.dumps(spec.config.model_dump(mode="json"), sort_keys=True)
             f.attrs["config_hash"] = spec.config.hash()
             for name, value in provenance().items():

@@ -25,7 +25,9 @@ from biped_sim.simulate import simulate
 from biped_sim.studies.checks import CONFIGS, Check, close, simplest_config
 from biped_sim.studies.continuation import period_doubling_slope
 from biped_sim.studies.drop_test import drop_test_table
+from biped_sim.studies.friction_checks import incline_checks
 from biped_sim.studies.garcia import simplest_variational_jacobian
+from biped_sim.studies.lugre_checks import lugre_checks
 from biped_sim.studies.uncertainty.checks import uncertainty_checks
 from biped_sim.studies.validation_studies import (
     basin_checks,
@@ -245,6 +247,8 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         ("rigid physics", rigid_physics_checks),
         ("simplest walker's basin", basin_checks),
         ("contact laws", contact_law_checks),
+        ("friction laws' dry limits on an incline", incline_checks),
+        ("LuGre against Canudas de Wit et al. 1995", lugre_checks),
         ("energy balance", energy_balance_checks),
         ("fit recovery", fit_recovery_checks),
         ("uncertainty: Sobol indices, mean period, rimless wheel MFPT", uncertainty_checks),
@@ -314,6 +318,10 @@ def write_report(checks: list[Check], extras: dict[str, Any], refs: dict[str, An
         lines.append(f"* {refs[key]['citation']}")
     lines.append(f"* Period-doubling slope: {refs['garcia1998']['period_doubling']['where']}")
     lines.append(f"* Fixed point: {refs['garcia1998']['fixed_point']['where']}")
+    lines.append(
+        "* LuGre: C. Canudas de Wit, H. Olsson, K. J. Astrom, P. Lischinsky, IEEE TAC 40(3) (1995) 419-425, Table I; "
+        "the set-ups as reconstructed in github.com/auralius/LuGre (demo1.m), checked against analytic properties."
+    )
     lines.append(
         "* Rimless wheel: analytic (MODEL.md 8); its multiplier cos^2(2 alpha) follows from the same energy balance."
     )
