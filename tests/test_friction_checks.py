@@ -14,8 +14,10 @@ from biped_sim.studies.friction_checks import (
     SCALES,
     SPHERE,
     creep_speed,
+    dead_band,
     dry_coefficients,
     dry_limit_parameters,
+    frictionless_row,
     incline_cases,
     incline_row,
     regularised_band,
@@ -23,7 +25,7 @@ from biped_sim.studies.friction_checks import (
     shrinks,
     spatial_rows,
 )
-from biped_sim.studies.lugre_checks import breakaway_check, presliding_checks, steady_state_check
+from biped_sim.studies.lugre_checks import breakaway_check, lag_check, presliding_checks, steady_state_check
 
 STICTION = {"bengisu_akay", "brown_mcphee", "lugre"}  # the laws whose dry limit has mu_s > mu_k
 
@@ -52,6 +54,13 @@ def test_creep_speeds_are_the_closed_forms_of_each_law() -> None:
         assert creep_speed(law, r, p) == pytest.approx(speed, rel=1e-10, abs=1e-16), law
 
 
+def test_only_ambrosio_has_a_dead_band_and_it_is_v0() -> None:
+    p = dry_limit_parameters(1.0)
+    bands = {law: dead_band(law, p) for law in CHECKED_LAWS}
+    assert bands.pop("ambrosio") == pytest.approx(1e-3, rel=1e-12)
+    assert set(bands.values()) == {0.0}
+
+
 @pytest.mark.parametrize("law", [law for law in CHECKED_LAWS if law != "lugre"])
 def test_the_regularised_band_shrinks_with_the_regularisation(law: str) -> None:
     base, fine = (regularised_band(law, dry_limit_parameters(scale)) for scale in SCALES)
@@ -74,6 +83,11 @@ def test_a_case_off_its_tolerance_or_not_shrinking_fails_its_row() -> None:
     assert incline_row([case]).passed and "\n" not in str(incline_row([case]))
 
 
+def test_without_friction_every_body_slides_at_g_sin_without_spin() -> None:
+    row = frictionless_row()
+    assert row.passed, row
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("law", CHECKED_LAWS)
 def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
@@ -82,8 +96,8 @@ def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
 
 
 @pytest.mark.slow
-def test_lugre_presliding_hysteresis_and_breakaway_follow_the_model() -> None:
-    checks = [*presliding_checks(), breakaway_check()]
+def test_lugre_presliding_hysteresis_breakaway_and_lag_follow_the_model() -> None:
+    checks = [*presliding_checks(), breakaway_check(), lag_check()]
     assert all(check.passed for check in checks), [check for check in checks if not check.passed]
 
 

@@ -32,7 +32,9 @@ regularisation:
 Both shrink with the scale (proportionally; LuGre's bristle time as its square root): the check also wants the
 measured error to shrink. The sphere in space, rolling straight down, is the plane problem by symmetry (the
 plane through the fall line and the centre is a mirror plane): it must give the planar sphere's numbers and
-no lateral motion; rolling with a lateral velocity it keeps that velocity and rolls down at 5/7 g sin.
+no lateral motion; rolling with a lateral velocity it keeps that velocity and rolls down at 5/7 g sin. Sliding
+with sidespin on flat ground (a slip along neither axis) its slip keeps its direction until it rolls, at
+v0 - 2/7 s0 whatever the law (:func:`flat_slide_row`): the check of the slip-vector form of the laws in space.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ from biped_sim.studies.incline import (
     SPHERE,
     Body,
     block_lean,
+    contact_slip,
     final_state,
     planar_body,
     rolling_angle,
@@ -80,7 +83,11 @@ ROLL_MARGIN, SLIDE_MARGIN = 0.9, 1.1  # needed friction over the dry static coef
 NUMERICAL_FLOOR = 1e-6  # [m/s^2] below this an error is the integrator's, not the law's
 LATERAL_SPEED = 0.5  # [m/s] the sphere in space rolling across the slope
 SPATIAL_AGREEMENT = 1e-8  # [m/s^2] the sphere in space against the planar sphere: two formulations at rtol 1e-10
-CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")
+CHECKED_LAWS = tuple(name for name in FRICTION_LAWS if name != "none")  # "none": frictionless_row
+FRICTIONLESS_SLOPE = 0.3  # [rad]
+# the sphere sliding on flat ground with sidespin: centre velocity and angular velocity (slope frame), so that its
+# first slip (1.3, 0.3) m/s is along neither axis nor its velocity
+FLAT_VELOCITY, FLAT_SPIN = (1.0, 0.0, 0.5), (2.0, 0.0, 3.0)
 
 
 def dry_limit_parameters(scale: float) -> np.ndarray:
@@ -284,6 +291,20 @@ def incline_row(cases: list[InclineCase]) -> Check:
     )  # fmt: skip
 
 
+def frictionless_row() -> Check:
+    """Without friction (law "none", its own dry limit) every body slides at g sin(theta) and does not spin."""
+    p, slope = dry_limit_parameters(1.0), FRICTIONLESS_SLOPE
+    expected = GRAVITY * math.sin(slope)
+    worst = 0.0
+    for body in BODIES:
+        motion = _mean_motion(body, final_state(*planar_body(body, "none", p, slope)))
+        worst = max(worst, abs(motion["measured"] - expected), abs(motion.get("measured_spin", 0.0)))
+    return Check(
+        GROUP, f"none: sphere, disc and block slide without spin ({math.degrees(slope):.2f} deg)",
+        f"a {expected:.4f}, R alpha 0 m/s^2", f"max err {worst:.1e}", f"{NUMERICAL_FLOOR:g}", worst <= NUMERICAL_FLOOR,
+    )  # fmt: skip
+
+
 def incline_cases(law: str) -> list[list[InclineCase]]:
     """Every body rolling (sticking) and sliding under ``law``, each at every scale of SCALES."""
     return [[case(law, body, scale) for scale in SCALES] for body in BODIES for case in (rolling_case, sliding_case)]
@@ -292,7 +313,7 @@ def incline_cases(law: str) -> list[list[InclineCase]]:
 def incline_checks() -> list[Check]:
     """The validation rows: every law, body and regime; the sphere in space."""
     planar = [incline_row(cases) for law in CHECKED_LAWS for cases in incline_cases(law)]
-    return planar + [row for law in CHECKED_LAWS for row in spatial_rows(law)]
+    return [frictionless_row(), *planar, *(row for law in CHECKED_LAWS for row in spatial_rows(law))]
 
 
 @dataclass(frozen=True)
@@ -315,7 +336,10 @@ def spatial_case(law: str, regime: str) -> SpatialCase:
     planar = (rolling_case if regime != "slides" else sliding_case)(law, SPHERE, 1.0)
     ratio = ROLL_MARGIN * dry_coefficients(law, p)[0] if regime != "slides" else 0.0
     across = LATERAL_SPEED if regime == "rolls across" else 0.0
-    states = sampled_states(*spatial_sphere(law, p, planar.slope, across, settled_bristles(law, ratio, p)), 400.0)
+    sphere = spatial_sphere(
+        law, p, planar.slope, (0.0, 0.0, across), (across / RADIUS, 0.0, 0.0), settled_bristles(law, ratio, p)
+    )
+    states = sampled_states(*sphere, 400.0)
     y = states[-1]
     a = 2.0 * y[0] / T**2
     if across:
@@ -326,6 +350,43 @@ def spatial_case(law: str, regime: str) -> SpatialCase:
     spin = 2.0 * RADIUS * rolling_angle(states) / T**2
     tilt = max(abs(y[2]), abs(y[4]), abs(y[5]))
     return SpatialCase(law, regime, (planar.measured, planar.measured_spin), (a, spin), tilt, SPATIAL_AGREEMENT)
+
+
+def dead_band(law: str, p: np.ndarray) -> float:
+    """The largest slip speed at which the law gives no friction (Ambrosio: v0; 0 for the others), to rounding."""
+    grid = _speed_grid(p)
+    idle = np.flatnonzero([friction_coefficient(law, v, p) <= 0.0 for v in grid])
+    if idle.size == 0:
+        return 0.0
+    low, high = grid[idle[-1]], grid[min(idle[-1] + 1, grid.size - 1)]
+    for _ in range(60):  # bisect the edge of the band between two grid speeds
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if friction_coefficient(law, middle, p) <= 0.0 else (low, middle)
+    return float(high)
+
+
+def flat_slide_row(law: str) -> Check:
+    """The sphere sliding with sidespin on flat ground: its slip keeps its first direction (any isotropic law
+    decelerates it along itself) until it rolls, at v0 - 2/7 s0 whatever the law (the angular momentum about the
+    contact plane's line under the centre is kept: friction acts in that plane at depth R). A law with a dead
+    band stops slipping anywhere in it, so the final velocity may differ by 2/7 of the band."""
+    p = dry_limit_parameters(1.0)
+    states = sampled_states(*spatial_sphere(law, p, 0.0, FLAT_VELOCITY, FLAT_SPIN), 200.0)
+    slips = np.array([contact_slip(y) for y in states])
+    expected = np.array(FLAT_VELOCITY)[[0, 2]] - SPHERE.share * slips[0]
+    error = float(np.linalg.norm(states[-1][[7, 9]] - expected))
+    sliding = np.linalg.norm(slips, axis=1) > 1e-3 * np.linalg.norm(slips[0])
+    moving, first = slips[sliding], slips[0]
+    cross = moving[:, 0] * first[1] - moving[:, 1] * first[0]  # the 2D cross product: |s| |s0| sin(turn)
+    turned = np.abs(cross) / (np.linalg.norm(moving, axis=1) * np.linalg.norm(first))
+    tolerance = SPHERE.share * dead_band(law, p) + NUMERICAL_FLOOR
+    return Check(
+        "Friction dry limits: the sphere in space",
+        f"{law}: sliding with sidespin on flat ground keeps its slip's direction, then rolls at v0 - 2/7 s0",
+        f"({expected[0]:.4f}, {expected[1]:.4f}) m/s; slip direction fixed",
+        f"error {error:.1e} m/s; slip turns {turned.max():.1e} rad", f"{tolerance:.1e} m/s; 1e-9 rad",
+        error <= tolerance and turned.max() <= 1e-9,
+    )  # fmt: skip
 
 
 def spatial_rows(law: str) -> list[Check]:
@@ -350,4 +411,5 @@ def spatial_rows(law: str) -> list[Check]:
             f"{across.tolerance + NUMERICAL_FLOOR:.1e}; {NUMERICAL_FLOOR:g}; 1e-9",
             error <= across.tolerance + NUMERICAL_FLOOR and change <= NUMERICAL_FLOOR and across.lateral <= 1e-9,
         ),
+        flat_slide_row(law),
     ]  # fmt: skip

@@ -105,10 +105,15 @@ def planar_body(
 
 
 def spatial_sphere(
-    law: str, p: np.ndarray, slope: float, lateral_speed: float, bristles: float = 0.0
+    law: str,
+    p: np.ndarray,
+    slope: float,
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    spin: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    bristles: float = 0.0,
 ) -> tuple[SpatialSystem, np.ndarray, np.ndarray]:
-    """(system, y0, modes0): the sphere in space at rest on the slope, or rolling across it at ``lateral_speed``
-    (spinning about the fall line at lateral_speed / R: no slip); its downhill bristle deflection ``bristles``."""
+    """(system, y0, modes0): the sphere in space on the slope with the centre's ``velocity`` and the angular
+    velocity ``spin`` (slope frame), its downhill bristle deflection ``bristles``."""
     inertia = SPHERE.inertia_ratio * MASS * RADIUS**2 * np.eye(3)
     normal, penetration, floor = default_contact(RADIUS, MASS * GRAVITY * math.cos(slope))
     baumgarte = BaumgarteConfig()
@@ -133,8 +138,8 @@ def spatial_sphere(
         limits=_limits(floor),
     )
     q = np.array([[0.0, RADIUS - penetration, 0.0, 1.0, 0.0, 0.0, 0.0]])
-    # Euler parameter rates of the spin omega = (lateral_speed / R, 0, 0) at p = (1, 0, 0, 0): pdot = (0, omega / 2)
-    qd = np.array([[0.0, 0.0, lateral_speed, 0.0, 0.5 * lateral_speed / RADIUS, 0.0, 0.0]])
+    # the Euler parameter rates of the angular velocity omega at p = (1, 0, 0, 0): pdot = (0, omega / 2)
+    qd = np.array([[*velocity, 0.0, *(0.5 * w for w in spin)]])
     y0, modes0 = standing_start(system, q, qd, (0,), floor)
     y0[14] = bristles  # after r, p and their rates: the foot's x bristle
     return system, y0, modes0
@@ -170,6 +175,18 @@ def block_lean(ratio: float, slope: float) -> float:
     stiffness = exponent * (load / 2.0) / penetration
     a, b = BLOCK_HALF_LENGTH, BLOCK_HALF_HEIGHT
     return b * ratio * load * b / (2.0 * stiffness * a * a)
+
+
+def angular_velocity(state: np.ndarray) -> np.ndarray:
+    """The spatial sphere's angular velocity in the slope frame, omega = 2 E(p) pdot, E = [-e, e~ + e0 I]."""
+    e0, e, e0_dot, e_dot = state[3], state[4:7], state[10], state[11:14]
+    return 2.0 * (e0 * e_dot - e0_dot * e + np.cross(e, e_dot))
+
+
+def contact_slip(state: np.ndarray) -> np.ndarray:
+    """The slip velocity (x, z) of the spatial sphere's lowest material point: v + omega x (0, -R, 0)."""
+    w = angular_velocity(state)
+    return np.array([state[7] + RADIUS * w[2], state[9] - RADIUS * w[0]])
 
 
 def rolling_angle(states: np.ndarray) -> float:
