@@ -55,7 +55,7 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
         ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
         ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
         ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
-        ("dynamics=compliant", "walker.kind: 'description3d' is available with dynamics: rigid only"),
+        ("dynamics=compliant", "walker.kind: 'description3d' needs formulation.kind: spatial with dynamics: compliant"),
         ("walker.description={}", "walker.description: unknown key"),
     ],
 )
