@@ -16,6 +16,7 @@ from pydantic import (
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
 from biped_sim.config.description import LEG_KEYS
+from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
@@ -292,6 +293,8 @@ class Config(Strict):
     def initial_keys(self) -> tuple[str, ...]:
         """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
         described = self.walker.description
+        if capabilities(self.walker.kind).space:
+            return SPACE_STATE_KEYS
         return described.state_keys() if described is not None else LEG_KEYS
 
     def hash(self) -> str:
