@@ -21,6 +21,7 @@ from biped_sim.io.posterior import read_posterior
 from biped_sim.io.references import Reference, load_reference
 from biped_sim.studies.fit import FitParameter, FitProblem, Outcome, calibrate, fit_problems, synthetic_reference
 from biped_sim.studies.fit.diagnose import _jump
+from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.problem import PENALTY_SCALES
 from biped_sim.sweep import local_executor
 from tests.conftest import CONFIGS, DEFAULT_CONFIG, ROOT, invoke, one_line_error
@@ -320,3 +321,20 @@ def test_a_described_walkers_bad_key_is_one_line(
     assert result.exit_code == 2
     assert expected in one_line_error(result.stderr)
     assert not out.exists()
+
+
+def test_a_run_as_far_as_a_stage_needs_answers_it_and_a_longer_request_runs_again(
+    reference: Reference, tmp_path: Path
+) -> None:
+    """A run stopped at step 2 is the first two strikes of the full run, bit for bit; it answers requests up to
+    step 2 and its checkpoint keeps how far it went."""
+    checkpoint = tmp_path / "fit.checkpoint.json"
+    evaluator = Evaluator(_problem(reference), checkpoint=checkpoint)
+    u = [0.4]
+    (short,) = evaluator.outcomes([u], 2)
+    assert evaluator.outcomes([u], 1) == [short] and evaluator.evaluations == 1 and short.strikes == 2
+    (full,) = evaluator.outcomes([u])
+    assert evaluator.evaluations == 2 and full.strikes == 3 and full.times[:3] == short.times
+    evaluator.save()
+    again = Evaluator(_problem(reference), checkpoint=checkpoint)
+    assert again.outcomes([u]) == [full] and again.evaluations == 0 and again.replayed == 1
