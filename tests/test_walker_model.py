@@ -240,7 +240,7 @@ def test_a_mirrored_leg_goes_with_bodies_off_the_legs_and_the_hips_own_fields() 
     assert described.joints[0].stops[0].angle == 1.0 and described.legs == [["leg_1"], ["leg_2"]]
     assert [f.centre for f in described.feet] == [(0.0, -0.35)] * 2
     assert described.bodies[1].inertia == pytest.approx(0.01)
-    assert config.initial_keys() == LEG_KEYS and config.walker.leg_length == 0.5
+    assert config.initial_keys() == (*LEG_KEYS, "torso_angle", "torso_rate") and config.walker.leg_length == 0.5
 
 
 def test_a_presets_parameters_are_its_fields_under_the_same_key() -> None:
