@@ -41,7 +41,9 @@ def test_one_body_legs_keep_the_readme_keys() -> None:
     data["walker"]["description"]["legs"] = [["thigh_1"], ["thigh_2"]]
     described = config_from_dict(data).walker.description
     assert described is not None
-    assert described.state_keys() == LEG_KEYS == tuple(InitialState.model_fields)  # the README's, spelled once
+    assert described.state_keys()[:4] == LEG_KEYS == tuple(InitialState.model_fields)  # the README's, spelled once
+    shanks = ("shank_1_angle", "shank_1_rate", "shank_2_angle", "shank_2_rate")  # now off the legs: keys of their own
+    assert described.state_keys()[4:] == described.off_leg_keys() == shanks
 
 
 def test_initial_state_of_a_described_walker_takes_its_own_keys() -> None:
