@@ -176,7 +176,7 @@ Number = Annotated[float, BeforeValidator(_not_a_boolean)]  # YAML's true is not
 
 
 class InitialState(Strict):
-    """Leg angles from the slope normal, positive when the foot is downhill of the hip (README)."""
+    """Leg angles from the slope normal, positive when the foot is downhill of the hip (docs/guide/model.md)."""
 
     stance_angle: float = Field(0.25, description="Stance leg angle theta_st [rad].")
     stance_rate: float = Field(-1.6, description="Stance leg angular rate [rad/s].")
