@@ -22,7 +22,6 @@ from biped_sim.simulate import CompliantRunResult, simulate
 from biped_sim.studies.convergence import converge
 from biped_sim.testing import default_walker, pendulum
 from biped_sim.walkers import build_model
-from biped_sim.walkers.compass import build_compass
 
 from .conftest import ROOT
 
@@ -167,35 +166,24 @@ def test_the_tree_solve_equals_the_star_solve_on_the_compass_to_rounding() -> No
 # ---------------------------------------------------------------- the builder
 
 
-def compass_description(config: Config) -> dict:
-    """The compass walker of ``config`` written as a description: each leg a body with half the hip mass."""
-    w = config.walker
-    leg = {"mass": w.leg_mass, "inertia": w.leg_inertia, "com": [w.leg_com_offset, -w.leg_com_from_hip]}
-    foot = {"centre": [w.foot_offset, -(w.leg_length - w.foot_radius)], "radius": w.foot_radius}
-    return {
-        "bodies": [{"name": "leg0", **leg}, {"name": "leg1", **leg}],
-        "point_masses": [{"name": f"hip{b}", "body": f"leg{b}", "mass": 0.5 * w.hip_mass} for b in (0, 1)],
-        "joints": [{"name": "hip", "parent": "leg0", "child": "leg1"}],
-        "feet": [{"name": "foot0", "body": "leg0", **foot}, {"name": "foot1", "body": "leg1", **foot}],
-        "legs": [["leg0"], ["leg1"]],
-    }
-
-
 @pytest.mark.parametrize("offsets", [(), ("walker.foot_offset=0.01", "walker.leg_com_offset=0.004")])
-def test_the_compass_described_builds_the_compass_system(offsets: tuple[str, ...]) -> None:
+def test_the_compass_preset_builds_the_compass_of_model_md(offsets: tuple[str, ...]) -> None:
+    """The compass preset, built from its description, is MODEL.md's compass: each leg with half the hip mass at
+    the hip, its centre of mass d = m c / (m + M_H/2) along and d_w = m w / (m + M_H/2) across the leg, its inertia
+    by parallel axes, the foot arc centre l - R along and d across the leg, rolling on its stance foot."""
     config = default_walker(*offsets)
-    described = config_from_dict(
-        {
-            **config.model_dump(mode="json"),
-            "walker": {"kind": "description", "description": compass_description(config)},
-        }
-    )
-    compass, built = build_compass(config, config.simulation.initial), build_model(described)
-    for name in PlanarSystem._fields:
-        if name not in ("ground", "stops"):
-            assert np.array_equal(getattr(built.system, name), getattr(compass.system, name)), name
-    np.testing.assert_allclose(built.y0, compass.y0, rtol=0, atol=1e-15)
-    assert np.array_equal(built.modes0, compass.modes0)
+    w = config.walker
+    m, c, across, half_hip = w.leg_mass, w.leg_com_from_hip, w.leg_com_offset, 0.5 * w.hip_mass
+    mass = m + half_hip
+    d, d_w = m * c / mass, m * across / mass
+    inertia = w.leg_inertia + m * ((c - d) ** 2 + (across - d_w) ** 2) + half_hip * (d**2 + d_w**2)
+    system = build_model(config).system
+    np.testing.assert_allclose(system.body_mass, [mass, mass], rtol=1e-15)
+    np.testing.assert_allclose(system.body_inertia, [inertia, inertia], rtol=1e-15)
+    np.testing.assert_allclose(system.joint_points, [[-d_w, d, -d_w, d]], rtol=1e-15, atol=1e-17)
+    centre = [w.foot_offset - d_w, -(w.leg_length - w.foot_radius - d)]
+    np.testing.assert_allclose(system.foot_center, [centre, centre], rtol=1e-15)
+    assert np.array_equal(system.foot_partner, [1, 0]) and np.array_equal(system.foot_radius, [w.foot_radius] * 2)
 
 
 def test_without_latches_the_stance_knee_of_chens_walker_flexes_and_it_falls() -> None:
