@@ -8,7 +8,7 @@ CONFIG ?= configs/round_foot_walker.yaml
 TEST_WORKERS ?= auto
 SLOW_WORKERS ?= 2
 
-.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden clean
+.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden docs clean
 
 # installed: the package and its test extras; warmed: also the compiled code of the bundled configs' groups
 WARMED := $(VENV)/.warmed
@@ -61,14 +61,23 @@ sweep-demo: $(STAMP)       ## the bundled slopes x integrators sweep and its rep
 golden: $(WARMED)          ## re-record tests/data/golden_summaries.json (after a change that moves numbers on purpose)
 	$(BIN)/python -m tests.record_golden
 
+DOCS_STAMP := $(VENV)/.installed-docs
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP) $(WARMED)  ## the documentation site into docs/_build/html (tutorials executed; warnings are errors)
+	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
+
 lint: $(STAMP)
-	$(BIN)/ruff check src tests
-	$(BIN)/ruff format --check src tests
+	$(BIN)/ruff check src tests docs
+	$(BIN)/ruff format --check src tests docs
 	$(BIN)/lint-imports
 
 format: $(STAMP)
-	$(BIN)/ruff format src tests
-	$(BIN)/ruff check --fix src tests
+	$(BIN)/ruff format src tests docs
+	$(BIN)/ruff check --fix src tests docs
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .ruff_cache docs/_build docs/tutorials docs/api/generated

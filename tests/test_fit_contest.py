@@ -12,7 +12,7 @@ from biped_sim.config import derive, load_config
 from biped_sim.contact.normal import NORMAL_LAWS
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.studies.fit import contest, fit_problems, synthetic_reference_data
-from biped_sim.studies.fit.contest import TIE_BAND, ranked, summary, verdicts
+from biped_sim.studies.fit.ranking import TIE_BAND, ranked, summary, verdicts
 from biped_sim.studies.fit.recovery import ROUNDING_STD_S
 from tests.conftest import DEFAULT_CONFIG
 

@@ -14,13 +14,16 @@ from biped_sim.studies.friction_checks import (
     SCALES,
     SPHERE,
     creep_speed,
+    dead_band,
     dry_coefficients,
     dry_limit_parameters,
+    frictionless_row,
     incline_cases,
     incline_row,
     regularised_band,
     rolling_case,
     shrinks,
+    spatial_rows,
 )
 from biped_sim.studies.lugre_checks import breakaway_check, presliding_checks, steady_state_check
 
@@ -51,6 +54,13 @@ def test_creep_speeds_are_the_closed_forms_of_each_law() -> None:
         assert creep_speed(law, r, p) == pytest.approx(speed, rel=1e-10, abs=1e-16), law
 
 
+def test_only_ambrosio_has_a_dead_band_and_it_is_v0() -> None:
+    p = dry_limit_parameters(1.0)
+    bands = {law: dead_band(law, p) for law in CHECKED_LAWS}
+    assert bands.pop("ambrosio") == pytest.approx(1e-3, rel=1e-12)
+    assert set(bands.values()) == {0.0}
+
+
 @pytest.mark.parametrize("law", [law for law in CHECKED_LAWS if law != "lugre"])
 def test_the_regularised_band_shrinks_with_the_regularisation(law: str) -> None:
     base, fine = (regularised_band(law, dry_limit_parameters(scale)) for scale in SCALES)
@@ -69,7 +79,13 @@ def test_a_case_off_its_tolerance_or_not_shrinking_fails_its_row() -> None:
     assert not incline_row([case, fine]).passed
     off = dataclasses.replace(case, measured=case.expected + 2.0 * case.tolerance + 1e-3)
     assert not off.passed and not incline_row([off]).passed
+    assert not dataclasses.replace(case, slip=1.5 * case.creep).passed  # it must creep at the law's creep speed
     assert incline_row([case]).passed and "\n" not in str(incline_row([case]))
+
+
+def test_without_friction_every_body_slides_at_g_sin_without_spin() -> None:
+    row = frictionless_row()
+    assert row.passed, row
 
 
 @pytest.mark.slow
@@ -83,3 +99,10 @@ def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
 def test_lugre_presliding_hysteresis_and_breakaway_follow_the_model() -> None:
     checks = [*presliding_checks(), breakaway_check()]
     assert all(check.passed for check in checks), [check for check in checks if not check.passed]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law", CHECKED_LAWS)
+def test_the_sphere_in_space_is_the_planar_sphere_and_rolls_across(law: str) -> None:
+    rows = spatial_rows(law)
+    assert all(row.passed for row in rows), [row for row in rows if not row.passed]

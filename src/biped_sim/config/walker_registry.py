@@ -33,6 +33,7 @@ class WalkerCapabilities:
     light_legs: bool = False  # legs of no mass: a strike sets the swing leg from the stance leg (Garcia's relations)
     energy_per_kg: bool = False  # its mass is no parameter (the wheel's hub): energies per kg of it
     strike_check: bool = False  # the plastic strike's stiff-contact check covers it (studies.convergence)
+    space: bool = False  # a walker in three dimensions (walker.space): its own rigid model, rigid.space_cycle
 
     @property
     def dynamics(self) -> tuple[str, ...]:
@@ -53,6 +54,8 @@ WALKERS: dict[str, WalkerCapabilities] = {
     "description": WalkerCapabilities(
         {"compliant": ("planar", "minimal"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
     ),
+    # a walker in space: its rigid period-1 gait only, for now (formulation.kind is not read by rigid dynamics)
+    "description3d": WalkerCapabilities({"rigid": ("planar",)}, False, False, ("limit_cycle",), space=True),
 }
 
 

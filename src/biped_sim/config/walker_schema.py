@@ -28,6 +28,7 @@ from pydantic import (
 from biped_sim.config.base import Strict
 from biped_sim.config.description import WalkerDescription
 from biped_sim.config.parameters import ParameterSpec, mirror_legs, parameter_values, resolve_numbers
+from biped_sim.config.space_description import SpaceWalker
 from biped_sim.errors import quote
 
 
@@ -237,6 +238,7 @@ _WALKER_TAGS = {
     "simplest": "SimplestWalker",
     "rimless_wheel": "RimlessWheelWalker",
     "description": "DescribedWalker",
+    "description3d": "SpaceWalker",
 }  # the union's tags: class names, which the one-line error drops from a field's key
 
 
@@ -259,7 +261,8 @@ WalkerConfig = Annotated[
     | Annotated[FourLeggedWalker, Tag("FourLeggedWalker")]
     | Annotated[SimplestWalker, Tag("SimplestWalker")]
     | Annotated[RimlessWheelWalker, Tag("RimlessWheelWalker")]
-    | Annotated[DescribedWalker, Tag("DescribedWalker")],
+    | Annotated[DescribedWalker, Tag("DescribedWalker")]
+    | Annotated[SpaceWalker, Tag("SpaceWalker")],
     Discriminator(_walker_tag),
     BeforeValidator(_walker_kind),
 ]

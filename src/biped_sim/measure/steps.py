@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from biped_sim.integrate.driver import Integration
 from biped_sim.multibody.dispatch import measures, system_foot_contact
@@ -93,6 +94,15 @@ class StepAccess:
             }
             for k in range(len(s.strike_time))
         ]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The step table as a DataFrame (what steps.csv holds): one row per heel strike k, indexed by k from 1,
+        the step that strike begins; the last row's period, length and slip are NaN (its step did not end).
+        The columns' units are in ``frame.attrs["units"]``."""
+        frame = pd.DataFrame({name: getattr(self.steps, name) for name, _ in STEP_COLUMNS})
+        frame.index = pd.RangeIndex(1, len(frame) + 1, name="step")
+        frame.attrs["units"] = dict(STEP_COLUMNS)
+        return frame
 
     def step_summary(self) -> dict[str, Any]:
         """The summary.json entries of the steps: times, feet, periods, lengths, mean speed, slip."""

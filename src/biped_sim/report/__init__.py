@@ -34,6 +34,8 @@ from biped_sim.report.figures import build_figures
 from biped_sim.report.tables import tables_for
 from biped_sim.report.view import SweepView
 
+__all__ = ["REPORT_OUTPUT", "Report", "build_report", "report_markdown"]
+
 REPORT_OUTPUT = OutputKind(
     "report", ("report.md", *(f"tables/*.{ext}" for ext in ("md", "csv", "tex")), "figures/*.png", "figures/*.svg")
 )

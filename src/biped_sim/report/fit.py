@@ -22,8 +22,8 @@ from biped_sim.report.fit_figures import contest_errors_figure, corner_figure, p
 from biped_sim.studies.compare import stats_table, step_table
 from biped_sim.studies.fit import Calibration
 from biped_sim.studies.fit.bayes import PosteriorRun
-from biped_sim.studies.fit.contest import evidence, ranked, ranking_table
 from biped_sim.studies.fit.document import fit_document, parameter_table, target_table
+from biped_sim.studies.fit.ranking import evidence, ranked, ranking_table
 
 FIT_FILES = (
     "fit.json", "fitted.yaml", "fit_parameters.*", "fit_targets.*", "fit_steps.*", "fit_stats.*", "fit_periods.*",

@@ -6,6 +6,7 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.config.walker_registry import capabilities
+from biped_sim.errors import ConfigError
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.walkers.describe import describe
 
@@ -13,6 +14,10 @@ from biped_sim.walkers.describe import describe
 def rigid_walker(config: Config) -> RigidWalker:
     """The rigid model of ``config.walker``."""
     kind = config.walker.kind
+    if capabilities(kind).space:
+        raise ConfigError(
+            "walker.kind", "a walker in space (description3d) has its rigid limit cycle only (biped-sim limit-cycle)"
+        )
     gravity = 1.0 if capabilities(kind).nondimensional else config.gravity  # Garcia's g = l = hip mass = 1
     return RigidWalker(config, describe(config), kind, gravity)
 

@@ -43,7 +43,7 @@ OWN, OUT, ON_PROFILE = 0, 1, 2  # guard modes: the walker's own; the plane's str
 APPLIED, SAMPLED, STOPS = 0, 1, 2  # StepRecord.counts: pushes applied, samples taken, stop strikes
 MIN_STEP = 1e-14  # a smaller step means the flow cannot be integrated: the step counts as a stall
 ROOT_TOL = 4.0 * np.finfo(float).eps  # relative width of the final bracket of an event time
-N_EVENTS = 4  # the guard, and at most three fall functions (two legs, the hip)
+N_EVENTS = 5  # the guard, and at most four fall functions (two legs, the hip, a torso)
 FD_STEP = 1e-7  # the central difference of the profile guard's rate along the flow (as the scipy reference)
 
 

@@ -12,9 +12,7 @@ from biped_sim.rigid.tree_kernels import (
     tree_guard_rate,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import (
-    T_NPHASE,
-)
+from biped_sim.rigid.tree_layout import T_NOFF, T_NPHASE
 
 # the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
 # its arguments' words and reference counts at every evaluation
@@ -46,7 +44,8 @@ def n_phases(p: np.ndarray) -> int:
 
 @kernel
 def n_fall_checks(p: np.ndarray) -> int:
-    return 3
+    """The legs' two, the hip's, and one for the bodies off the legs (a torso) if any."""
+    return 4 if p[T_NOFF] > 0 else 3
 
 
 @kernel

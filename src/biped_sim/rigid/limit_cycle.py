@@ -244,8 +244,7 @@ def scan_starts(walker: RigidWalker) -> list[tuple[str, np.ndarray]]:
             continue
         for angle in SCAN_ANGLES:
             label = f"scan stance_angle {angle:g}, stance_rate {rate:.4g}"
-            z = [angle, rate] + [SCAN_SWING_RATIO * rate] * (len(walker.section_names) - 2)  # the swing leg's rates
-            points.append((label, np.array(z)))
+            points.append((label, walker.section_point(angle, rate, SCAN_SWING_RATIO * rate)))
     return points
 
 
@@ -346,8 +345,7 @@ def _generic_starts(walker: RigidWalker) -> list[np.ndarray]:
         return [walker.from_section(np.array([-k * scale])) for k in (1.0, 0.5, 2.0)]
     starts = ((0.25, 0.36), (0.2, 0.2), (0.3, 0.5))
     if len(walker.section_names) >= 3:  # the legs just after a strike, as the walker's section places them
-        swing = len(walker.section_names) - 2  # the swing leg's rates (its hip body's; a free trailing knee's)
-        return [walker.from_section(np.array([angle, -k * scale] + [-0.4 * k * scale] * swing)) for angle, k in starts]
+        return [walker.from_section(walker.section_point(angle, -k * scale, -0.4 * k * scale)) for angle, k in starts]
     return [np.array([angle, -angle, -k * scale, -0.4 * k * scale]) for angle, k in starts]
 
 

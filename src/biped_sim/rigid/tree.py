@@ -23,7 +23,7 @@ import numpy as np
 from biped_sim.config import Config, WalkerDescription
 from biped_sim.config.description import angles_then_rates
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.tree_build import Tree, tree_locks, tree_params
+from biped_sim.rigid.tree_build import Tree, off_leg_keys, tree_locks, tree_params
 from biped_sim.rigid.tree_kernels import (
     PAST,
     RELEASED,
@@ -65,7 +65,7 @@ class RigidWalker:
         self.name, self.description, self.config, self.gravity = name, description, config, gravity
         self.params = tree_params(config, description, gravity)
         self.n_q = int(self.params[0])
-        self.state_names = angles_then_rates(description.state_keys())
+        self.state_names = angles_then_rates(description.state_keys() + off_leg_keys(description))
         self.slope, self.fall_leg_angle = config.ground.slope, config.simulation.fall_leg_angle
         self.leg_length, self.foot_radius = float(self.params[1]), float(self.params[2])
         self.reference_mass = float(sum(self.params[self._row(0, i)] for i in range(self.n_points)))
@@ -77,20 +77,23 @@ class RigidWalker:
         for parent, child, limit, *_ in locks:
             self.leg_offsets[child] = self.leg_offsets[parent] + limit
         self.start_locks = [(parent, child, limit) for parent, child, limit, *_, leg in locks if leg != 1]
-        n, half = self.n_q, self.n_q // 2
+        n, half = self.n_q, tree.leg_size
+        self.leg_size, self.off_legs = half, list(range(2 * half if len(description.legs) == 2 else n, n))
         # the swing leg's locks, hip down (parent, child, whether the heel strike leaves it free: its stops released),
         # and the bodies whose rates are free just after the strike: its hip body, each released stop's child
         released = any(lock[4] == RELEASED for lock in locks)
-        self.swing_locks = [(lock[0], lock[1], released and lock[5] == 1) for lock in locks if lock[1] >= half]
+        self.swing_locks = [
+            (lock[0], lock[1], released and lock[5] == 1) for lock in locks if half <= lock[1] < 2 * half
+        ]
         self.free_swing = [half] + [child for _, child, free in self.swing_locks if free]
         if self.shift:
-            self.section_names: tuple[str, ...] = (self.state_names[1],)
-        else:
+            self.section_indices = [1]
+        else:  # the stance angle and rate, the swing leg's free rates (none when light), each off-leg angle and rate
             swing_light = self.params[perm_offset(self.params) + 2 * n + half] != 0.0
-            swing_rates = [self.state_names[n + k] for k in self.free_swing]
-            self.section_names = (self.state_names[0], self.state_names[n], *swing_rates)
-            self.section_names = self.section_names[:2] if swing_light else self.section_names
+            swing = [] if swing_light else [n + k for k in self.free_swing]
+            self.section_indices = [0, n, *swing, *self.off_legs, *(n + k for k in self.off_legs)]
             self._check_alike()
+        self.section_names = tuple(self.state_names[i] for i in self.section_indices)
 
     @property
     def n_points(self) -> int:
@@ -242,20 +245,27 @@ class RigidWalker:
     # --- the state by name, the section --------------------------------------------------------------------------
     def to_section(self, x_plus: np.ndarray) -> np.ndarray:
         """Independent coordinates of a post-impact state."""
-        n = self.n_q
-        indices = [n] if self.shift else [0, n, *(n + k for k in self.free_swing)][: len(self.section_names)]
-        return np.array([x_plus[i] for i in indices])
+        return np.array([x_plus[i] for i in self.section_indices])
+
+    def section_point(self, angle: float, rate: float, swing_rate: float) -> np.ndarray:
+        """A section point of a typical passive gait: the stance angle and rate, every free swing rate
+        ``swing_rate``, the bodies off the legs (a torso) upright and at rest."""
+        swing = len(self.section_names) - 2 - 2 * len(self.off_legs)
+        return np.array([angle, rate] + [swing_rate] * swing + [0.0] * (2 * len(self.off_legs)))
 
     def from_section(self, z: np.ndarray) -> np.ndarray:
         """Post-impact state from its section coordinates (the legs symmetric about -phi, every stop locked; the
         swing leg's bodies turning with its hip body but those the strike leaves free, which have their own rates)."""
         if self.shift:
             return np.array([0.5 * self.shift - self.lean, z[0]])
-        half = self.n_q // 2
+        half, off = self.leg_size, len(self.off_legs)
         swing = -z[0] - 2.0 * self.lean
-        angles = np.concatenate([z[0] + self.leg_offsets[:half], swing + self.leg_offsets[half:]])
-        rates = np.concatenate([np.full(half, z[1]), np.zeros(half)])
-        rates[self.free_swing[: len(z) - 2]] = z[2:]
+        z_off = z[len(z) - 2 * off :]
+        angles = np.concatenate(
+            [z[0] + self.leg_offsets[:half], swing + self.leg_offsets[half : 2 * half], z_off[:off]]
+        )
+        rates = np.concatenate([np.full(half, z[1]), np.zeros(half), z_off[off:]])
+        rates[self.free_swing[: len(z) - 2 - 2 * off]] = z[2 : len(z) - 2 * off]
         for parent, child, free in self.swing_locks:  # hip down: a held stop's child turns with its parent
             rates[child] = rates[child] if free else rates[parent]
         x = np.concatenate([angles, rates])
@@ -293,5 +303,5 @@ class RigidWalker:
         return legs
 
     def fallen(self, x: np.ndarray) -> bool:
-        """A leg's hip body past the fall angle."""
-        return bool(abs(x[0]) >= self.fall_leg_angle or abs(x[self.landing_index]) >= self.fall_leg_angle)
+        """A leg's hip body, or a body off the legs (a torso), past the fall angle."""
+        return any(abs(x[k]) >= self.fall_leg_angle for k in (0, self.landing_index, *self.off_legs))

@@ -32,10 +32,16 @@ class Tree:
     and the one that lands next; ``shift``: the landing foot's angle from the stance foot's about the hip (a wheel)."""
 
     def __init__(self, d: WalkerDescription) -> None:
-        self.order = [b for leg in d.legs for b in leg]
-        names = [b.name for b in d.bodies]
-        if len(d.legs) > 2 or sorted(self.order) != sorted(names):
-            raise ConfigError("walker.description.legs", "rigid dynamics needs one or two legs holding every body")
+        legs = [b for leg in d.legs for b in leg]
+        self.off_legs = [b.name for b in d.bodies if b.name not in legs]  # a torso: its coordinates after the legs'
+        self.order = legs + self.off_legs
+        self.leg_size = len(d.legs[0])
+        if len(d.legs) > 2 or (self.off_legs and len(d.legs) != 2):
+            raise ConfigError(
+                "walker.description.legs", "rigid dynamics needs one or two legs, and two to carry a body off them"
+            )
+        if any(f.body in self.off_legs for f in d.feet):
+            raise ConfigError("walker.description.feet", "rigid dynamics takes feet on the legs only")
         self.index = {name: k for k, name in enumerate(self.order)}
         self.body = {b.name: b for b in d.bodies}
         self.joint = {j.child: j for j in d.joints}
@@ -70,6 +76,14 @@ class Tree:
         w = dict(self.origin(name, pinned))
         w[self.index[name]] = w.get(self.index[name], np.zeros(2)) + np.array(local)
         return w
+
+
+def off_leg_keys(d: WalkerDescription) -> tuple[str, ...]:
+    """The initial-state keys of the bodies off the legs (a torso: torso_angle, torso_rate) that the description's
+    own keys lack."""
+    legs, keys = {b for leg in d.legs for b in leg}, d.state_keys()
+    extra = [f"{b.name}_{what}" for b in d.bodies if b.name not in legs for what in ("angle", "rate")]
+    return tuple(key for key in extra if key not in keys)
 
 
 def _wheel_spacing(d: WalkerDescription) -> float:
@@ -137,8 +151,8 @@ def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, 
     RELEASED (held, but let go through the heel strike: ``release_at_heel_strike``), 0 free (the swing leg's)."""
     locks, released = [], set()
     for j in d.joints:
-        leg = next(i for i, leg in enumerate(d.legs) if j.child in leg)
-        if j.parent not in d.legs[leg]:
+        leg = next((i for i, leg in enumerate(d.legs) if j.child in leg), None)
+        if leg is None or j.parent not in d.legs[leg]:
             if j.stops:
                 raise ConfigError("walker.description.joints", f"{j.name}: rigid dynamics takes stops in legs only")
             continue
@@ -165,11 +179,12 @@ def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, 
 
 
 def _relabelling(tree: Tree, n: int) -> tuple[list[int], list[float]]:
-    """(perm, shift) of the heel strike: coordinate k after it is coordinate perm[k] before plus shift[k]."""
+    """(perm, shift) of the heel strike: coordinate k after it is coordinate perm[k] before plus shift[k] (the legs
+    swap; a body off them keeps its coordinate)."""
     if tree.shift:
         return [0], [tree.shift]
-    half = n // 2
-    return [half + k for k in range(half)] + list(range(half)), [0.0] * n
+    half = tree.leg_size
+    return [half + k for k in range(half)] + list(range(half)) + list(range(2 * half, n)), [0.0] * n
 
 
 def _leg_lean(tree: Tree, n: int, locks: list) -> tuple[float, float]:
@@ -196,7 +211,8 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     gx, gy = gravity_vector(gravity, config.ground.slope)
     header = [n, depth + radius, radius, lean, gx, gy, config.simulation.fall_leg_angle]
     offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases))
-    p = [*header, len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0])]
+    counts = [len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0]), len(tree.off_legs)]
+    p = [*header, *counts, config.simulation.fall_leg_angle]
     p += [offsets[k] for k in range(T_ROWS, T_TABLES)]
     for t in (0, 1):
         p.append(rolling[t])

@@ -41,8 +41,10 @@ from biped_sim.rigid.tree_layout import (
     P_LEAN,
     P_R,
     ROW_HEAD,
+    T_FALL_OFF,
     T_NLIGHT,
     T_NLOCK,
+    T_NOFF,
     T_NPHASE,
     T_NPTS,
     coords,
@@ -392,10 +394,17 @@ def skip_phase(p: np.ndarray, phase: int, x: np.ndarray) -> bool:
 @kernel
 def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
     """Fall function i (positive while standing): 0, 1: the fall angle minus |each leg's hip body's angle|; 2: the
-    hip's height minus 0.05 l."""
+    hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): their fall angle minus the largest
+    |angle| among them."""
     if i < 2:
         return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
-    _, hip_y = point(p, int(p[T_NPTS]), x[: coords(p)])
+    n = coords(p)
+    if i == 3:
+        tilt = 0.0
+        for k in range(n - int(p[T_NOFF]), n):
+            tilt = max(tilt, abs(x[k]))
+        return p[T_FALL_OFF] - tilt
+    _, hip_y = point(p, int(p[T_NPTS]), x[:n])
     return hip_y - FALL_HIP_FRACTION * p[P_L]
 
 

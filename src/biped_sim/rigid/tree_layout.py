@@ -3,7 +3,8 @@
 
 Layout of ``p``: the header (P_NQ, P_L the leg length, P_R the stance foot's radius, P_LEAN the locked leg's foot
 lean phi, P_GX and P_GY the gravity vector in the slope frame, P_FALL), T_NLOCK, T_NPHASE, T_NPTS, T_RSW (the
-landing foot's radius), T_NLIGHT, the offsets T_ROWS ... T_TRIG; per table: the rolling coordinate, then per row
+landing foot's radius), T_NLIGHT, T_NOFF and T_FALL_OFF (the bodies off the legs, a torso, and their fall angle),
+the offsets T_ROWS ... T_TRIG; per table: the rolling coordinate, then per row
 (mass, inertia, coordinate, w (2 n)), heavy rows first; the hip's and the landing foot's w (2 n each, table 0); per
 lock (parent, child, limit, sign: +1 upper / -1 lower, active); per phase (kind, lock); the permutation (n), the
 shift (n) and each table's light flags (n each); a workspace (the solves); the sines and cosines of the angles last
@@ -20,10 +21,11 @@ from biped_sim.kernel import kernel
 
 P_NQ, P_L, P_R, P_LEAN, P_GX, P_GY, P_FALL, T0 = 0, 1, 2, 3, 4, 5, 6, 7
 T_NLOCK, T_NPHASE, T_NPTS, T_RSW, T_NLIGHT = T0, T0 + 1, T0 + 2, T0 + 3, T0 + 4
+T_NOFF, T_FALL_OFF = T0 + 5, T0 + 6  # the bodies off the legs (the last coordinates) and their fall angle
 # where each part starts (written by layout_offsets): the two tables' first rows, the hip's and landing foot's w,
 # the locks, the phases, the permutation, the workspace, the sines and cosines of the last state's angles
-T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM, T_WORK, T_TRIG = T0 + 5, T0 + 7, T0 + 8, T0 + 9, T0 + 10, T0 + 11, T0 + 12
-T_TABLES = T0 + 13
+T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM, T_WORK, T_TRIG = T0 + 7, T0 + 9, T0 + 10, T0 + 11, T0 + 12, T0 + 13, T0 + 14
+T_TABLES = T0 + 15
 LOCK_FIELDS, PHASE_FIELDS, ROW_HEAD = 5, 2, 3
 
 

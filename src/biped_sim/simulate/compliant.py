@@ -45,7 +45,7 @@ ENERGY_TERMS = (
 VIOLATION_UNITS = {"position": "m", "velocity": "m/s", "normalization": "1"}
 
 
-@dataclass
+@dataclass(repr=False)  # RunResult.__repr__: one line, not every array
 class CompliantRunResult(RunResult):
     """A compliant simulation and what it measured.
 

@@ -81,6 +81,19 @@ class RunResult(StepAccess, ABC):
     def integrity_text(self) -> str:
         """One clause on the model's own check: the constraint violation, or the impact losses."""
 
+    def __repr__(self) -> str:
+        """One line for a notebook: the status, the strikes, the gait (from the step table, so it computes no
+        channel), e.g. ``<RunResult walking: 7 heel strikes in 3.000 s, mean period 0.4395 s, 0.624 m/s>``."""
+        steps = self.step_summary()
+        nondimensional = self.unit("s") != "s"  # the simplest walker's (g = l = 1)
+        s, speed = ("", "") if nondimensional else (" s", " m/s")
+        text = f"<RunResult {self.status}: {steps['n_steps']} heel strikes in {self.t_final:.3f}{s}"
+        if steps["mean_step_period"] is not None:
+            text += f", mean period {steps['mean_step_period']:.4f}{s}, {steps['mean_speed']:.3g}{speed}"
+        if nondimensional:
+            text += ", g = l = 1"
+        return text + (f" ({self.status_reason})>" if self.status_reason else ">")
+
     def write(self, out_dir: str | Path) -> None:
         """Write trajectory.h5, steps.csv, config.yaml and summary.json into ``out_dir`` (each atomically,
         summary.json last)."""

@@ -71,7 +71,7 @@ from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, w
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
 
 
-@dataclass
+@dataclass(repr=False)  # RunResult.__repr__: one line, not every array
 class RigidRunResult(RunResult):
     """A rigid simulation and what it measured."""
 
@@ -182,11 +182,15 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
     if step.status == "tripped":
         return "the swing foot met the ground profile short of a heel strike (a riser, or below it)"
     x = step.x_minus
-    leg_margin = walker.fall_leg_angle - float(np.max(np.abs(x[: walker.n_q])))
-    hip_margin = walker.hip_height(x) / walker.leg_length - FALL_HIP_FRACTION
-    if leg_margin <= hip_margin:
-        return FALL_REASONS[LEG_TOO_FAR]
-    return f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"
+    legs = [k for k in range(walker.n_q) if k not in walker.off_legs]
+    margins = {FALL_REASONS[LEG_TOO_FAR]: walker.fall_leg_angle - float(np.max(np.abs(x[legs])))}
+    for k in walker.off_legs:  # a torso
+        body = walker.state_names[k].removesuffix("_angle")
+        margins[f"the {body} past simulation.fall_leg_angle from the slope normal"] = walker.fall_leg_angle - abs(x[k])
+    margins[f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"] = (
+        walker.hip_height(x) / walker.leg_length - FALL_HIP_FRACTION
+    )
+    return min(margins, key=lambda reason: margins[reason])
 
 
 def walk(config: Config, start: RigidStart, progress: Callable[[float], None] | None) -> tuple[RigidTrace, WalkEnd]:

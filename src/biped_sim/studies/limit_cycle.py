@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import STATE_KEYS, Config, derive, parse_yaml
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import integrate_model
@@ -39,6 +40,7 @@ from biped_sim.rigid.limit_cycle import (
     newton_fixed_point,
     rigid_limit_cycle,
 )
+from biped_sim.rigid.space_cycle import space_limit_cycle
 from biped_sim.simulate import prepare_model, simulate
 from biped_sim.walkers import BuiltModel
 
@@ -347,6 +349,10 @@ def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_st
     ``settle_steps``: steps walked from the guess before Newton (None: each model's default; 0: the cycle
     nearest the guess, stable or not).
     """
+    if capabilities(config.walker.kind).space:  # its own rigid model, its own scan
+        if guess is not None:
+            raise ArgumentError("guess", "a walker in space finds its gait without a guess (its scan)")
+        return space_limit_cycle(config, SETTLE_STEPS if settle_steps is None else settle_steps)
     if config.dynamics == "rigid":
         if config.ground.profile.kind != "flat":  # the rigid step map reads the plane
             raise ConfigError("ground.profile", "a rigid limit cycle needs the flat ground (the same every step)")

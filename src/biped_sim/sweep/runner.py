@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
 from biped_sim.config import Config
 from biped_sim.io.atomic import write_json_atomic
 from biped_sim.io.run_files import start_run_directory
@@ -41,7 +43,7 @@ from biped_sim.simulate import simulate
 from biped_sim.simulate.warmup import warm_up
 from biped_sim.sweep.lock import sweep_lock
 from biped_sim.sweep.pool import WorkerDiedError
-from biped_sim.sweep.rows import metrics_from_summary, settings_of, unfinished_metrics, write_table
+from biped_sim.sweep.rows import metrics_from_summary, settings_of, table_frame, unfinished_metrics, write_table
 from biped_sim.sweep.spec import RunSpec, Sweep
 
 RUN_FILES = ("steps.csv", "config.yaml")  # besides summary.json and trajectory.h5, checked on their own
@@ -152,6 +154,17 @@ class SweepOutcome:
             if row["status"] in FAILED_STATUSES:
                 counts[row["status"]] = counts.get(row["status"], 0) + 1
         return counts
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The sweep table (sweep.csv) as a DataFrame: one row per run, its swept values, status and gait."""
+        return table_frame(self.rows)
+
+    def __repr__(self) -> str:
+        statuses: dict[str, int] = {}
+        for row in self.rows:
+            statuses[row["status"]] = statuses.get(row["status"], 0) + 1
+        counts = ", ".join(f"{n} {status}" for status, n in sorted(statuses.items()))
+        return f"<SweepOutcome {self.sweep_dir}: {len(self.rows)} runs ({counts})>"
 
 
 def manifest(sweep: Sweep) -> dict[str, Any]:

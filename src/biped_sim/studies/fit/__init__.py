@@ -18,7 +18,7 @@ From Python (the CLI's ``biped-sim fit`` is this, plus flags)::
 Modules: :mod:`.parameters` (keys, bounds, the normalised variable), :mod:`.problem` (targets and residuals),
 :mod:`.evaluate` (the cached, parallel, checkpointed evaluations), :mod:`.optimize` (global stage and polish),
 :mod:`.diagnose` (profile scans, verdict), :mod:`.stats` (estimates, identifiability), :mod:`.bayes`
-(emcee), :mod:`.contest` (AICc ranking), :mod:`.document` (fit.json, tables), :mod:`.synthetic`.
+(emcee), :mod:`.ranking` (the AICc ranking of a contest), :mod:`.document` (fit.json, tables), :mod:`.synthetic`.
 """
 
 from __future__ import annotations

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 from scipy import optimize, stats
 
 from biped_sim.config import Config, derive
@@ -123,6 +124,16 @@ class MfptCurve:
     @property
     def roughness_label(self) -> str:
         return "slope sd per step [rad]" if self.ground == "slope" else "height sd [leg lengths]"
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per roughness level: the MFPT [steps], its interval, the falls, the censored walks (and the
+        rimless wheel's chain MFPT)."""
+        return pd.DataFrame(self.to_json()["levels"])
+
+    def __repr__(self) -> str:
+        mfpts = ", ".join(f"{e.mfpt:.3g}" for e in self.estimates)
+        return (f"<MfptCurve on {self.ground} ground, {self.seeds} walks per level capped at {self.cap} steps: "
+                f"MFPT [{mfpts}] at roughness {self.roughness}>")  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         rows = []

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from biped_sim.config import Config
 from biped_sim.errors import ArgumentError, ConfigError
@@ -117,6 +118,33 @@ class Uncertainty:
     @property
     def outputs(self) -> list[dict[str, Any]]:
         return self.runs.outputs
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The statistics as a DataFrame: one row per output, over the samples that walked (``n``, the mean, its
+        standard error, the sd, the quantiles ``q0.05`` ... ``q0.95``, min and max)."""
+        rows = {}
+        for name, described in self.stats["outputs"].items():
+            quantiles = {f"q{q}": value for q, value in described.get("quantiles", {}).items()}
+            rows[name] = {key: value for key, value in described.items() if key != "quantiles"} | quantiles
+        return pd.DataFrame.from_dict(rows, orient="index")
+
+    def samples_frame(self) -> pd.DataFrame:
+        """One row per sample: the keys' values, the run's status and its scalar outputs (NaN where it has none)."""
+        frame = pd.DataFrame(self.values, columns=list(self.spec.keys))
+        frame["status"] = [output["status"] for output in self.outputs]
+        for name in output_names(self.spec.config):
+            frame[name] = column(self.outputs, name)
+        return frame
+
+    def __repr__(self) -> str:
+        walking = self.stats["probability_walking"]
+        low, high = walking["ci"]
+        period = self.stats["outputs"]["steady_period"]
+        text = (f"<Uncertainty of {', '.join(self.spec.keys)}: {self.stats['n_samples']} samples, "
+                f"P(walking) {walking['value']:.3f} [{low:.3f}, {high:.3f}]")  # fmt: skip
+        if period.get("mean") is not None:
+            text += f", steady period {period['mean']:.4g} (sd {period['sd']:.2g})"
+        return text + ">"
 
     def to_json(self) -> dict[str, Any]:
         """The document of ``biped-sim uncertainty --json``: the statistics, the indices and the notes."""

@@ -1,0 +1,143 @@
+"""The description in space: a two-legged walker whose legs are rigid bodies in three dimensions, joined by a
+lateral hinge (``walker.kind: description3d``, its description under ``walker.space``).
+
+The leg is written once, as the left leg in its own frame (x forward, y along the hinge axis pointing away from
+the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
+(y -> -y). The two hip points lie on the hinge axis ``hip_width`` apart; ``splay`` turns each leg outward about
+its forward axis through its hip point. A foot is a point, a sphere or a ring (a thin circular edge whose plane
+is normal to ``normal``); a planar walker is the special case of zero hip width, a centre of mass in the leg's
+x-z plane and a sphere or ring foot in it.
+
+Why a member of its own (and ``walker.space`` rather than ``walker.description``): every consumer of
+``walker.description`` reads a planar tree (the compliant builders, the planar rigid model, the pictures), so
+a spatial walker kept apart never reaches a planar path by accident, and a planar description stays valid and
+unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from biped_sim.config.base import Strict
+
+Vector3 = tuple[float, float, float]
+# a thin rod's principal moments (0, I, I) meet the triangle inequality with equality: its published tensor, rounded
+# to 4 digits (Coleman et al.'s legs), misses it by a few 1e-4 of the largest moment, which is taken as rounding
+INERTIA_ROUNDING = 1e-3
+
+
+class InertiaSpec(Strict):
+    """An inertia tensor about the centre of mass, in the leg's frame [kg m^2] (products as +integral x y dm,
+    so the tensor is [[xx, -xy, -xz], [-xy, yy, -yz], [-xz, -yz, zz]], the convention of Coleman et al. 2001's
+    table, whose Ixy etc. are the tensor's off-diagonal entries with their sign: give ``products: tensor``)."""
+
+    xx: float = Field(..., ge=0, description="Moment about x [kg m^2].")
+    yy: float = Field(..., ge=0, description="Moment about y [kg m^2].")
+    zz: float = Field(..., ge=0, description="Moment about z [kg m^2].")
+    xy: float = Field(0.0, description="Product xy [kg m^2].")
+    xz: float = Field(0.0, description="Product xz [kg m^2].")
+    yz: float = Field(0.0, description="Product yz [kg m^2].")
+    products: Literal["tensor", "integral"] = Field(
+        "tensor",
+        description="'tensor': xy, xz, yz are the tensor's off-diagonal entries; 'integral': they are +integral "
+        "x y dm etc. (the tensor's entries are their negatives).",
+    )
+
+    @model_validator(mode="after")
+    def _physical(self) -> InertiaSpec:
+        moments = np.linalg.eigvalsh(self.matrix())
+        a, b, c = sorted(moments)
+        if a < -INERTIA_ROUNDING * c or a + b < c * (1.0 - INERTIA_ROUNDING):
+            raise ValueError(
+                "xx: not an inertia tensor (principal moments "
+                f"{a:.4g}, {b:.4g}, {c:.4g}: each must be >= 0 and at most the sum of the other two)"
+            )
+        return self
+
+    def matrix(self) -> np.ndarray:
+        """The 3 x 3 tensor in the leg's frame."""
+        sign = 1.0 if self.products == "tensor" else -1.0
+        xy, xz, yz = sign * self.xy, sign * self.xz, sign * self.yz
+        return np.array([[self.xx, xy, xz], [xy, self.yy, yz], [xz, yz, self.zz]])
+
+
+class SpaceFoot(Strict):
+    """A foot: a point, a sphere (rolling) or a ring (a thin circular edge rolling on the ground)."""
+
+    shape: Literal["point", "sphere", "ring"] = Field(..., description="'point', 'sphere' or 'ring'.")
+    centre: Vector3 = Field(..., description="The point, or the sphere's or ring's centre, from the hip point [m].")
+    radius: float = Field(0.0, ge=0, description="Sphere or ring radius [m] (a point: 0).")
+    normal: Vector3 = Field(
+        (0.0, 1.0, 0.0), description="A ring's plane normal in the leg's frame (default y: the ring in the x-z plane)."
+    )
+
+    @model_validator(mode="after")
+    def _radius_fits_shape(self) -> SpaceFoot:
+        if self.shape == "point" and self.radius != 0.0:
+            raise ValueError("radius: a point foot has radius 0 (a round foot is a sphere or a ring)")
+        if self.shape != "point" and self.radius <= 0.0:
+            raise ValueError(f"radius: a {self.shape} foot needs a radius > 0")
+        if self.shape == "ring" and math.hypot(*self.normal) < 1e-12:
+            raise ValueError("normal: a ring's plane normal must not be zero")
+        return self
+
+
+class SpaceLeg(Strict):
+    """The left leg in its frame (x forward, y along the hinge away from the other leg, z up; origin at the hip
+    point): its mass, centre of mass, inertia about the centre of mass, and foot."""
+
+    mass: float = Field(..., gt=0, description="Mass [kg].")
+    com: Vector3 = Field(..., description="Centre of mass from the hip point [m].")
+    inertia: InertiaSpec = Field(..., description="Inertia tensor about the centre of mass [kg m^2].")
+    foot: SpaceFoot = Field(..., description="The foot.")
+
+
+class SpaceDescription(Strict):
+    """Two alike legs (the left written, the right its mirror) joined by one hinge along the lateral axis."""
+
+    hip_width: float = Field(0.0, ge=0, description="Distance between the two hip points along the hinge [m].")
+    splay: float = Field(
+        0.0, gt=-math.pi / 4, lt=math.pi / 4, description="Each leg turned outward about its forward axis [rad]."
+    )
+    hip_mass: float = Field(0.0, ge=0, description="A point mass at the hinge's midpoint [kg].")
+    leg: SpaceLeg = Field(..., description="The left leg (the right leg is its mirror image).")
+
+    @model_validator(mode="after")
+    def _foot_below_hip(self) -> SpaceDescription:
+        if self.leg_length() <= 0.0:
+            raise ValueError(
+                "walker.space.leg.foot.centre: the foot's bottom must be below the hip (z of centre minus radius < 0)"
+            )
+        return self
+
+    def leg_length(self) -> float:
+        """The hip point to the foot's bottom with the leg upright and no splay [m]: the walker's length scale."""
+        return -(self.leg.foot.centre[2] - self.leg.foot.radius)
+
+
+class SpaceWalker(Strict):
+    """A walker in three dimensions (``walker.kind: description3d``): rigid dynamics, its period-1 gait."""
+
+    kind: Literal["description3d"] = Field(
+        "description3d", description="Two rigid legs in space joined by a lateral hinge (walker.space)."
+    )
+    space: SpaceDescription = Field(..., description="The walker in space (SpaceDescription).")
+
+    @property
+    def description(self) -> None:
+        """No planar description: the planar paths (compliant builders, planar rigid model) never see it."""
+        return None
+
+    @property
+    def leg_length(self) -> float:
+        """Hip point to the foot's bottom [m]."""
+        return self.space.leg_length()
+
+    @property
+    def point_feet(self) -> bool:
+        """Whether the foot is a point."""
+        return self.space.leg.foot.shape == "point"

@@ -1,0 +1,181 @@
+"""Period-1 gaits of the rigid walker in space: Newton on the step map's fixed point, Floquet multipliers.
+
+Poincare section: just after a strike, mirrored so that the stance leg is the left leg (a symmetric gait is a
+fixed point: the right leg's step is the left's mirror image). Its coordinates: heading (measured from the
+downhill direction), bank, pitch, the stance leg's angular velocity (slope frame) and the hinge rate. The hinge
+angle is not one: the strike puts the trailing foot on the ground, which fixes it (solved from the others, the
+root near minus twice the pitch; its multiplier would be exactly zero). On a slope the heading is a state like the
+others (gravity's downhill component turns the walker); on level ground the map is the same in every heading, so
+the heading is left out of the section (the walker starts each step heading 0) and its multiplier, exactly 1, is
+reported beside the others. Newton and the finite-difference Jacobian are the planar model's
+(:mod:`biped_sim.rigid.limit_cycle`); the search without a guess walks a scan of sagittal starts first, as the
+planar searches do.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from biped_sim.config import Config
+from biped_sim.rigid.limit_cycle import (
+    FD_STEP,
+    RIGID_TOLERANCE,
+    SCAN_ANGLES,
+    SCAN_RATES,
+    SETTLE_STEPS,
+    LimitCycle,
+    SearchFellError,
+    StepFailedError,
+    map_jacobian,
+    newton_fixed_point,
+    settle,
+)
+from biped_sim.rigid.space_kernels import space_params
+from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, space_model, swing_clearance
+from biped_sim.rigid.space_step import SpaceStep, space_step
+from biped_sim.rigid.step import RTOL
+
+SWING_RATE_RATIO = -0.6  # the hinge rate just after a strike, times the stance pitch rate (planar gaits' 0.4 - 1)
+RATES = (4, 5, 6, 7)  # the section's rates: omega_x, omega_y, omega_z, swing_rate
+
+
+class SpaceSection:
+    """The section's coordinates of a walker in space (module docstring)."""
+
+    def __init__(self, model: SpaceModel) -> None:
+        self.model = model
+        self.heading = model.slope != 0.0
+        self.indices = ((0,) if self.heading else ()) + (1, 2, *RATES)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The coordinates' names."""
+        return tuple(STATE_NAMES[i] for i in self.indices)
+
+    def to_section(self, x: np.ndarray) -> np.ndarray:
+        """A post-strike state's section coordinates."""
+        return np.array([x[i] for i in self.indices])
+
+    def from_section(self, z: np.ndarray) -> np.ndarray:
+        """The post-strike state of section coordinates ``z``: the hinge angle that puts the trailing foot on the
+        ground (secant iterations from minus twice the pitch)."""
+        x = np.zeros(N_STATE)
+        x[list(self.indices)] = z
+        a, b = -2.0 * x[2], -1.9 * x[2]
+        fa, fb = self._clearance(x, a), self._clearance(x, b)
+        for _ in range(50):
+            if fb == fa or abs(fb) < 1e-15:
+                break
+            a, b, fa = b, b - fb * (b - a) / (fb - fa), fb
+            fb = self._clearance(x, b)
+        x[3] = b
+        return x
+
+    def _clearance(self, x: np.ndarray, beta: float) -> float:
+        x[3] = beta
+        return swing_clearance(self.model, x)
+
+
+def space_walker_model(config: Config) -> SpaceModel:
+    """The rigid model of a ``walker.kind: description3d`` config."""
+    return space_model(config.walker.space, config.gravity, config.ground.slope)  # type: ignore[union-attr]
+
+
+class SpaceMap:
+    """The step map on the section, its compiled parameters built once."""
+
+    def __init__(self, model: SpaceModel) -> None:
+        self.model = model
+        self.section = SpaceSection(model)
+        self.params = space_params(model)
+
+    def step(self, z: np.ndarray) -> tuple[np.ndarray, SpaceStep]:
+        """The next section point and the step."""
+        step = space_step(self.model, self.section.from_section(np.asarray(z, dtype=float)), self.params)
+        if step.x_plus is None:
+            raise StepFailedError(f"the rigid walker in space {step.status} during the step")
+        return self.section.to_section(step.x_plus), step
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        return self.step(z)[0]
+
+
+def scan(model: SpaceModel, section: SpaceSection) -> list[tuple[str, np.ndarray]]:
+    """Sagittal post-strike starts (pitch back by the scan's angles, forward pitch rates in sqrt(g / l)); the
+    lateral coordinates start at zero."""
+    scale = math.sqrt(model.gravity / model.leg_length)
+    starts = []
+    for k in SCAN_RATES:
+        for angle in SCAN_ANGLES:
+            x = np.zeros(N_STATE)
+            x[2], x[5], x[7] = -0.5 * angle, k * scale, SWING_RATE_RATIO * k * scale
+            starts.append((f"scan pitch {-0.5 * angle:g}, omega_y {k * scale:.4g}", section.to_section(x)))
+    return starts
+
+
+def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> LimitCycle:
+    """The period-1 gait of a walker in space, found without a guess: each point of :func:`scan` walked
+    ``settle_steps`` steps then Newton, until one converges (then each as it is)."""
+    model = space_walker_model(config)
+    step_map = SpaceMap(model)
+    starts = scan(model, step_map.section)
+    tries = [(label, z, settle_steps) for label, z in starts] + [(label, z, 0) for label, z in starts]
+    found = None
+    for label, z0, steps in tries:
+        try:
+            solved = newton_fixed_point(step_map, settle(step_map, z0, steps) if steps else z0, RIGID_TOLERANCE)
+        except StepFailedError:
+            continue
+        found = (solved, f"{label}, after {steps} settling steps" if steps else label)
+        if solved[1]:
+            break
+    tried = f"the {len(starts)} points of a scan (each walked {settle_steps} steps, then as it is)"
+    if found is None:
+        raise SearchFellError("walker.space", f"no rigid limit cycle: the walker falls from {tried}")
+    (z, converged, iterations, residual), how = found
+    return _cycle(step_map, z, converged, iterations, residual, how, tried)
+
+
+def _cycle(
+    step_map: SpaceMap, z: np.ndarray, converged: bool, iterations: int, residual: float, how: str, tried: str
+) -> LimitCycle:
+    """The limit-cycle record at section point ``z``."""
+    section = step_map.section
+    _, step = step_map.step(z)
+    jac = map_jacobian(step_map, z)
+    multipliers = np.linalg.eigvals(jac)
+    if not section.heading:
+        multipliers = np.append(multipliers, 1.0)
+    x_plus = section.from_section(z)
+    names = STATE_NAMES[:8]
+    return LimitCycle(
+        dynamics="rigid",
+        walker="description3d",
+        slope=step_map.model.slope,
+        converged=converged,
+        iterations=iterations,
+        residual=residual,
+        section_names=section.names,
+        section_point=z,
+        fixed_point={name: float(v) for name, v in zip(names, x_plus, strict=False)},
+        touchdown={name: float(v) for name, v in zip(names, step.x_minus, strict=False)},
+        step_period=step.period,
+        step_length=step.length,
+        jacobian=jac,
+        multipliers=multipliers,
+        tolerance=RIGID_TOLERANCE,
+        notes=[
+            f"found by Newton from {how}",
+            "section just after heel strike, mirrored to the left leg's stance; coordinates "
+            + ", ".join(section.names),
+            "the hinge angle is fixed by the trailing foot on the ground (not a coordinate)"
+            + ("" if section.heading else "; level ground: heading left out, its multiplier 1 appended"),
+            f"step map: scipy DOP853 over the compiled flow, rtol {RTOL:g}",
+            f"multipliers: central differences, relative step {FD_STEP:g}",
+            "touchdown: the state just before the strike (not mirrored)",
+        ],
+        start=how,
+        tried=tried,
+    )

@@ -1,0 +1,166 @@
+"""The rigid walker in space: Kane's equations of the stance phase and the plastic heel strike.
+
+Generalized speeds u = (omega, beta'): the stance leg's angular velocity (slope frame) and the hinge rate. The
+stance foot's material point at contact has zero velocity (pinned point foot; a sphere or ring rolling without
+slip: a nonholonomic constraint, the contact point moving over the ground and over the foot), so every point's
+velocity is linear in u: v = A u, and every part's angular velocity w = B u. With the accelerations
+a = A u' + b and w' = B u' + e (b and e from the motion of the contact point and of the hinge axis), Kane's
+equations are sum A^T m (a - g) + B^T (I w' + w x I w) = 0, i.e. M u' = F with M = sum m A^T A + B^T I B: the
+contact force does no work through the partial velocities, so it never appears. The attitude follows from
+omega = E (psi', phi', theta') (:func:`~biped_sim.rigid.space_model.rate_matrix`) and the contact point from
+the geometric contact point's velocity.
+
+The strike is plastic: the landing foot sticks (and then rolls), the trailing foot leaves. The impulse at the
+new contact and the hinge's have no moment about the new contact point (whole walker) nor about the hinge axis
+(trailing leg), and with the new configuration's partial velocities A', B' these balances are
+M' u+ = sum A'^T m v- + B'^T I w-. The walker is then mirrored (y -> -y) so that the new stance leg is the
+left leg again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped_sim.rigid.space_model import (
+    MIRROR,
+    N_STATE,
+    Pose,
+    SpaceModel,
+    attitude_angles,
+    bottom_direction_rate,
+    foot_bottom,
+    pose,
+    rate_matrix,
+)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """[v]x: [v]x w = v x w."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+@dataclass(frozen=True)
+class PartMotion:
+    """One part's motion: position from the contact point r, world inertia, velocity v = A u, angular velocity
+    w = B u, and the accelerations' parts that do not depend on u' (b, e)."""
+
+    mass: float
+    r: np.ndarray
+    inertia: np.ndarray
+    a_matrix: np.ndarray
+    b_matrix: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    b: np.ndarray
+    e: np.ndarray
+
+
+def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) -> np.ndarray:
+    """Velocity of the geometric stance contact point over the ground (the material point's is zero)."""
+    foot = model.feet[0]
+    d_dot = bottom_direction_rate(foot, where.rotations[0], omega)
+    return np.cross(omega, -foot.radius * where.stance_d) + foot.radius * d_dot
+
+
+def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
+    """Every part's motion in state ``x`` (:class:`PartMotion`)."""
+    where = pose(model, x)
+    omega, rate, axis = x[4:7], x[7], where.hinge
+    p_dot = contact_point_velocity(model, where, omega)
+    motions = []
+    for part in model.parts:
+        turn = where.rotations[part.frame]
+        r = where.point(part.frame, part.com)
+        a_matrix = np.zeros((3, 4))
+        b_matrix = np.zeros((3, 4))
+        a_matrix[:, :3] = -_skew(r)
+        b_matrix[:, :3] = np.eye(3)
+        v = np.cross(omega, r)
+        e = np.zeros(3)
+        swing_terms = np.zeros(3)
+        if part.frame == 1:  # the hinge turns it about the axis through the origin
+            s = r - where.origin
+            a_matrix[:, 3] = np.cross(axis, s)
+            b_matrix[:, 3] = axis
+            v = v + rate * a_matrix[:, 3]
+            w_swing = omega + rate * axis
+            swing_terms = rate * (np.cross(np.cross(omega, axis), s) + np.cross(axis, np.cross(w_swing, s)))
+            e = rate * np.cross(omega, axis)
+        b = np.cross(omega, v - p_dot) + swing_terms
+        inertia = turn @ part.inertia @ turn.T
+        motions.append(PartMotion(part.mass, r, inertia, a_matrix, b_matrix, v, b_matrix @ x[4:8], b, e))
+    return motions
+
+
+def mass_matrix(motions: list[PartMotion]) -> np.ndarray:
+    """Kane's generalized mass matrix sum m A^T A + B^T I B (4 x 4, symmetric positive definite)."""
+    return sum(m.mass * m.a_matrix.T @ m.a_matrix + m.b_matrix.T @ m.inertia @ m.b_matrix for m in motions)
+
+
+def flow(model: SpaceModel, x: np.ndarray) -> np.ndarray:
+    """dx/dt of the stance phase (:mod:`biped_sim.rigid.space_model`'s state)."""
+    motions = part_motions(model, x)
+    gravity = model.gravity_vector
+    force = np.zeros(4)
+    for m in motions:
+        force += m.a_matrix.T @ (m.mass * (gravity - m.b))
+        force -= m.b_matrix.T @ (m.inertia @ m.e + np.cross(m.w, m.inertia @ m.w))
+    x_dot = np.empty(N_STATE)
+    x_dot[:3] = np.linalg.solve(rate_matrix(x[0], x[1]), x[4:7])
+    x_dot[3] = x[7]
+    x_dot[4:8] = np.linalg.solve(mass_matrix(motions), force)
+    x_dot[8:] = contact_point_velocity(model, pose(model, x), x[4:7])[:2]
+    return x_dot
+
+
+def ground_point(x: np.ndarray) -> np.ndarray:
+    """The stance contact point (slope frame)."""
+    return np.array([x[8], x[9], 0.0])
+
+
+def energy(model: SpaceModel, x: np.ndarray) -> float:
+    """Kinetic plus potential energy (potential zero at the slope frame's origin)."""
+    base = ground_point(x)
+    gravity = model.gravity_vector
+    return float(
+        sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w - m.mass * gravity @ (base + m.r)
+            for m in part_motions(model, x))
+    )  # fmt: skip
+
+
+def angular_momentum(motions: list[PartMotion], about: np.ndarray) -> np.ndarray:
+    """The walker's angular momentum about ``about`` (a point from the stance contact point)."""
+    return sum(np.cross(m.r - about, m.mass * m.v) + m.inertia @ m.w for m in motions)
+
+
+def swing_foot_point(model: SpaceModel, x: np.ndarray) -> np.ndarray:
+    """The swing foot's lowest point from the stance contact point."""
+    where = pose(model, x)
+    return where.origin + foot_bottom(model.feet[1], where.rotations[1])[0]
+
+
+def landed(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
+    """The configuration after the strike, mirrored: the landing leg is the stance leg, velocities zero."""
+    where = pose(model, x_minus)
+    psi, phi, theta = attitude_angles(MIRROR @ where.rotations[1] @ MIRROR)
+    contact = MIRROR @ (ground_point(x_minus) + swing_foot_point(model, x_minus))
+    x = np.zeros(N_STATE)
+    x[:4] = psi, phi, theta, -x_minus[3]
+    x[8:] = contact[:2]
+    return x
+
+
+def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
+    """The state just after the plastic strike, mirrored (the landing leg the left, stance leg)."""
+    before = part_motions(model, x_minus)
+    before = [before[1], before[0], *before[2:]]  # the landing leg is the new stance leg
+    x_plus = landed(model, x_minus)
+    after = part_motions(model, x_plus)
+    momentum = np.zeros(4)
+    for old, new in zip(before, after, strict=True):
+        momentum += new.a_matrix.T @ (old.mass * (MIRROR @ old.v))
+        momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
+    x_plus[4:8] = np.linalg.solve(mass_matrix(after), momentum)
+    return x_plus

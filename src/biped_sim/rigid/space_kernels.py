@@ -1,0 +1,146 @@
+"""The compiled stance-phase flow of the rigid walker in space: the equations of
+:mod:`biped_sim.rigid.space_dynamics` (Kane's, generalized speeds = the stance leg's angular velocity and the
+hinge rate) over a flat parameter vector, for the integrator's many calls. The plain-numpy
+:func:`~biped_sim.rigid.space_dynamics.flow` is their reference (tests compare them to rounding).
+
+Parameter vector (:func:`space_params`): gravity (3, slope frame), the number of parts, then per part its frame
+(0 stance leg, 1 swing leg), mass, centre of mass (3) and inertia (9, row-major; the walker frame, hinge at zero),
+then per foot (stance, swing) its shape code, radius, centre (3) and unit normal (3).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from biped_sim.kernel import kernel
+from biped_sim.rigid.space_model import RING, SPHERE, SpaceModel
+
+MAX_PARTS = 3
+PART_SIZE = 14
+FOOT_SIZE = 8
+PARTS = 4
+FEET = PARTS + MAX_PARTS * PART_SIZE
+N_PARAMS = FEET + 2 * FOOT_SIZE
+
+
+def space_params(model: SpaceModel) -> np.ndarray:
+    """The model as the kernels' parameter vector."""
+    p = np.zeros(N_PARAMS)
+    p[:3] = model.gravity_vector
+    p[3] = len(model.parts)
+    for k, part in enumerate(model.parts):
+        o = PARTS + k * PART_SIZE
+        p[o : o + PART_SIZE] = [part.frame, part.mass, *part.com, *part.inertia.ravel()]
+    for k, foot in enumerate(model.feet):
+        o = FEET + k * FOOT_SIZE
+        p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal]
+    return p
+
+
+@kernel
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+@kernel
+def rotations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The stance leg's rotation Rz(psi) Rx(phi) Ry(theta), the swing leg's (times Ry(beta)) and E of
+    omega = E (psi', phi', theta')."""
+    cz, sz, cx, sx = math.cos(x[0]), math.sin(x[0]), math.cos(x[1]), math.sin(x[1])
+    cy, sy, cb, sb = math.cos(x[2]), math.sin(x[2]), math.cos(x[3]), math.sin(x[3])
+    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    rb = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+    zx = rz @ rx
+    stance = zx @ ry
+    e = np.zeros((3, 3))
+    e[2, 0] = 1.0
+    e[:, 1] = rz[:, 0]
+    e[:, 2] = zx[:, 1]
+    return stance, stance @ rb, e
+
+
+@kernel
+def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A foot's lowest point from its frame's origin and the unit vector d from its centre to it (slope frame)."""
+    o = FEET + foot * FOOT_SIZE
+    centre = rotation @ p[o + 2 : o + 5]
+    d = np.zeros(3)
+    if p[o] == SPHERE:
+        d[2] = -1.0
+    elif p[o] == RING:
+        n = rotation @ p[o + 5 : o + 8]
+        w = -n[2] * n
+        w[2] += 1.0
+        d = -w / math.sqrt(w @ w)
+    return centre + p[o + 1] * d, d
+
+
+@kernel
+def contact_rate(p: np.ndarray, rotation: np.ndarray, d: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """The stance contact point's velocity over the ground (the material point's is zero)."""
+    o = FEET
+    radius = p[o + 1]
+    rate = cross(omega, -radius * d)
+    if p[o] == RING:
+        n = rotation @ p[o + 5 : o + 8]
+        n_dot = cross(omega, n)
+        w = -n[2] * n
+        w[2] += 1.0
+        norm = math.sqrt(w @ w)
+        w_dot = -n_dot[2] * n - n[2] * n_dot
+        unit = w / norm
+        rate -= radius * (w_dot - unit * (unit @ w_dot)) / norm
+    return rate
+
+
+@kernel
+def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """dx/dt of the stance phase: Kane's M u' = F and the attitude's and contact point's rates."""
+    stance, swing, e_matrix = rotations(x)
+    foot, d = bottom(p, 0, stance)
+    origin = -foot
+    omega = x[4:7].copy()
+    rate = x[7]
+    axis = stance[:, 1].copy()
+    p_dot = contact_rate(p, stance, d, omega)
+    mass = np.zeros((4, 4))
+    force = np.zeros(4)
+    gravity = p[:3]
+    for k in range(int(p[3])):
+        o = PARTS + k * PART_SIZE
+        turn = swing if p[o] == 1.0 else stance
+        r = origin + turn @ p[o + 2 : o + 5]
+        inertia = turn @ np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3)) @ np.ascontiguousarray(turn.T)
+        a_matrix = np.zeros((3, 4))
+        b_matrix = np.zeros((3, 4))
+        for i in range(3):  # omega x r = -[r]x omega
+            a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
+            a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
+            b_matrix[i, i] = 1.0
+        v = cross(omega, r)
+        e = np.zeros(3)
+        extra = np.zeros(3)
+        if p[o] == 1.0:
+            s = r - origin
+            a_matrix[:, 3] = cross(axis, s)
+            b_matrix[:, 3] = axis
+            v += rate * a_matrix[:, 3]
+            extra = rate * (cross(cross(omega, axis), s) + cross(axis, cross(omega + rate * axis, s)))
+            e = rate * cross(omega, axis)
+        w = b_matrix @ x[4:8]
+        b = cross(omega, v - p_dot) + extra
+        a_t = np.ascontiguousarray(a_matrix.T)
+        b_t = np.ascontiguousarray(b_matrix.T)
+        mass += p[o + 1] * a_t @ a_matrix + b_t @ inertia @ b_matrix
+        force += a_t @ (p[o + 1] * (gravity - b)) - b_t @ (inertia @ e + cross(w, inertia @ w))
+    x_dot = np.empty(10)
+    x_dot[:3] = np.linalg.solve(e_matrix, omega)
+    x_dot[3] = rate
+    x_dot[4:8] = np.linalg.solve(mass, force)
+    x_dot[8:] = p_dot[:2]
+    return x_dot

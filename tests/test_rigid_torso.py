@@ -1,0 +1,99 @@
+"""Rigid walkers with a body off the legs (a torso hinged at the hip): the flow, the heel strike, the section, the
+limit cycle and falls named by what fell."""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import numpy as np
+import pytest
+
+from biped_sim import config_from_dict
+from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import rigid_step
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.tree import RigidWalker
+from biped_sim.simulate.rigid import fall_reason
+
+# compass legs with a heavy hip and a torso hanging below the hip on a free joint (a pendulum: no spring holds it)
+TORSO_WALKER: dict[str, Any] = {
+    "dynamics": "rigid",
+    "gravity": 9.81,
+    "ground": {"slope": 0.02},
+    "walker": {
+        "kind": "description",
+        "description": {
+            "leg": {
+                "bodies": [{"name": "leg", "mass": 1.0, "inertia": 0.02, "com": [0.0, -0.5]}],
+                "feet": [{"name": "foot", "body": "leg", "centre": [0.0, -1.0], "radius": 0.0}],
+            },
+            "bodies": [{"name": "torso", "mass": 1.0, "inertia": 0.01, "com": [0.0, -0.2]}],
+            "point_masses": [{"name": "hip", "body": "leg_1", "at": [0.0, 0.0], "mass": 5.0}],
+            "joints": [{"name": "waist", "parent": "leg_1", "child": "torso", "at": [0.0, 0.0]}],
+        },
+    },
+    "simulation": {"t_end": 5.0, "initial": "rigid_limit_cycle"},
+}
+START = np.array([0.2, -0.2, 0.05, -0.9, -0.7, -1.2])  # stance, swing, torso angles; their rates
+
+
+def torso_config(com_y: float = -0.2) -> dict[str, Any]:
+    config = copy.deepcopy(TORSO_WALKER)
+    config["walker"]["description"]["bodies"][0]["com"] = [0.0, com_y]
+    return config
+
+
+@pytest.fixture(scope="module")
+def torso() -> RigidWalker:
+    return rigid_walker(config_from_dict(TORSO_WALKER))
+
+
+def test_the_torso_is_a_coordinate_after_the_legs_and_in_the_section(torso: RigidWalker) -> None:
+    assert torso.state_names == ("stance_angle", "swing_angle", "torso_angle", "stance_rate", "swing_rate",
+                                 "torso_rate")  # fmt: skip
+    assert torso.section_names == ("stance_angle", "stance_rate", "swing_rate", "torso_angle", "torso_rate")
+    z = np.array([0.2, -0.9, -0.7, 0.05, -1.2])
+    np.testing.assert_array_equal(torso.to_section(torso.from_section(z)), z)
+    np.testing.assert_array_equal(torso.from_section(z)[[2, 5]], [0.05, -1.2])
+
+
+def test_energy_is_conserved_through_the_swing_with_a_torso(torso: RigidWalker) -> None:
+    step = rigid_step(torso, START, sample_rate=1000.0)
+    assert step.status == "strike"
+    energy = np.array([sum(torso.energy(x)) for x in step.samples_x])
+    kinetic = np.array([torso.energy(x)[0] for x in step.samples_x])
+    assert np.ptp(kinetic) > 0.1 * kinetic.max()
+    assert np.ptp(energy) < 1e-10 * np.abs(energy).max()
+    assert np.ptp(step.samples_x[:, 2]) > 0.05  # the torso swings on its own
+
+
+def test_the_heel_strike_keeps_the_torso_angle_and_its_angular_momentum_about_the_hip(torso: RigidWalker) -> None:
+    step = rigid_step(torso, START)
+    x_minus, x_plus = step.x_minus, torso.impact(step.x_minus)
+    assert x_plus[2] == x_minus[2]  # the torso keeps its coordinate through the relabelling
+    hip = torso.hip(x_minus[:3])
+    shift = torso.hip(x_plus[:3]) - hip  # the new state lives in its own contact frame
+    before = torso.angular_momentum(x_minus, hip, coordinates={2})
+    after = torso.angular_momentum(x_plus, hip + shift, coordinates={2})
+    assert after == pytest.approx(before, rel=1e-12)  # the hip's impulse has no moment about the hip
+    assert abs(x_plus[5] - x_minus[5]) > 1e-3  # but its rate jumps with the hip's velocity (com off the hip)
+    new_contact = np.array(torso.swing_foot(x_minus, 0.0, 0.0))
+    total_before = torso.angular_momentum(x_minus, new_contact)
+    total_after = torso.angular_momentum(x_plus, new_contact + shift)
+    assert total_after == pytest.approx(total_before, rel=1e-12)
+
+
+def test_the_torso_walker_finds_its_limit_cycle_and_multipliers() -> None:
+    cycle = rigid_limit_cycle(config_from_dict(TORSO_WALKER))
+    assert cycle.converged
+    assert len(cycle.multipliers) == 5
+    assert set(cycle.fixed_point) >= {"torso_angle", "torso_rate"}
+    assert cycle.step_period > 0.0
+
+
+def test_an_unheld_upright_torso_falls_and_is_named() -> None:
+    walker = rigid_walker(config_from_dict(torso_config(com_y=0.3)))
+    step = rigid_step(walker, START)
+    assert step.status == "fell"
+    assert fall_reason(walker, step) == "the torso past simulation.fall_leg_angle from the slope normal"

@@ -1,0 +1,157 @@
+"""The walker in space (walker.kind: description3d): its description, its rigid flow and strike, its gait."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from biped_sim.config import config_from_dict, load_config
+from biped_sim.errors import ConfigError
+from biped_sim.rigid import space_dynamics as dyn
+from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.space_cycle import SpaceSection, space_limit_cycle, space_walker_model
+from biped_sim.rigid.space_kernels import space_flow, space_params
+from biped_sim.rigid.space_model import MIRROR, swing_clearance
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
+STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # heading .. hinge rate, contact x, y
+
+
+def compass_in_space(hip_width: float = 0.0) -> dict[str, Any]:
+    """Goswami's compass (configs/compass_goswami.yaml) as a walker in space: zero hip width, the legs' mass on
+    their axes, its 1 mm round feet as spheres (a planar walker's gait is the sagittal special case)."""
+    leg = {"mass": 5.0, "com": [0.0, 0.0, -0.5], "inertia": {"xx": 0.1, "yy": 0.0, "zz": 0.1},
+           "foot": {"shape": "sphere", "radius": 0.001, "centre": [0.0, 0.0, -0.999]}}  # fmt: skip
+    space = {"hip_width": hip_width, "hip_mass": 10.0, "leg": leg}
+    return {"dynamics": "rigid", "gravity": 9.81, "ground": {"slope": 0.0523598775598},
+            "walker": {"kind": "description3d", "space": space}}  # fmt: skip
+
+
+def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
+    config = load_config(TINKERTOY)
+    assert config.walker.kind == "description3d" and config.walker.description is None
+    assert config.walker.leg_length == pytest.approx(1.0)
+    model = space_walker_model(config)
+    stance, swing = model.parts
+    np.testing.assert_allclose(stance.com, [0.0, 0.1812 + 0.6969, -0.6863])
+    np.testing.assert_allclose(swing.com, MIRROR @ stance.com)
+    np.testing.assert_allclose(swing.inertia, MIRROR @ stance.inertia @ MIRROR)
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("walker.space.leg.foot.radius=0", "walker.space.leg.foot.radius: a ring foot needs a radius > 0"),
+        ("walker.space.leg.foot.shape=point", "walker.space.leg.foot.radius: a point foot has radius 0"),
+        ("walker.space.leg.inertia.xx=0.5", "walker.space.leg.inertia.xx: not an inertia tensor"),
+        ("walker.space.leg.mass=0", "walker.space.leg.mass: Input should be greater than 0"),
+        ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
+        ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
+        ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
+        ("dynamics=compliant", "walker.kind: 'description3d' is available with dynamics: rigid only"),
+        ("walker.description={}", "walker.description: unknown key"),
+    ],
+)
+def test_a_bad_walker_in_space_is_one_line_naming_its_field(override: str, message: str) -> None:
+    with pytest.raises(ConfigError) as error:
+        load_config(TINKERTOY, [override])
+    assert str(error.value).startswith(message) and "\n" not in str(error.value)
+
+
+def test_a_walker_in_space_refuses_the_planar_paths() -> None:
+    from biped_sim.rigid.build import rigid_walker
+
+    with pytest.raises(ConfigError, match=r"walker\.kind: a walker in space"):
+        rigid_walker(load_config(TINKERTOY))
+
+
+def test_the_velocities_are_the_positions_rates() -> None:
+    """Every part's velocity (Kane's A u) is the time derivative of its position, the contact point rolling."""
+    model = space_walker_model(load_config(TINKERTOY))
+    rate, h = dyn.flow(model, STATE), 1e-6
+
+    def positions(x: np.ndarray) -> np.ndarray:
+        return np.array([dyn.ground_point(x) + m.r for m in dyn.part_motions(model, x)])
+
+    numeric = (positions(STATE + h * rate) - positions(STATE - h * rate)) / (2 * h)
+    np.testing.assert_allclose(numeric, [m.v for m in dyn.part_motions(model, STATE)], atol=1e-9)
+
+
+def test_the_strike_keeps_the_angular_momenta() -> None:
+    """About the new contact point (the whole walker) and about the hinge (the trailing leg), to rounding; the
+    walker mirrored, positions and inertias continue."""
+    model = space_walker_model(load_config(TINKERTOY))
+    section = SpaceSection(model)
+    x = section.from_section(section.to_section(STATE * [1, 1, -1, 1, 1, 1, 1, 1, 0, 0]))  # swing foot ahead, down
+    x[8:] = 0.3, 0.1
+    assert abs(swing_clearance(model, x)) < 1e-14
+    before, x_plus = dyn.part_motions(model, x), dyn.strike(model, x)
+    after = dyn.part_motions(model, x_plus)
+    contact = dyn.ground_point(x_plus)
+    np.testing.assert_allclose(contact, MIRROR @ (dyn.ground_point(x) + dyn.swing_foot_point(model, x)), atol=1e-15)
+    old = [before[1], before[0]]  # mirrored: the landing (right) leg is the new (left) stance leg
+    for o, n in zip(old, after, strict=True):
+        np.testing.assert_allclose(MIRROR @ (dyn.ground_point(x) + o.r), contact + n.r, atol=1e-15)
+
+    def momentum(motions: list[dyn.PartMotion], base: np.ndarray, mirror: np.ndarray, det: float) -> np.ndarray:
+        return sum(np.cross(mirror @ (base + m.r) - contact, mirror @ (m.mass * m.v)) + det * mirror @ (m.inertia @ m.w)
+                   for m in motions)  # fmt: skip
+
+    total_before = momentum(old, dyn.ground_point(x), MIRROR, -1.0)
+    np.testing.assert_allclose(momentum(after, contact, np.eye(3), 1.0), total_before, atol=1e-15)
+    hinge_point = contact + dyn.pose(model, x_plus).origin  # the hinge's midpoint
+    axis = dyn.pose(model, x_plus).hinge
+
+    def trailing(m: dyn.PartMotion, base: np.ndarray, mirror: np.ndarray, det: float) -> float:
+        arm = mirror @ (base + m.r) - hinge_point
+        return axis @ (np.cross(arm, mirror @ (m.mass * m.v)) + det * mirror @ (m.inertia @ m.w))
+
+    assert trailing(after[1], contact, np.eye(3), 1.0) == pytest.approx(
+        trailing(old[1], dyn.ground_point(x), MIRROR, -1.0), abs=1e-15
+    )
+
+
+@pytest.mark.slow
+def test_the_compiled_flow_is_the_reference_flow() -> None:
+    model = space_walker_model(load_config(TINKERTOY))
+    np.testing.assert_allclose(space_flow(space_params(model), STATE), dyn.flow(model, STATE), rtol=1e-13, atol=1e-14)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", [TINKERTOY, None], ids=["tinkertoy_ring", "compass_sphere"])
+def test_the_swing_keeps_its_energy(config: Path | None) -> None:
+    """Energy through 2 natural periods of the stance phase (the rolling ring's contact point moving) to 1e-10."""
+    model = space_walker_model(load_config(config) if config else config_from_dict(compass_in_space(0.2)))
+    params = space_params(model)
+    sol = solve_ivp(lambda t, x: space_flow(params, x), (0.0, 0.6), STATE, method="DOP853", rtol=1e-13, atol=1e-13)
+    energies = [dyn.energy(model, x) for x in sol.y.T]
+    assert np.ptp(energies) < 1e-10 * max(1.0, abs(energies[0]))
+
+
+@pytest.mark.slow
+def test_a_planar_walker_in_space_walks_its_planar_gait() -> None:
+    """Goswami's compass written in space: the sagittal fixed point to 1e-9, its multipliers to 1e-6 (the lateral
+    ones are the space model's own)."""
+    planar = rigid_limit_cycle(
+        load_config(CONFIGS / "compass_goswami.yaml", ["dynamics=rigid", "simulation.initial=rigid_limit_cycle"])
+    )
+    cycle = space_limit_cycle(config_from_dict(compass_in_space()))
+    assert planar.converged and cycle.converged
+    point = cycle.fixed_point
+    angle, rate, swing = (planar.fixed_point[k] for k in ("stance_angle", "stance_rate", "swing_rate"))
+    # the planar angles are + foot downhill, the pitch + top downhill; the hinge is swing minus stance pitch
+    expected = [-angle, -rate, 2 * angle, rate - swing]
+    actual = [point["pitch"], point["omega_y"], point["swing_angle"], point["swing_rate"]]
+    np.testing.assert_allclose(actual, expected, atol=1e-9)
+    assert max(abs(point[k]) for k in ("heading", "bank", "omega_x", "omega_z")) < 1e-15  # the sagittal plane
+    assert cycle.step_period == pytest.approx(planar.step_period, abs=1e-9)
+    names = list(cycle.section_names)
+    sagittal = [names.index(n) for n in ("pitch", "omega_y", "swing_rate")]
+    block = cycle.jacobian[np.ix_(sagittal, sagittal)]
+    multipliers = np.sort_complex(np.linalg.eigvals(block))
+    np.testing.assert_allclose(multipliers, np.sort_complex(planar.multipliers), atol=1e-6)
