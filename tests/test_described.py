@@ -225,6 +225,15 @@ def test_a_knee_latch_engages_at_the_knee_strike_and_lets_go_after_the_toe_off_a
     assert np.all(swing[(run.t > latched) & (run.t < run.strike_t[1])] == HELD)
 
 
+def test_a_swing_foot_starting_below_the_ground_is_refused_without_the_scuffing_guard() -> None:
+    """The stance leg leaning, the swing leg straight down: its foot starts under the ground, which the scuffing
+    guard would ignore (mid-stance scuffing) and a run without it could not start from."""
+    swing_down = ["simulation.initial.swing_thigh_angle=0", "simulation.initial.swing_shank_angle=0"]
+    assert build_model(_kneed(*swing_down)).y0.size  # the guard ignores the scuffing swing foot
+    with pytest.raises(ConfigError, match=r"^simulation\.initial: the swing foot starts below the ground"):
+        build_model(_kneed(*swing_down, "contact.scuffing_guard=false"))
+
+
 def test_a_latch_needs_a_joint_within_a_leg_one_line_naming_the_field() -> None:
     data = _kneed().model_dump(mode="json")
     data["walker"]["description"]["joints"][0]["stops"] = [{"side": "upper", "angle": 0.5, "latch": True}]
