@@ -97,14 +97,14 @@ def package_page(package_name: str) -> str:
 
 
 def write_pages(out_dir: Path) -> list[str]:
-    """Write one page per package into ``out_dir`` (replacing what a previous build left); their names."""
+    """Write one page per package into ``out_dir`` (removing the pages of packages gone); their names."""
     out_dir.mkdir(parents=True, exist_ok=True)
+    names = [name for name in packages() if name != f"{ROOT_PACKAGE}.cli"]  # the CLI: its --help and the guides
     for old in out_dir.glob("*.md"):
-        old.unlink()
-    written = []
-    for name in packages():
-        if name == f"{ROOT_PACKAGE}.cli":
-            continue  # the command line is documented by its --help and the guides, not as Python
-        (out_dir / f"{name}.md").write_text(package_page(name), encoding="utf-8")
-        written.append(name)
-    return written
+        if old.stem not in names:
+            old.unlink()
+    for name in names:
+        page, text = out_dir / f"{name}.md", package_page(name)
+        if not page.is_file() or page.read_text(encoding="utf-8") != text:  # unchanged: Sphinx need not reread it
+            page.write_text(text, encoding="utf-8")
+    return names

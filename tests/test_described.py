@@ -6,12 +6,23 @@ from __future__ import annotations
 import itertools
 import math
 
+import numba
 import numpy as np
 import pytest
 
 from biped_sim.config import Config, IntegratorConfig, config_from_dict, derive, load_config
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
-from biped_sim.contact.stop import FREE, HELD, LATCHED, RELEASING, make_stops
+from biped_sim.contact.stop import (
+    FREE,
+    HELD,
+    LATCHED,
+    RELEASING,
+    NoStops,
+    Stops,
+    make_stops,
+    stop_torques,
+    stops_energy,
+)
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.dispatch import formulation_of, make_workspace, measures, system_rhs
@@ -42,6 +53,18 @@ def _kneed(*overrides: str, foot_centre: tuple[float, float] | None = None, latc
 
 
 # ---------------------------------------------------------------- a joint stop: the drop test
+
+
+def test_a_walker_without_joint_stops_has_a_stops_record_of_its_own_type() -> None:
+    """No stops is a type (NoStops), on which numba specialises: such a walker compiles none of the stops' code and
+    its stop kernels are no-ops; a walker with stops has a Stops record, in both formulations."""
+    plain, kneed = build_model(default_walker()).system, build_model(_kneed()).system
+    assert type(plain.stops) is NoStops and plain.stops.law.shape == (0,)
+    assert type(kneed.stops) is Stops and numba.typeof(kneed.stops) != numba.typeof(plain.stops)
+    assert type(tree_system(plain).stops) is NoStops and type(tree_system(kneed).stops) is Stops
+    y, modes, force = np.ones(12), np.ones((2, 4)), np.ones(6)
+    assert stop_torques(y, plain.stops, modes, 2, force) == 0.0 and stops_energy(y, plain.stops, modes, 2) == 0.0
+    assert force.tolist() == [1.0] * 6
 
 
 def stop_pendulum(law: str, restitution: float, stiffness: float = 1.0e3) -> PlanarSystem:

@@ -21,14 +21,16 @@ from biped_sim.io.posterior import read_posterior
 from biped_sim.io.references import Reference, load_reference
 from biped_sim.studies.fit import FitParameter, FitProblem, Outcome, calibrate, fit_problems, synthetic_reference
 from biped_sim.studies.fit.diagnose import _jump
+from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.problem import PENALTY_SCALES
 from biped_sim.sweep import local_executor
-from tests.conftest import DEFAULT_CONFIG, invoke, one_line_error
+from tests.conftest import CONFIGS, DEFAULT_CONFIG, ROOT, invoke, one_line_error
 
 FAST = ["integrator.rtol=1e-6", "integrator.atol=1e-8"]
 TRUE_INERTIA = 0.005
 NOISE_S = 5e-4
 BOUNDS = "walker.leg_inertia=0.0043:0.0095"
+KNEED = ROOT / "tests" / "data" / "kneed_compliant_parametrised.yaml"  # named parameters, a mirrored leg
 
 
 def _config(*overrides: str) -> Config:
@@ -190,6 +192,8 @@ BAD_REFERENCES = {
         (["--param", "contact.restitution=0.3:2"], "contact.restitution: bound 2 is not a valid config"),
         (["--param", "walker.leg_inertia=0.001"], "--param: expected KEY=LO:HI"),
         (["--param", BOUNDS, "--param", BOUNDS], "walker.leg_inertia: is fitted twice"),
+        (["--param", BOUNDS, "--param", "walker.parameters.leg_inertia=0.0043:0.0095"],
+         "walker.leg_inertia: is fitted twice"),  # a preset's parameter is its field
         (["--param", BOUNDS, "--param", "walker.hip_mass=1:3", "--param", "contact.restitution=0.1:0.9",
           "--param", "walker.leg_mass=0.5:2"], "--param: 4 parameters for 3 reference values"),
         (["--param", BOUNDS, "--reference", "missing.yaml"], "no such reference file"),
@@ -276,3 +280,61 @@ def test_a_fit_interrupted_midway_resumes_and_ends_where_an_uninterrupted_one_do
     fresh = calibrate(problem).result
     assert resumed.replayed == done and resumed.simulations == fresh.simulations - done
     assert resumed.parameters == fresh.parameters
+
+
+def test_a_described_walker_is_fitted_by_its_named_parameters_and_raw_keys(reference: Reference) -> None:
+    """A named parameter (both thighs), a number of the mirrored leg (both feet), a body of a walker written without
+    parameters; and a contest over a named parameter, one problem per value."""
+    keys = ["walker.parameters.thigh_mass", "walker.description.leg.feet.foot.radius"]
+    named = [f"{keys[0]}=0.4:0.6", f"{keys[1]}=0.015:0.025"]
+    [(_, problem)] = fit_problems(load_config(KNEED), reference, named)
+    assert [(p.key, p.start) for p in problem.parameters] == [(keys[0], 0.5), (keys[1], 0.02)]
+    fitted = problem.config_at(problem.values([1.0, 0.0])).walker.description
+    assert [b.mass for b in fitted.bodies if b.name.startswith("thigh")] == [0.6, 0.6]
+    assert [f.radius for f in fitted.feet] == [0.015, 0.015]
+    raw = "walker.description.bodies.thigh_1.mass=0.4:0.6"
+    [(_, problem)] = fit_problems(load_config(CONFIGS / "kneed_walker_compliant.yaml"), reference, [raw])
+    assert problem.parameters[0].start == 0.5
+    each = ("walker.parameters.knee_restitution", [0.1, 0.3])
+    contest = fit_problems(load_config(KNEED), reference, named[:1], each=each)
+    stops = [[j.stops[0].restitution for j in p.config.walker.description.joints[1:]] for _, p in contest]
+    assert [label for label, _ in contest] == ["0.1", "0.3"] and stops == [[0.1, 0.1], [0.3, 0.3]]
+
+
+@pytest.mark.parametrize(
+    ("case", "expected"),
+    [
+        (["--param", "walker.description.leg.bodies.thigh.mass=0.4:0.6"],
+         "walker.description.leg.bodies.thigh.mass: is the expression 'thigh_mass' of the walker's parameters"),
+        (["--param", "walker.parameters.thigh=0.4:0.6"], "walker.parameters: no item named 'thigh'; the names are"),
+        (["--param", "walker.parameters.thigh_mass=0.4:0.6", "--param", "walker.parameters.thigh_mass=0.3:0.6"],
+         "walker.parameters.thigh_mass: is fitted twice"),
+        (["--param", "walker.parameters.thigh_mass=0.4:0.6", "--each", "walker.parameters.thigh_mass=0.5,0.6"],
+         "walker.parameters.thigh_mass: is both the contest's key and a fitted parameter"),
+    ],
+)  # fmt: skip
+def test_a_described_walkers_bad_key_is_one_line(
+    case: list[str], expected: str, reference_file: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    result = invoke("fit", str(KNEED), *case, "--reference", str(reference_file), "--out", str(out))
+    assert result.exit_code == 2
+    assert expected in one_line_error(result.stderr)
+    assert not out.exists()
+
+
+def test_a_run_as_far_as_a_stage_needs_answers_it_and_a_longer_request_runs_again(
+    reference: Reference, tmp_path: Path
+) -> None:
+    """A run stopped at step 2 is the first two strikes of the full run, bit for bit; it answers requests up to
+    step 2 and its checkpoint keeps how far it went."""
+    checkpoint = tmp_path / "fit.checkpoint.json"
+    evaluator = Evaluator(_problem(reference), checkpoint=checkpoint)
+    u = [0.4]
+    (short,) = evaluator.outcomes([u], 2)
+    assert evaluator.outcomes([u], 1) == [short] and evaluator.evaluations == 1 and short.strikes == 2
+    (full,) = evaluator.outcomes([u])
+    assert evaluator.evaluations == 2 and full.strikes == 3 and full.times[:3] == short.times
+    evaluator.save()
+    again = Evaluator(_problem(reference), checkpoint=checkpoint)
+    assert again.outcomes([u]) == [full] and again.evaluations == 0 and again.replayed == 1

@@ -25,7 +25,7 @@ from biped_sim.studies.friction_checks import (
     shrinks,
     spatial_rows,
 )
-from biped_sim.studies.lugre_checks import breakaway_check, presliding_checks, steady_state_check
+from biped_sim.studies.lugre_checks import breakaway_check, lag_check, presliding_checks, steady_state_check
 
 STICTION = {"bengisu_akay", "brown_mcphee", "lugre"}  # the laws whose dry limit has mu_s > mu_k
 
@@ -96,8 +96,8 @@ def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
 
 
 @pytest.mark.slow
-def test_lugre_presliding_hysteresis_and_breakaway_follow_the_model() -> None:
-    checks = [*presliding_checks(), breakaway_check()]
+def test_lugre_presliding_hysteresis_breakaway_and_lag_follow_the_model() -> None:
+    checks = [*presliding_checks(), breakaway_check(), lag_check()]
     assert all(check.passed for check in checks), [check for check in checks if not check.passed]
 
 

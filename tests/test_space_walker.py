@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,7 @@ from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.space_cycle import SpaceSection, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_flow, space_params
 from biped_sim.rigid.space_model import MIRROR, swing_clearance
+from tests.conftest import invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
@@ -155,3 +157,29 @@ def test_a_planar_walker_in_space_walks_its_planar_gait() -> None:
     block = cycle.jacobian[np.ix_(sagittal, sagittal)]
     multipliers = np.sort_complex(np.linalg.eigvals(block))
     np.testing.assert_allclose(multipliers, np.sort_complex(planar.multipliers), atol=1e-6)
+
+
+def test_a_walker_in_space_takes_no_guess() -> None:
+    result = invoke("limit-cycle", str(TINKERTOY), "--guess", "[0.1, 0.2, 0.3, 0.4]")
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr).startswith("error: --guess: a walker in space finds its gait without a guess")
+
+
+@pytest.mark.slow
+def test_the_tinkertoy_walks_stably() -> None:
+    """Coleman et al.'s toy (configs/space/tinkertoy.yaml) found without a guess by `biped-sim limit-cycle`: the
+    README's gait (the search walks the scan, which falls sideways, then continues the sagittal twin's gait)."""
+    result = invoke("limit-cycle", str(TINKERTOY), "--json")
+    assert result.exit_code == 0, result.output
+    cycle = json.loads(result.stdout)
+    assert cycle["stable"] and cycle["walker"] == "description3d"
+    assert cycle["step_period"] == pytest.approx(1.00711404, abs=1e-8)
+    assert cycle["step_length"] == pytest.approx(0.46483907, abs=1e-8)
+    point = cycle["fixed_point"]
+    expected = {"heading": 0.09866766, "bank": -0.00924861, "pitch": -0.16016583, "swing_angle": 0.29424124,
+                "omega_x": -0.06623178, "omega_y": 0.46696908, "omega_z": -0.13656793,
+                "swing_rate": -0.39255917}  # fmt: skip
+    assert point == pytest.approx(expected, abs=1e-8)
+    moduli = sorted(abs(complex(*m)) for m in cycle["multipliers"])
+    np.testing.assert_allclose(moduli, [0.21839504, 0.70796054, 0.70796054, 0.83139588, 0.83139588, 0.83915586,
+                                        0.83915586], atol=1e-6)  # fmt: skip

@@ -21,7 +21,7 @@ from typing import Any
 from biped_sim.config import derive, load_config
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.studies.fit import calibrate, fit_problems, synthetic_reference_data
-from biped_sim.studies.fit.recovery import PAIRS, draw_cases, recover, summary
+from biped_sim.studies.fit.recovery import PAIRS, draw_cases, recover, start_config, summary
 from biped_sim.sweep import study_executor
 
 CONFIG = Path("configs/round_foot_walker.yaml")
@@ -71,9 +71,9 @@ def fit_bench(posterior: bool = True) -> dict[str, Any]:
 
 def recovery_bench() -> dict[str, object]:
     """Per parameter pair: the recovery check's first RECOVERY_CASES cases, their cost per fit and rate."""
-    base = load_config(CONFIG)
-    cases = {pair: draw_cases(base, pair, RECOVERY_CASES, RECOVERY_SEED)[0] for pair in PAIRS}
+    starts = {pair: start_config(pair) for pair in PAIRS}
+    cases = {pair: draw_cases(starts[pair], pair, RECOVERY_CASES, RECOVERY_SEED)[0] for pair in PAIRS}
     with study_executor("local", WORKERS) as pool:
-        recoveries = [recover(base, pair, hidden, pool) for pair in PAIRS for hidden in cases[pair]]
+        recoveries = [recover(starts[pair], pair, hidden, pool) for pair in PAIRS for hidden in cases[pair]]
     rows = {pair: {k: v for k, v in row.items() if k != "misses"} for pair, row in summary(recoveries).items()}
     return {pair: row | {"target_s_per_fit": TARGETS_S["recovery_per_fit"]} for pair, row in rows.items()}

@@ -43,6 +43,7 @@ from typing import NamedTuple
 import numpy as np
 
 from biped_sim.contact.normal import N_NORMAL_PARAMS, elastic_energy
+from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
     ARMED,
     IMPACT_SPEED,
@@ -74,14 +75,27 @@ class Stops(NamedTuple):
     latch: np.ndarray  # (ns, 2) int64: FOOT, PARTNER of a latching stop, NOT_LATCHING (both) of a plain one
 
 
+class NoStops(Stops):
+    """The joint stops of a walker without any: a :class:`Stops` record of no rows, of a type of its own.
+
+    The stop kernels the engine calls (:func:`stop_torques`, :func:`stops_energy`, :func:`update_stop_modes`,
+    :func:`stop_rate`, and the stops' event functions) are resolved at compile time from the record's type
+    (:func:`~biped_sim.contact.registry.by_type`), so that a walker without stops compiles none of their code
+    (``docs/architecture.md``, "Compile time"); :func:`make_stops` of no rows returns one. A new kernel that
+    loops over a system's stops is registered the same way: its code for :class:`Stops`, a no-op for this type.
+    """
+
+    __slots__ = ()
+
+
 def make_stops(
     index: np.ndarray, limit: np.ndarray, law: np.ndarray, params: np.ndarray, latch: np.ndarray | None = None
 ) -> Stops:
-    """A :class:`Stops` record with the kernels' dtypes and shapes (any number of rows, 0 included; ``latch``
+    """A :class:`Stops` record with the kernels' dtypes and shapes (a :class:`NoStops` of no rows; ``latch``
     None: no stop latches)."""
     law = np.asarray(law, dtype=np.int64).reshape(-1)
     latch = np.full((law.shape[0], 2), NOT_LATCHING) if latch is None else latch
-    return Stops(
+    return (Stops if law.shape[0] else NoStops)(
         np.asarray(index, dtype=np.int64).reshape(-1, 4),
         np.asarray(limit, dtype=np.float64).reshape(-1, 3),
         law,
@@ -115,6 +129,22 @@ def stop_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, float]
 
 
 @kernel
+def _stop_rate(y: np.ndarray, stops: Stops, s: int) -> float:
+    return stop_penetration(y, stops, s)[1]
+
+
+@kernel
+def _no_stop_rate(y: np.ndarray, stops: NoStops, s: int) -> float:
+    return 0.0
+
+
+stop_rate = by_type("stop_rate", "stops", {Stops: _stop_rate, NoStops: _no_stop_rate})
+stop_rate.__doc__ = (
+    """Stop s's approach rate deltadot [rad/s] (:func:`stop_penetration`; a :class:`NoStops` has none)."""
+)
+
+
+@kernel
 def is_latched(stops: Stops, modes: np.ndarray, row: int, s: int) -> bool:
     """Whether stop s (mode row ``row``) is a latching stop whose latch holds."""
     return stops.latch[s, FOOT] != NOT_LATCHING and modes[row, LATCHED] != FREE
@@ -137,10 +167,7 @@ def stop_torque(y: np.ndarray, stops: Stops, modes: np.ndarray, row: int, s: int
 
 
 @kernel
-def stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int, force: np.ndarray) -> float:
-    """Add every stop's torques to the generalized forces ``force`` (indexed as the angles in y: both
-    formulations' coordinates come first in y) and return the power their damping dissipates (W_stop's rate);
-    the stops' modes are rows first_row, ... of ``modes``."""
+def _stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int, force: np.ndarray) -> float:
     power = 0.0
     for s in range(stops.law.shape[0]):
         tau, p = stop_torque(y, stops, modes, first_row + s, s)
@@ -153,6 +180,17 @@ def stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int,
 
 
 @kernel
+def _no_stop_torques(y: np.ndarray, stops: NoStops, modes: np.ndarray, first_row: int, force: np.ndarray) -> float:
+    return 0.0
+
+
+stop_torques = by_type("stop_torques", "stops", {Stops: _stop_torques, NoStops: _no_stop_torques})
+stop_torques.__doc__ = """Add every stop's torques to the generalized forces ``force`` (indexed as the angles in y: both
+formulations' coordinates come first in y) and return the power their damping dissipates (W_stop's rate); the
+stops' modes are rows first_row, ... of ``modes``."""
+
+
+@kernel
 def stop_energy(y: np.ndarray, stops: Stops, modes: np.ndarray, row: int, s: int) -> float:
     """Energy K |delta|^(n+1) / (n+1) stored in stop s (mode row ``row``) while it is pressed or latched, else 0."""
     delta = stop_penetration(y, stops, s)[0]
@@ -162,12 +200,20 @@ def stop_energy(y: np.ndarray, stops: Stops, modes: np.ndarray, row: int, s: int
 
 
 @kernel
-def stops_energy(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int) -> float:
-    """Energy stored in every stop of ``stops`` (their modes: rows first_row, ... of ``modes``)."""
+def _stops_energy(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int) -> float:
     elastic = 0.0
     for s in range(stops.law.shape[0]):
         elastic += stop_energy(y, stops, modes, first_row + s, s)
     return elastic
+
+
+@kernel
+def _no_stops_energy(y: np.ndarray, stops: NoStops, modes: np.ndarray, first_row: int) -> float:
+    return 0.0
+
+
+stops_energy = by_type("stops_energy", "stops", {Stops: _stops_energy, NoStops: _no_stops_energy})
+stops_energy.__doc__ = """Energy stored in every stop of ``stops`` (their modes: rows first_row, ... of ``modes``)."""
 
 
 @kernel
@@ -191,7 +237,7 @@ def _latch_after(stops: Stops, modes: np.ndarray, gates: np.ndarray, approach: n
 
 
 @kernel
-def update_stop_modes(
+def _update_stop_modes(
     t: float, y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int, recontact: float,
     gates: np.ndarray, approach: np.ndarray,
 ) -> bool:  # fmt: skip
@@ -224,3 +270,15 @@ def update_stop_modes(
         modes[row, LATCHED] = latch if latching else 1.0
         modes[row, TOUCHING] = 1.0 if touching else 0.0
     return changed
+
+
+@kernel
+def _no_stop_modes(
+    t: float, y: np.ndarray, stops: NoStops, modes: np.ndarray, first_row: int, recontact: float,
+    gates: np.ndarray, approach: np.ndarray,
+) -> bool:  # fmt: skip
+    return False
+
+
+update_stop_modes = by_type("update_stop_modes", "stops", {Stops: _update_stop_modes, NoStops: _no_stop_modes})
+update_stop_modes.__doc__ = _update_stop_modes.__doc__

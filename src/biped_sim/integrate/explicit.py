@@ -5,8 +5,9 @@ One numba function, :func:`advance`, runs every explicit method:
 * fixed step (euler, rk2, rk4; dopri5/dop853 with step control off): discrete contact
   events (touchdown, lift-off, scuffing-guard switches) are applied at step boundaries;
 * adaptive (dopri5, dop853): embedded error control (Hairer's norm and step-size rule, as in
-  scipy), and events located inside the step by root finding (Illinois) on the method's
-  dense output, so that no touchdown is stepped over; the step is cut at the event.
+  scipy: :func:`~biped_sim.integrate.stepper.step_factor`), and events located inside the step by root
+  finding (Illinois) on the method's dense output, so that no touchdown is stepped over; the step is cut
+  at the event.
 
 Each pass of the loop takes a step (its stages: :func:`~biped_sim.integrate.stepper.stage_input`,
 :func:`~biped_sim.integrate.stepper.propagate`), controls its error (:func:`_control`) and, when
@@ -41,7 +42,7 @@ from biped_sim.integrate.recorder import (
     has_room,
     record_sample,
 )
-from biped_sim.integrate.stepper import Loop, error_norm, initial_step, propagate, stage_input
+from biped_sim.integrate.stepper import SAFETY, Loop, error_norm, initial_step, propagate, stage_input, step_factor
 from biped_sim.integrate.tableaus import DOPRI5, FIXED
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_fall, system_rhs
@@ -93,27 +94,26 @@ def _step_size(t: float, h: float, cfg: Settings) -> tuple[float, bool]:
 def _control(err: float, finite: bool, t: float, h: float, error_order: int, st: np.record) -> tuple[bool, float]:
     """Error control of a step with error norm ``err``: (accepted, next step) or (rejected, step to retry with).
 
-    h_new = h min(10, max(0.2, 0.9 err^(-1/(q+1)))) (Hairer's rule, as scipy; q the order of the
-    error estimator). Stops the integration as DIVERGED when the step falls below MIN_STEP or too
-    many steps were forced. ``finite``: whether the step's end state is finite (else err is inf).
+    The controller :func:`~biped_sim.integrate.stepper.step_factor` (the step after a rejection may grow), but
+    for a step of at most FORCED_STEP: accepted whatever its error, as if it were 1 (next step SAFETY h).
+    Stops the integration as DIVERGED when the step falls below MIN_STEP or too many steps were forced.
+    ``finite``: whether the step's end state is finite (else err is inf).
     """
-    q_exp = -1.0 / (error_order + 1)
-    if finite and err > 1.0 and h <= FORCED_STEP:
+    if finite and not err < 1.0 and h <= FORCED_STEP:
         # a force jump at the step start (Kelvin-Voigt touchdown on a step boundary) cannot be
         # resolved by shrinking the step: accept a tiny step across it
         st.forced += 1
         if st.forced > MAX_FORCED:
             _stop(st, DIVERGED, t, TOO_MANY_FORCED)
             return False, h
-        err = 1.0
-    if not (err <= 1.0):
+        return True, h * SAFETY
+    accepted, factor = step_factor(err, error_order, False)
+    h *= factor
+    if not accepted:
         st.rejected += 1
-        factor = 0.2 if not math.isfinite(err) else max(0.2, 0.9 * err**q_exp)
-        h *= factor
         if not h >= MIN_STEP:  # a NaN step too
             _stop(st, DIVERGED, t, MIN_STEP_REACHED if math.isfinite(h) else NONFINITE)
-        return False, h
-    return True, h * (10.0 if err == 0.0 else min(10.0, 0.9 * err**q_exp))
+    return accepted, h
 
 
 @njit(cache=True, inline="always")

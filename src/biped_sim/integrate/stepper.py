@@ -92,6 +92,28 @@ def propagate(b: np.ndarray, stages: int, h: float, y: np.ndarray, k: np.ndarray
     return finite
 
 
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # the step-size rule's constants (Hairer's, as scipy's)
+
+
+@njit(cache=True, inline="always")
+def step_factor(err: float, error_order: int, after_rejection: bool) -> tuple[bool, float]:
+    """The step-size controller of every adaptive loop: (accepted, factor of h for the next try or step).
+
+    Hairer, Norsett & Wanner's rule (Solving ODEs I, II.4), as scipy's RK45 and DOP853: a step whose error
+    norm ``err`` is below 1 is accepted and the next one is h min(MAX_FACTOR, SAFETY err^(-1/(q+1))) (q the
+    order of the error estimator; MAX_FACTOR after an error of exactly 0), capped at 1 ``after_rejection`` (the
+    step before it was rejected, as scipy); else it is retried with h max(MIN_FACTOR, SAFETY err^(-1/(q+1))),
+    MIN_FACTOR for a non-finite norm. The compliant loop (:mod:`~biped_sim.integrate.explicit`) lets the step
+    after a rejection grow (``after_rejection`` always False: its runs are pinned so); the rigid step map
+    (:mod:`biped_sim.rigid.integration`) caps it.
+    """
+    exponent = -1.0 / (error_order + 1)
+    if not err < 1.0:
+        return False, MIN_FACTOR if not math.isfinite(err) else max(MIN_FACTOR, SAFETY * err**exponent)
+    factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err**exponent)
+    return True, min(1.0, factor) if after_rejection else factor
+
+
 @kernel
 def _rms_norm(v: np.ndarray, scale: np.ndarray) -> float:
     """sqrt(mean((v / scale)^2))."""

@@ -18,8 +18,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import RECONTACT_TIME, ContactBuffers, update_contact_modes
-from biped_sim.contact.stop import FOOT, NOT_LATCHING, PARTNER, stop_event_count, stop_penetration, update_stop_modes
+from biped_sim.contact.stop import (
+    FOOT,
+    NOT_LATCHING,
+    PARTNER,
+    NoStops,
+    Stops,
+    stop_event_count,
+    stop_penetration,
+    stop_rate,
+    update_stop_modes,
+)
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_foot_contact
 
@@ -39,12 +50,18 @@ def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
     """g[2 i] = penetration of foot i, g[2 i + 1] = its lead over its partner (1 without a partner);
     g[2 nf + s] = penetration of joint stop s; then, per latching stop, the approach velocity of the foot whose
     strike its release waits for (:mod:`biped_sim.contact.stop`)."""
-    nf, stops = system.foot_body.shape[0], system.stops
+    nf = system.foot_body.shape[0]
     for i in range(nf):
         delta, _, x_i = system_foot_contact(y, system, i)
         g[2 * i] = delta
         partner = system.foot_partner[i]
         g[2 * i + 1] = x_i - system_foot_contact(y, system, partner)[2] if partner >= 0 else 1.0
+    stop_event_functions(y, system, system.stops, g)
+
+
+@kernel
+def _stop_events(y: np.ndarray, system: tuple, stops: Stops, g: np.ndarray) -> None:
+    nf = system.foot_body.shape[0]
     k = 2 * nf + stops.law.shape[0]
     for s in range(stops.law.shape[0]):
         g[2 * nf + s] = stop_penetration(y, stops, s)[0]
@@ -54,11 +71,22 @@ def system_event_functions(y: np.ndarray, system: tuple, g: np.ndarray) -> None:
 
 
 @kernel
+def _no_stop_events(y: np.ndarray, system: tuple, stops: NoStops, g: np.ndarray) -> None:
+    return None
+
+
+stop_event_functions = by_type("stop_event_functions", "stops", {Stops: _stop_events, NoStops: _no_stop_events})
+stop_event_functions.__doc__ = """The joint stops' event functions after the feet's in ``g`` (see
+:func:`system_event_functions`), of ``system`` whose ``stops`` they are (none for a
+:class:`~biped_sim.contact.stop.NoStops`)."""
+
+
+@kernel
 def system_approach_velocity(y: np.ndarray, system: tuple, contact: int) -> float:
     """Approach velocity deltadot of a contact: a foot's [m/s], or a joint stop's after the feet [rad/s]."""
     nf = system.foot_body.shape[0]
     if contact >= nf:
-        return stop_penetration(y, system.stops, contact - nf)[1]
+        return stop_rate(y, system.stops, contact - nf)
     return system_foot_contact(y, system, contact)[1]
 
 

@@ -9,8 +9,8 @@ integration is :mod:`biped_sim.rigid.integration`'s:
 
 * the flow of :mod:`biped_sim.rigid.kernels` is integrated by DOP853 at rtol = atol = 1e-12 with scipy's
   step-size control (Hairer's norm, safety 0.9, factors 0.2..10, no growth after a rejection), from
-  Hairer's starting step; the tableau, the stage arithmetic, the error norm and the dense-output
-  evaluation are the compliant loop's (:mod:`biped_sim.integrate`); the three extra dense-output stages
+  Hairer's starting step; the tableau, the stage arithmetic, the error norm, the step-size controller and the
+  dense-output evaluation are the compliant loop's (:mod:`biped_sim.integrate`); the three extra dense-output stages
   are computed here because they call the rigid flow;
 * after each accepted step the guard of the phase (downward zero) and the fall functions (any zero) are
   compared with their values at the step's start; the earliest crossing is located on the degree-7 dense

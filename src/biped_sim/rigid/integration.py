@@ -29,6 +29,7 @@ from biped_sim.integrate.stepper import (
     initial_step_trial,
     propagate,
     stage_input,
+    step_factor,
 )
 from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import kernel
@@ -212,7 +213,6 @@ def stretch(
     p, tab, sc = cw.params, cw.tab, cw.sc
     rate = cw.plan.sample_rate
     k_next = _first_sample(rate, t)
-    expo = -1.0 / (tab.error_order + 1)
     rigid_rhs(p, y, sc.k[0])
     h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
@@ -230,13 +230,11 @@ def stretch(
         rigid_rhs(p, sc.y_new, sc.k[tab.stages])
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
-        if not err < 1.0:
-            h *= max(0.2, 0.9 * err**expo) if math.isfinite(err) else 0.2
+        accepted, factor = step_factor(err, tab.error_order, rejected)
+        if not accepted:
+            h *= factor
             rejected = True
             continue
-        factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err**expo)
-        if rejected:
-            factor = min(1.0, factor)
         rejected = False
         counters[1] += 1
         _events(cw, phase, mode, sc.y_new, sc.g_new)

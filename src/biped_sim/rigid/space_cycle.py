@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.config.space_description import SpaceDescription
 from biped_sim.rigid.limit_cycle import (
     FD_STEP,
     RIGID_TOLERANCE,
@@ -27,6 +28,7 @@ from biped_sim.rigid.limit_cycle import (
     SETTLE_STEPS,
     LimitCycle,
     SearchFellError,
+    SearchResult,
     StepFailedError,
     map_jacobian,
     newton_fixed_point,
@@ -37,6 +39,8 @@ from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, space_
 from biped_sim.rigid.space_step import SpaceStep, space_step
 from biped_sim.rigid.step import RTOL
 
+CONTINUATION_STEP = 0.125  # the largest step of the homotopy's share (sagittal twin 0 -> walker 1)
+MIN_CONTINUATION_STEP = 1.0 / 1024
 SWING_RATE_RATIO = -0.6  # the hinge rate just after a strike, times the stance pitch rate (planar gaits' 0.4 - 1)
 RATES = (4, 5, 6, 7)  # the section's rates: omega_x, omega_y, omega_z, swing_rate
 
@@ -115,23 +119,75 @@ def scan(model: SpaceModel, section: SpaceSection) -> list[tuple[str, np.ndarray
     return starts
 
 
-def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> LimitCycle:
-    """The period-1 gait of a walker in space, found without a guess: each point of :func:`scan` walked
-    ``settle_steps`` steps then Newton, until one converges (then each as it is)."""
-    model = space_walker_model(config)
-    step_map = SpaceMap(model)
-    starts = scan(model, step_map.section)
-    tries = [(label, z, settle_steps) for label, z in starts] + [(label, z, 0) for label, z in starts]
+def sagittal_twin(space: SpaceDescription, share: float) -> SpaceDescription:
+    """The walker with its lateral geometry scaled by ``share``: hip width, splay, the leg's lateral centre of mass
+    and foot offsets, and the products of inertia that couple y (0: its sagittal twin, a planar walker in space, whose
+    gait the sagittal scan finds; 1: the walker itself)."""
+    leg = space.leg
+    inertia = leg.inertia.model_copy(update={"xy": share * leg.inertia.xy, "yz": share * leg.inertia.yz})
+    com = (leg.com[0], share * leg.com[1], leg.com[2])
+    centre = (leg.foot.centre[0], share * leg.foot.centre[1], leg.foot.centre[2])
+    scaled = leg.model_copy(
+        update={"com": com, "inertia": inertia, "foot": leg.foot.model_copy(update={"centre": centre})}
+    )
+    return space.model_copy(update={"hip_width": share * space.hip_width, "splay": share * space.splay, "leg": scaled})
+
+
+def _scan_solve(step_map: SpaceMap, settle_steps: int) -> tuple[SearchResult, str] | None:
+    """Newton from each scan point walked ``settle_steps`` first (0: as it is): the first converged solve, else
+    the last one that did not fall (None: it fell from every point)."""
     found = None
-    for label, z0, steps in tries:
+    for label, z0 in scan(step_map.model, step_map.section):
         try:
-            solved = newton_fixed_point(step_map, settle(step_map, z0, steps) if steps else z0, RIGID_TOLERANCE)
+            solved = newton_fixed_point(step_map, settle(step_map, z0, settle_steps), RIGID_TOLERANCE)
         except StepFailedError:
             continue
-        found = (solved, f"{label}, after {steps} settling steps" if steps else label)
+        found = (solved, f"{label}, after {settle_steps} settling steps" if settle_steps else label)
         if solved[1]:
             break
-    tried = f"the {len(starts)} points of a scan (each walked {settle_steps} steps, then as it is)"
+    return found
+
+
+def _continued(config: Config, z: np.ndarray) -> tuple[SearchResult, float]:
+    """Newton along the homotopy from the sagittal twin's gait ``z`` (share 0) to the walker (share 1), the share
+    stepped up while Newton converges from the last fixed point and halved when it does not; the last result and
+    the share it reached."""
+    share, step, solved = 0.0, CONTINUATION_STEP, (z, True, 0, 0.0)
+    while share < 1.0 and step >= MIN_CONTINUATION_STEP:
+        trial = min(1.0, share + step)
+        twin = space_model(sagittal_twin(config.walker.space, trial), config.gravity, config.ground.slope)  # type: ignore[union-attr]
+        try:
+            result = newton_fixed_point(SpaceMap(twin), solved[0], RIGID_TOLERANCE)
+        except StepFailedError:
+            result = (solved[0], False, 0, math.inf)
+        if result[1]:
+            share, solved, step = trial, result, min(2.0 * step, CONTINUATION_STEP)
+        else:
+            step *= 0.5
+    return (solved if share == 1.0 else (solved[0], False, solved[2], solved[3])), share
+
+
+def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> LimitCycle:
+    """The period-1 gait of a walker in space, found without a guess, the first that converges of: Newton from
+    each point of :func:`scan` walked ``settle_steps`` steps (a stable gait draws the walk in); the gait of its
+    sagittal twin (:func:`sagittal_twin`, found so) continued to the walker; Newton from each scan point as it is
+    (any gait). ``settle_steps = 0``: the last only."""
+    model = space_walker_model(config)
+    step_map = SpaceMap(model)
+    found, tried = None, f"the {len(scan(model, step_map.section))} points of a scan"
+    if settle_steps:
+        found = _scan_solve(step_map, settle_steps)
+        tried += f" (each walked {settle_steps} steps), the sagittal twin's gait continued, the scan as it is"
+    if settle_steps and (found is None or not found[0][1]):
+        space, g, slope = config.walker.space, config.gravity, config.ground.slope  # type: ignore[union-attr]
+        twin_map = SpaceMap(space_model(sagittal_twin(space, 0.0), g, slope))
+        twin = _scan_solve(twin_map, settle_steps)  # its lateral instability may topple the walks: then as it is
+        twin = twin if twin is not None and twin[0][1] else _scan_solve(twin_map, 0)
+        if twin is not None and twin[0][1]:
+            continued, share = _continued(config, twin[0][0])
+            found = (continued, f"the sagittal twin's gait ({twin[1]}) continued to share {share:.4g}")
+    if found is None or not found[0][1]:
+        found = _scan_solve(step_map, 0) or found
     if found is None:
         raise SearchFellError("walker.space", f"no rigid limit cycle: the walker falls from {tried}")
     (z, converged, iterations, residual), how = found

@@ -312,6 +312,8 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
 def guess_keys(config: Config) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """The keys a guess of ``config``'s gait may take: its initial-state keys (:meth:`Config.initial_keys`) and, in
     rigid dynamics, its Poincare section's coordinates (the compliant search starts from a run: the state only)."""
+    if capabilities(config.walker.kind).space:
+        raise ArgumentError("guess", "a walker in space finds its gait without a guess (its scan)")
     section = rigid_walker(config).section_names if config.dynamics == "rigid" else ()
     return config.initial_keys(), section
 
@@ -349,9 +351,7 @@ def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_st
     ``settle_steps``: steps walked from the guess before Newton (None: each model's default; 0: the cycle
     nearest the guess, stable or not).
     """
-    if capabilities(config.walker.kind).space:  # its own rigid model, its own scan
-        if guess is not None:
-            raise ArgumentError("guess", "a walker in space finds its gait without a guess (its scan)")
+    if capabilities(config.walker.kind).space:  # its own rigid model and search (no guess: guess_keys refuses)
         return space_limit_cycle(config, SETTLE_STEPS if settle_steps is None else settle_steps)
     if config.dynamics == "rigid":
         if config.ground.profile.kind != "flat":  # the rigid step map reads the plane

@@ -20,7 +20,10 @@ compare with analytic properties of the model instead of figure data:
   dz/dx = 1 - sigma0 sgn(v) z / Fs, so each ramp from force F_a to F_b moves the mass by
   (Fs / sigma0) ln((Fs - sgn F_a) / (Fs - sgn F_b)) (sgn: the ramp's direction): the loop is closed, its
   branches apart (hysteresis), and every displacement is of the order of the bristle length Fs / sigma0;
-* break-away: the peak friction force along a ramp rises as the rate falls, towards Fs.
+* break-away: the peak friction force along a ramp rises as the rate falls, towards Fs;
+* frictional lag: with the velocity oscillating, 1e-3 (cos(w t) + 1.5) m/s at w = 1, 10, 25 rad/s (the
+  reconstruction's Fig. 3), the force lags it: it is higher while the velocity rises than while it falls, the
+  loop around the steady-state curve widens with w and closes onto the curve as w -> 0.
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ BREAKAWAY_RATES = (0.1, 0.3, 1.0, 3.0, 10.0, 30.0)  # [N/s] force rates of the b
 BREAKAWAY_SLOW_LIMIT = 0.02  # the slowest ramp breaks away within this fraction of Fs (the quasi-static limit)
 PRESLIDING_TOLERANCE = 0.02  # relative, against the quasi-static Dahl curve (which neglects sigma1 zdot, v > 0)
 STEADY_SPEEDS = (1e-4, 5e-4, 1e-3, 2e-3, 1e-2, 0.1)  # [m/s]
+LAG_FREQUENCIES = (1.0, 10.0, 25.0)  # [rad/s] of the velocity oscillation 1e-3 (cos(w t) + 1.5) m/s
+LAG_SLOW_LIMIT = 0.02  # [N] the slowest oscillation's largest departure from the steady-state curve
 
 
 def paper_parameters() -> np.ndarray:
@@ -160,6 +165,31 @@ def breakaway_force(rate: float, p: np.ndarray | None = None) -> float:
     return float(motion.friction[falls[0]])
 
 
+def lag_loop(frequency: float, p: np.ndarray | None = None) -> tuple[float, float]:
+    """The velocity 1e-3 (cos(w t) + 1.5) m/s imposed at ``frequency`` w [rad/s]: over the fourth period, the
+    largest departure [N] of the force from the steady-state curve and the smallest (rising - falling) force
+    difference [N] at equal velocity (positive: the force is higher while the velocity rises)."""
+    p = paper_parameters() if p is None else p
+    period = 2.0 * math.pi / frequency
+
+    def speed(t: float) -> float:
+        return 1e-3 * (math.cos(frequency * t) + 1.5)
+
+    t = np.linspace(3.0 * period, 4.0 * period, 2001)
+    sol = solve_ivp(
+        lambda ti, z: [friction(speed(ti), z[0], p)[1]], (0.0, t[-1]), [0.0], method="Radau", t_eval=t, rtol=1e-10,
+        atol=1e-16,
+    )  # fmt: skip
+    v = np.array([speed(ti) for ti in t])
+    force = np.array([friction(vi, zi, p)[0] for vi, zi in zip(v, sol.y[0], strict=True)])
+    departure = float(np.max(np.abs(force - np.array([steady_state_force(vi) for vi in v]))))
+    falling, rising = slice(0, 1001), slice(1000, 2001)  # cos falls over the first half period, rises after
+    probe = np.linspace(v.min(), v.max(), 52)[1:-1]
+    up = np.interp(probe, v[rising], force[rising])
+    down = np.interp(probe, v[falling][::-1], force[falling][::-1])
+    return departure, float(np.min(up - down))
+
+
 GROUP = "LuGre (Canudas de Wit et al. 1995, Table I)"
 
 
@@ -212,6 +242,21 @@ def breakaway_check() -> Check:
     )  # fmt: skip
 
 
+def lag_check() -> Check:
+    """Frictional lag: the force is higher while the velocity rises; the loop widens with the frequency and
+    closes onto the steady-state curve at the slowest."""
+    loops = [lag_loop(w) for w in LAG_FREQUENCIES]
+    widening = all(b[0] > a[0] for a, b in itertools.pairwise(loops))
+    frequencies = ", ".join(f"{w:g}" for w in LAG_FREQUENCIES)
+    return Check(
+        GROUP, f"frictional lag, v = 1e-3 (cos(w t) + 1.5) m/s at w = {frequencies} rad/s: largest departure from "
+        "the steady state [N]; rising minus falling force", f"widens with w, under {LAG_SLOW_LIMIT} at the slowest; "
+        "rising > falling", " / ".join(f"{d:.4f}" for d, _ in loops) + "; min " + " / ".join(
+            f"{g:.1e}" for _, g in loops), "-",
+        widening and loops[0][0] <= LAG_SLOW_LIMIT and min(g for _, g in loops) > 0.0,
+    )  # fmt: skip
+
+
 def lugre_checks() -> list[Check]:
-    """The validation rows: steady state, presliding hysteresis, break-away against the force rate."""
-    return [steady_state_check(), *presliding_checks(), breakaway_check()]
+    """The validation rows: steady state, presliding hysteresis, break-away against the force rate, lag."""
+    return [steady_state_check(), *presliding_checks(), breakaway_check(), lag_check()]

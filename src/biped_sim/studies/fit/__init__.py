@@ -45,7 +45,7 @@ from biped_sim.studies.fit.bayes import (
 )
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import GLOBAL_METHODS, SEED, run_fit
-from biped_sim.studies.fit.parameters import FitParameter, fit_parameter, parse_parameter
+from biped_sim.studies.fit.parameters import FitParameter, fit_parameter, parse_parameter, same_key
 from biped_sim.studies.fit.problem import FitProblem, Outcome
 from biped_sim.studies.fit.stats import FitResult, summarize
 from biped_sim.studies.fit.synthetic import synthetic_reference, synthetic_reference_data
@@ -93,7 +93,7 @@ def fit_problems(
     problems = []
     for label, variant in variants:
         fitted = tuple(parse_parameter(text, variant) for text in parameters)
-        if each is not None and each[0] in [p.key for p in fitted]:
+        if each is not None and same_key(each[0]) in [same_key(p.key) for p in fitted]:
             raise ConfigError(each[0], "is both the contest's key and a fitted parameter")
         problems.append((label, FitProblem(variant, reference, fitted, skip, quantities)))
     return problems

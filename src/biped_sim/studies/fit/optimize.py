@@ -9,11 +9,12 @@ step. The default global stage, ``multistart``, is therefore:
 
 1. a scrambled Sobol design (``scipy.stats.qmc.Sobol``, seeded) of ``2^ceil(log2(SOBOL_PER_PARAMETER p))``
    points over the box (normalised variables), one batch on the executor, scored on the targets of the
-   continuation's first level (below);
+   continuation's first level (below), each run only as far as they go;
 2. the design's basins: a point is a basin's lowest point when no lower design point lies within
    ``BASIN_RADIUS`` of it; the best ``POLISH_STARTS`` of them are each polished by continuation over the
    steps (:func:`step_levels`: the targets up to the first model step with more targets than parameters,
-   then one step more at a time, each level polished from the last one's optimum, the last on every target);
+   then one step more at a time, each level polished from the last one's optimum, the last on every target;
+   a level's runs stop at its last step, so that the early levels cost a fraction of a full run);
 3. when the best polished basin still misses the data (a reference with std: chi2 beyond its
    ``1 - MISFIT_P_VALUE`` quantile), IPOP-CMA-ES restarts (``cma.fmin2``, the population doubled at each
    restart, each generation one batch) within ``IPOP_SETTINGS["maxfevals"]`` evaluations in all; their best
@@ -135,8 +136,9 @@ def _cma(evaluator: Evaluator, dimension: int, seed: int) -> Stage:
 
 
 def _design(evaluator: Evaluator, dimension: int, seed: int, rows: np.ndarray) -> tuple[Stage, np.ndarray, np.ndarray]:
-    """The space-filling start in one batch: a scrambled Sobol design, or in one dimension a grid of GRID_POINTS;
-    (its best point, the points, their costs over the targets ``rows``)."""
+    """The space-filling start in one batch of runs as far as the targets ``rows``: a scrambled Sobol design, or in
+    one dimension a grid of GRID_POINTS; (its best point over ``rows``, with its cost over every target, the
+    points, their costs over ``rows``)."""
     if dimension == 1:
         points = np.linspace(0.0, 1.0, GRID_POINTS)[:, None]
         name, text = "grid", f"{GRID_POINTS} grid points"
@@ -145,10 +147,11 @@ def _design(evaluator: Evaluator, dimension: int, seed: int, rows: np.ndarray) -
         points = qmc.Sobol(dimension, scramble=True, seed=np.random.default_rng(seed)).random_base2(m)
         name, text = "sobol", f"{len(points)} scrambled Sobol points"
     evaluator.stage = f"global ({text})"
-    residuals = [evaluator.problem.residuals(o) for o in evaluator.outcomes(list(points))]
-    costs = np.array([0.5 * float(r[rows] @ r[rows]) for r in residuals])
-    best = int(np.argmin([0.5 * float(r @ r) for r in residuals]))
-    full = 0.5 * float(residuals[best] @ residuals[best])
+    outcomes = evaluator.outcomes(list(points), evaluator.problem.steps_for(rows))  # only as far as the rows
+    residuals = [evaluator.problem.residuals(o)[rows] for o in outcomes]
+    costs = np.array([0.5 * float(r @ r) for r in residuals])
+    best = int(np.argmin(costs))
+    full = evaluator.costs([points[best]])[0]
     return Stage(name, points[best], full, len(points), True, f"best of {text}"), points, costs
 
 
@@ -207,11 +210,11 @@ def _polish(
     """``least_squares`` from ``start`` on the targets ``rows`` (all by default), at most ``evaluations`` steps."""
     before = evaluator.evaluations + evaluator.replayed
     evaluator.stage = "polish (least squares)"
-    kept = slice(None) if rows is None else rows
+    kept, steps = slice(None) if rows is None else rows, evaluator.problem.steps_for(rows)
     solution = least_squares(
-        lambda u: evaluator.residuals(u)[kept],
+        lambda u: evaluator.residuals(u, steps)[kept],
         start,
-        jac=lambda u: evaluator.jacobian(u, FD_STEP)[kept],
+        jac=lambda u: evaluator.jacobian(u, FD_STEP, steps)[kept],
         bounds=(0.0, 1.0),
         method="trf",
         x_scale=1.0,

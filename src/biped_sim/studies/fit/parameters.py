@@ -55,6 +55,10 @@ def numeric_value(config: Config, key: str) -> float:
     node = get_dotted(config.model_dump(mode="json"), key)
     if node is None:
         raise ConfigError(key, "has no value in the config to start from: set one")
+    if isinstance(node, str) and key.startswith("walker.description."):
+        raise ConfigError(
+            key, f"is the expression {node!r} of the walker's parameters: vary those instead (walker.parameters.NAME)"
+        )
     if isinstance(node, bool) or not isinstance(node, float):
         raise ConfigError(key, f"is not a real-valued parameter (its value is {node!r})")
     return node
@@ -92,10 +96,19 @@ def parse_parameter(text: str, config: Config) -> FitParameter:
 
 
 def check_parameters(parameters: tuple[FitParameter, ...]) -> None:
-    """At least one parameter, no key twice."""
+    """At least one parameter, no key twice (a preset's ``walker.parameters.NAME`` is its ``walker.NAME``)."""
     if not parameters:
         raise ConfigError("parameters", "give at least one config key to fit (KEY=LO:HI)")
-    check_distinct([p.key for p in parameters], "is fitted twice")
+    same = [same_key(p.key) for p in parameters]
+    if twice := sorted(p.key for p, k in zip(parameters, same, strict=True) if same.count(k) > 1):
+        raise ConfigError(twice[0], "is fitted twice")
+
+
+def same_key(key: str) -> str:
+    """The key as its field: a preset's parameter ``walker.parameters.NAME`` is its field ``walker.NAME``, so both
+    spellings are one key (a described walker has no field ``walker.NAME``: its parameters keep their key)."""
+    prefix = "walker.parameters."
+    return "walker." + key[len(prefix) :] if key.startswith(prefix) and "." not in key[len(prefix) :] else key
 
 
 def check_distinct(keys: list[str], reason: str) -> None:

@@ -235,13 +235,20 @@ class FitProblem:
         """The config with ``values`` set (what fitted.yaml holds)."""
         return derive(self.config, values)
 
-    def evaluation_data(self, u: np.ndarray | list[float]) -> dict[str, Any]:
-        """The config an evaluation runs (plain data): values set, stopping at the last reference step."""
+    def steps_for(self, rows: np.ndarray | None) -> int:
+        """The model steps a run needs for the targets ``rows`` (a mask; None: every target)."""
+        if rows is None:
+            return self.model_steps
+        return max(t.model_step for t, kept in zip(self.targets, rows, strict=True) if kept)
+
+    def evaluation_data(self, u: np.ndarray | list[float], steps: int | None = None) -> dict[str, Any]:
+        """The config an evaluation runs (plain data): values set, stopping at model step ``steps`` (by default the
+        last reference step; its end time the same whatever ``steps``, so that a run's first strikes are too)."""
         t_end = max(self.config.simulation.t_end, REACH_MARGIN * self.model_steps * self.guess_period)
         data = self.config.model_dump(mode="json")
         values = {
             **self.values(u),
-            "simulation.max_steps": self.model_steps,
+            "simulation.max_steps": self.model_steps if steps is None else steps,
             "simulation.t_end": t_end,
             "output.sample_rate": EVALUATION_SAMPLE_RATE,
             "formulation.kind": self.evaluation_formulation,

@@ -1,14 +1,19 @@
 """Recovery measured on cases nobody chose: hidden values drawn at random (seeded) across the bounds, fitted back.
 
-Each case is the default walker's own first ``STEPS`` step periods (``T_END`` s runs, as issue 27's
-reproductions) at hidden values of a parameter pair, rounded to 1e-5 s, with the rounding's own std
-(1e-5 / sqrt(12) s) as the reference's std, so that a fit that stops in another basin is seen to miss the
-data. The hidden values are drawn uniformly over ``INTERIOR`` of each parameter's normalised range (a truth
-on a bound is a different question: the fit then says "on a bound"); a draw at which the walker falls
-before the reference's last step makes no reference and is drawn again (counted). A case is recovered when every fitted
-value lies within ``TOLERANCE_SE`` standard errors of the truth, the RMS period error is at the rounding
-(below ``ROUNDING_RMS_S``) and the verdict is converged; a case not recovered must at least not be a
-confident wrong answer: its verdict must be "not converged" or "not identifiable" (``honest``).
+Each case is a walker's own first step periods (the default walker's first ``STEPS``, ``T_END`` s runs, as issue
+27's reproductions; the compliant kneed walker's first ``KNEED_STEPS``, a described walker fitted by its named
+parameter ``walker.parameters.thigh_mass``) at hidden values of a parameter pair, rounded to 1e-5 s, with the
+rounding's own std (1e-5 / sqrt(12) s) as the reference's std, so that a fit that stops in another basin is seen
+to miss the data. The hidden values are drawn uniformly over ``INTERIOR`` of each parameter's normalised range (a
+truth on a bound is a different question: the fit then says "on a bound"); a draw at which the walker falls
+before the reference's last step makes no reference and is drawn again (counted). A case is recovered when every
+fitted value lies within ``TOLERANCE_SE`` standard errors of the truth, the RMS period error is at the rounding
+(below ``ROUNDING_RMS_S``) and the verdict is converged; a case not recovered must at least not be a confident
+wrong answer: its verdict must be "not converged" or "not identifiable" (``honest``).
+
+The kneed walker's reference is shorter because each of its runs costs far more than the default walker's (README,
+"Calibration"): three periods, which its thigh mass and foot stiffness move in different proportions, so the pair
+is identifiable from them.
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from biped_sim.config import Config, derive
+from biped_sim.config import Config, derive, load_config
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import run_fit
@@ -32,18 +37,42 @@ from biped_sim.studies.fit.stats import FitResult, summarize
 from biped_sim.studies.fit.synthetic import synthetic_reference_data
 
 STEPS, T_END = 7, 3.5
+KNEED_STEPS, KNEED_T_END = 3, 2.5
 ROUNDING_S = 1e-5
 ROUNDING_STD_S = ROUNDING_S / math.sqrt(12.0)  # 2.9 us: the rounding's own std
 ROUNDING_RMS_S = 5e-6  # an RMS period error below this is at the rounding
 TOLERANCE_SE = 3.0
 INTERIOR = (0.1, 0.9)
 MAX_DRAWS = 3  # draws per case at most (the walker must walk at the truth)
-# each pair: the start config's changes and the fitted KEY=LO:HI
-PAIRS: dict[str, tuple[dict[str, Any], tuple[str, ...]]] = {
-    "inertia+restitution": ({}, ("walker.leg_inertia=0.004:0.007", "contact.restitution=0.1:0.9")),
-    "stiffness+friction": (
+DEFAULT_WALKER = "configs/round_foot_walker.yaml"
+KNEED_WALKER = "tests/data/kneed_compliant_parametrised.yaml"  # configs/kneed_walker_compliant.yaml, parametrised
+
+
+@dataclass(frozen=True)
+class Pair:
+    """A parameter pair: the config its fits start from (a file of the repository, with ``changes``), the fitted
+    ``KEY=LO:HI`` and the reference's length (its first ``steps`` periods, runs of ``t_end`` s)."""
+
+    config: str
+    changes: dict[str, Any]
+    parameters: tuple[str, ...]
+    steps: int = STEPS
+    t_end: float = T_END
+
+
+PAIRS: dict[str, Pair] = {
+    "inertia+restitution": Pair(DEFAULT_WALKER, {}, ("walker.leg_inertia=0.004:0.007", "contact.restitution=0.1:0.9")),
+    "stiffness+friction": Pair(
+        DEFAULT_WALKER,
         {"contact.materials": None, "contact.stiffness": 3.24e7},
         ("contact.stiffness=1e7:1e8", "friction.mu_kinetic=0.3:0.9"),
+    ),
+    "kneed thigh mass+stiffness": Pair(
+        KNEED_WALKER,
+        {},
+        ("walker.parameters.thigh_mass=0.4:0.6", "contact.stiffness=3e5:3e6"),
+        KNEED_STEPS,
+        KNEED_T_END,
     ),
 }
 
@@ -68,34 +97,35 @@ class Recovery:
         return self.recovered or self.verdict != "converged"
 
 
-def start_config(base: Config, pair: str) -> Config:
-    """The config a pair's fits start from (``base`` with the pair's changes, ``T_END`` s)."""
-    return derive(base, {**PAIRS[pair][0], "simulation.t_end": T_END})
+def start_config(pair: str, root: Path = Path(".")) -> Config:
+    """The config a pair's fits start from: its file (under the repository's ``root``) with its changes."""
+    spec = PAIRS[pair]
+    return derive(load_config(root / spec.config), {**spec.changes, "simulation.t_end": spec.t_end})
 
 
-def draw_cases(base: Config, pair: str, count: int, seed: int) -> tuple[list[dict[str, float]], int]:
+def draw_cases(start: Config, pair: str, count: int, seed: int) -> tuple[list[dict[str, float]], int]:
     """``count`` hidden value sets for ``pair``, uniform over INTERIOR of each normalised range (seeded), each one
     whose walker takes the reference's steps (a truth that falls makes no reference); and how many were drawn."""
-    start = start_config(base, pair)
-    parameters = [parse_parameter(text, start) for text in PAIRS[pair][1]]
+    steps = PAIRS[pair].steps
+    parameters = [parse_parameter(text, start) for text in PAIRS[pair].parameters]
     rng, cases, drawn = np.random.default_rng(seed), [], 0
     while len(cases) < count and drawn < MAX_DRAWS * count:
         drawn += 1
         row = rng.uniform(*INTERIOR, size=len(parameters))
         hidden = {p.key: float(f"{p.from_unit(u):.6g}") for p, u in zip(parameters, row, strict=True)}
-        data = derive(start, {**hidden, "simulation.max_steps": STEPS}).model_dump(mode="json")
-        if simulate_outcome(data).strikes >= STEPS:
+        data = derive(start, {**hidden, "simulation.max_steps": steps}).model_dump(mode="json")
+        if simulate_outcome(data).strikes >= steps:
             cases.append(hidden)
     return cases, drawn
 
 
-def recovery_problem(base: Config, pair: str, hidden: dict[str, float]) -> FitProblem:
-    """The fit of ``pair`` against the start config's periods at ``hidden`` (rounded, with the rounding's std)."""
-    start = start_config(base, pair)
-    data = synthetic_reference_data(derive(start, hidden), STEPS, 0.0, 0, decimals=5)
-    data["std"] = [ROUNDING_STD_S] * STEPS
+def recovery_problem(start: Config, pair: str, hidden: dict[str, float]) -> FitProblem:
+    """The fit of ``pair`` against ``start``'s periods at ``hidden`` (rounded, with the rounding's std)."""
+    steps = PAIRS[pair].steps
+    data = synthetic_reference_data(derive(start, hidden), steps, 0.0, 0, decimals=5)
+    data["std"] = [ROUNDING_STD_S] * steps
     reference = Reference(Path("synthetic"), ReferenceSpec.model_validate(data))
-    return FitProblem(start, reference, tuple(parse_parameter(text, start) for text in PAIRS[pair][1]))
+    return FitProblem(start, reference, tuple(parse_parameter(text, start) for text in PAIRS[pair].parameters))
 
 
 def judge(pair: str, hidden: dict[str, float], result: FitResult, wall_s: float) -> Recovery:
@@ -111,10 +141,10 @@ def judge(pair: str, hidden: dict[str, float], result: FitResult, wall_s: float)
     return Recovery(pair, hidden, result.parameters, errors, rms, result.verdict, recovered, evaluations, wall_s)
 
 
-def recover(base: Config, pair: str, hidden: dict[str, float], executor: Executor | None = None) -> Recovery:
-    """Fit one case (its simulations on ``executor``) and judge it."""
+def recover(start: Config, pair: str, hidden: dict[str, float], executor: Executor | None = None) -> Recovery:
+    """Fit one case from ``start`` (:func:`start_config`; its simulations on ``executor``) and judge it."""
     clock = time.perf_counter()
-    evaluator = Evaluator(recovery_problem(base, pair, hidden), executor)
+    evaluator = Evaluator(recovery_problem(start, pair, hidden), executor)
     result = summarize(run_fit(evaluator), evaluator)
     return judge(pair, hidden, result, time.perf_counter() - clock)
 
