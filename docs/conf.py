@@ -64,7 +64,7 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "matplotlib_animations": False,
     "show_signature": False,
-    "image_scrapers": ("matplotlib", PackageFigures()),
+    "image_scrapers": (PackageFigures(), "matplotlib"),  # this order: see gallery_figures.py
 }
 
 html_theme = "furo"

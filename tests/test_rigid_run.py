@@ -30,8 +30,8 @@ RIMLESS = CONFIGS / "rimless_wheel.yaml"
 THETA_STAR, THETA_DOT_STAR = 0.20031090049483, -0.19983247291764  # MODEL.md 8, slope 0.009
 RIGID_DATASETS = (
     "time", "state", "state_names", "energy/kinetic", "energy/potential", "energy/dissipated_impact",
-    "energy/push_work", "energy/residual", "hip", "steps/strike_time", "steps/foot", "steps/period", "steps/length",
-    "steps/slip",
+    "energy/dissipated_elements", "energy/push_work", "energy/residual", "hip", "steps/strike_time", "steps/foot",
+    "steps/period", "steps/length", "steps/slip",
     "steps/stance_angle", "steps/stance_rate", "steps/swing_angle", "steps/swing_rate", "strikes/time",
     "strikes/pre_impact", "strikes/post_impact",
 )  # fmt: skip

@@ -9,12 +9,15 @@ from typing import Any
 import numpy as np
 import pytest
 
-from biped_sim import config_from_dict
+from biped_sim import config_from_dict, load_config
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.simulate.rigid import fall_reason
+from biped_sim.simulate import simulate
+from biped_sim.simulate.rigid import RigidRunResult, fall_reason
+
+from .conftest import ROOT
 
 # compass legs with a heavy hip and a torso hanging below the hip on a free joint (a pendulum: no spring holds it)
 TORSO_WALKER: dict[str, Any] = {
@@ -35,12 +38,19 @@ TORSO_WALKER: dict[str, Any] = {
     },
     "simulation": {"t_end": 5.0, "initial": "rigid_limit_cycle"},
 }
+TORSO_COMPASS = ROOT / "tests" / "data" / "torso_compass.yaml"  # springs and dampers hold its torso upright
 START = np.array([0.2, -0.2, 0.05, -0.9, -0.7, -1.2])  # stance, swing, torso angles; their rates
 
 
-def torso_config(com_y: float = -0.2) -> dict[str, Any]:
+def torso_config(com_y: float = -0.2, stiffness: float = 0.0) -> dict[str, Any]:
+    """The torso walker with its torso's centre of mass at com_y and, if ``stiffness``, a spring of it to each leg."""
     config = copy.deepcopy(TORSO_WALKER)
     config["walker"]["description"]["bodies"][0]["com"] = [0.0, com_y]
+    if stiffness:
+        config["walker"]["description"]["joints"][0]["elements"] = [
+            {"name": "spring_1", "law": "linear_spring", "stiffness": stiffness},
+            {"name": "spring_2", "law": "linear_spring", "stiffness": stiffness, "against": "leg_2"},
+        ]
     return config
 
 
@@ -97,3 +107,25 @@ def test_an_unheld_upright_torso_falls_and_is_named() -> None:
     step = rigid_step(walker, START)
     assert step.status == "fell"
     assert fall_reason(walker, step) == "the torso past simulation.fall_leg_angle from the slope normal"
+
+
+def test_hip_springs_hold_an_upright_torso_and_their_energy_closes_the_swing() -> None:
+    walker = rigid_walker(config_from_dict(torso_config(com_y=0.2, stiffness=20.0)))
+    step = rigid_step(walker, START, sample_rate=1000.0)
+    assert step.status == "strike"
+    energy = np.array([sum(walker.energy(x)) for x in step.samples_x])
+    assert np.ptp(energy) < 1e-10 * np.abs(energy).max()  # the springs' potential in the energy: conserved
+    theta = step.samples_x[:, 2] - step.samples_x[:, 0], step.samples_x[:, 2] - step.samples_x[:, 1]
+    stored = 0.5 * 20.0 * (theta[0] ** 2 + theta[1] ** 2)
+    assert np.ptp(stored) > 1e-3 * np.abs(energy).max()  # the springs really store and release energy
+    unheld = rigid_step(rigid_walker(config_from_dict(torso_config(com_y=0.2))), START)
+    assert unheld.status == "fell"  # without the springs the same torso falls
+
+
+def test_a_rigid_run_books_the_dampers_work() -> None:
+    result = simulate(load_config(TORSO_COMPASS, ["dynamics=rigid", "simulation.t_end=0.6"]))
+    assert isinstance(result, RigidRunResult)
+    worked = result.energy.dissipated_elements
+    assert worked[-1] > 0.01 * abs(result.energy.kinetic).max() and np.all(np.diff(worked) >= 0.0)
+    # the trapezoidal rule over the samples (1 kHz): the balance closes to its error, not to the integration's
+    assert np.abs(result.energy.residual).max() < 1e-4 * np.abs(result.energy.potential).max()

@@ -231,6 +231,7 @@ ENERGY_TERMS = (
     ("dissipated_normal", "dissipated, normal"),
     ("dissipated_friction", "dissipated, friction"),
     ("dissipated_impact", "dissipated, impacts"),  # a rigid run's
+    ("dissipated_elements", "dissipated, joint elements"),
 )
 
 

@@ -32,7 +32,7 @@ contact, constraint or event data (contact is a rolling constraint and heel stri
     /state                     (ns, ny)      the walker's reduced state, names in /state_names (legs relabelled
                                              at each strike: 'stance' is the current stance leg)
     /state_names               (ny,)         strings
-    /energy/{kinetic,potential,dissipated_impact,push_work,residual}  (ns,) J
+    /energy/{kinetic,potential,dissipated_impact,dissipated_elements,push_work,residual}  (ns,) J
     /hip                       (ns, 2)       m
     /steps/{strike_time,foot,period,length,slip,stance_angle,stance_rate,swing_angle,swing_rate}
                                              touchdown (pre-impact) angles and rates, as compliant runs record them

@@ -1,7 +1,8 @@
 """Measures of a rigid run: its heel-strike trace, step table, energy terms and hip path.
 
 Step k's models measure positions from their own origin; :func:`rigid_energy_and_hip` puts every sample in
-one slope frame so that the energy balance E(t) - E(0) + W_impact(t) - W_push(t) is checked across steps.
+one slope frame so that the energy balance E(t) - E(0) + W_impact(t) + W_element(t) - W_push(t) is checked across
+steps (W_element: the dampers' work, the trapezoidal rule over the samples: exact to the samples' spacing squared).
 """
 
 from __future__ import annotations
@@ -21,11 +22,13 @@ from biped_sim.rigid.tree_layout import rolling
 
 @dataclass
 class RigidEnergy:
-    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) - W_push(t) (J, J/kg or nondimensional)."""
+    """Energy terms at the samples; residual = E(t) - E(0) + W_impact(t) + W_element(t) - W_push(t) (J, J/kg or
+    nondimensional; E's potential holds the joint elements' springs)."""
 
     kinetic: np.ndarray
     potential: np.ndarray
     dissipated_impact: np.ndarray
+    dissipated_elements: np.ndarray  # W_element(t): the joint elements' (dampers') work, trapezoids over the samples
     push_work: np.ndarray  # W_push(t): work of the pushes so far (their kinetic energy jumps)
     residual: np.ndarray
 
@@ -101,8 +104,9 @@ def rigid_energy_and_hip(
     dissipated_by_step = np.concatenate([[0.0], np.cumsum(losses)])
     step_of_sample = np.concatenate(trace.sample_step)
     sample_origin = origin[step_of_sample]
-    terms, hip = np.empty((len(times), 2)), np.empty((len(times), 2))
+    terms, hip = np.empty((len(times), 3)), np.empty((len(times), 2))
     rigid_loop(walker.params, np.ascontiguousarray(states, dtype=np.float64), walker.n_points, terms, hip)
+    elements = np.concatenate([[0.0], np.cumsum(0.5 * (terms[1:, 2] + terms[:-1, 2]) * np.diff(times))])
     kinetic = terms[:, 0]
     potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
     sample_level = np.concatenate([[0.0], trace.strike_levels])[step_of_sample] if trace.strike_levels else None
@@ -116,8 +120,8 @@ def rigid_energy_and_hip(
     push_work = np.zeros(len(times))
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it
-    residual = kinetic + potential - energy_0 + dissipated - push_work
+    residual = kinetic + potential - energy_0 + dissipated + elements - push_work
     hip[:, 0] += sample_origin
     if sample_level is not None:
         hip[:, 1] += sample_level
-    return RigidEnergy(kinetic, potential, dissipated, push_work, residual), hip
+    return RigidEnergy(kinetic, potential, dissipated, elements, push_work, residual), hip

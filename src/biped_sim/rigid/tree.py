@@ -274,9 +274,10 @@ class RigidWalker:
 
     def state_from_legs(self, legs: dict[str, float]) -> np.ndarray:
         """The state of the initial-state keys, on the joints locked at a step's start (the stance leg's stops:
-        its keys below the hip body are then implied)."""
-        x = np.array([legs[name] for name in self.state_names], dtype=float)
+        its keys below the hip body are then implied); a body off the legs without keys starts upright at rest."""
         n = self.n_q
+        off = {self.state_names[k] for k in self.off_legs} | {self.state_names[n + k] for k in self.off_legs}
+        x = np.array([legs.get(name, 0.0) if name in off else legs[name] for name in self.state_names], dtype=float)
         for parent, child, limit in self.start_locks:
             x[child], x[n + child] = x[parent] + limit, x[n + parent]
         return x

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config, FootSpec, WalkerDescription
+from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, element_parameters
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.tree_kernels import PAST, RELEASED, STOP, STRIKE
 from biped_sim.rigid.tree_layout import T_ROWS, T_TABLES, T_TRIG, T_WORK, gravity_vector, layout_offsets
@@ -178,6 +179,16 @@ def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, 
     return locks
 
 
+def tree_elements(tree: Tree, d: WalkerDescription) -> list[list[float]]:
+    """(law, child, other, the law's parameters) of every joint element: a torque on the child's coordinate and its
+    opposite on the other body's (the joint's parent, or the body it acts against)."""
+    return [
+        [JOINT_ELEMENT_LAWS[e.law].index, tree.index[j.child], tree.index[other],
+         *element_parameters(e.law, **e.values())]
+        for j, e, other in d.joint_elements()
+    ]  # fmt: skip
+
+
 def _relabelling(tree: Tree, n: int) -> tuple[list[int], list[float]]:
     """(perm, shift) of the heel strike: coordinate k after it is coordinate perm[k] before plus shift[k] (the legs
     swap; a body off them keeps its coordinate)."""
@@ -210,9 +221,10 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     radius = tree.feet[0].radius
     gx, gy = gravity_vector(gravity, config.ground.slope)
     header = [n, depth + radius, radius, lean, gx, gy, config.simulation.fall_leg_angle]
-    offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases))
+    elements = tree_elements(tree, d)
+    offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases), len(elements))
     counts = [len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0]), len(tree.off_legs)]
-    p = [*header, *counts, config.simulation.fall_leg_angle]
+    p = [*header, *counts, config.simulation.fall_leg_angle, len(elements)]
     p += [offsets[k] for k in range(T_ROWS, T_TABLES)]
     for t in (0, 1):
         p.append(rolling[t])
@@ -221,7 +233,7 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     p += _flat(tree.origin(tree.root, tree.feet[0]), n)
     p += _flat(tree.at(tree.feet[1].body, tree.feet[1].centre, tree.feet[0]), n)
     p += [v for lock in locks for v in lock[:5]] + [v for phase in phases for v in phase]
-    p += perm + shift + flags[0] + flags[1]
+    p += perm + shift + flags[0] + flags[1] + [v for element in elements for v in element]
     assert len(p) == offsets[T_WORK], (len(p), offsets)
     return np.array(p + [0.0] * (offsets[T_TRIG] + 2 * n - len(p)), dtype=float)
 

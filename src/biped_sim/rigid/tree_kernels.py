@@ -32,8 +32,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from biped_sim.contact.joint_element import element_energy, element_torque
 from biped_sim.kernel import kernel
 from biped_sim.rigid.tree_layout import (
+    ELEMENT_FIELDS,
+    ELEMENT_HEAD,
     P_FALL,
     P_GX,
     P_GY,
@@ -42,12 +45,14 @@ from biped_sim.rigid.tree_layout import (
     P_R,
     ROW_HEAD,
     T_FALL_OFF,
+    T_NELEM,
     T_NLIGHT,
     T_NLOCK,
     T_NOFF,
     T_NPHASE,
     T_NPTS,
     coords,
+    element_offset,
     fill_trig,
     jacobian_column,
     light_flags,
@@ -224,8 +229,51 @@ def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int,
 
 
 @kernel
+def _element(p: np.ndarray, e: int, q: np.ndarray, qd: np.ndarray) -> tuple[int, int, float, float]:
+    """(child, other, torque on the child, dissipated power) of joint element e: its law's one source
+    (:mod:`biped_sim.contact.joint_element`) at the relative angle and rate of the child to the other body."""
+    o = element_offset(p, e)
+    child, other = int(p[o + 1]), int(p[o + 2])
+    params = p[o + ELEMENT_HEAD : o + ELEMENT_FIELDS]
+    tau, power = element_torque(int(p[o]), q[child] - q[other], qd[child] - qd[other], params)
+    return child, other, tau, power
+
+
+@kernel
+def _element_forces(p: np.ndarray, q: np.ndarray, qd: np.ndarray, r: int) -> None:
+    """Add the joint elements' torques to the generalized forces at p[r:]: with absolute angles as coordinates a
+    couple tau on (child, other) is tau on the child's coordinate and -tau on the other's."""
+    for e in range(int(p[T_NELEM])):
+        child, other, tau, _ = _element(p, e, q, qd)
+        p[r + child] += tau
+        p[r + other] -= tau
+
+
+@kernel
+def tree_element_energy(p: np.ndarray, q: np.ndarray) -> float:
+    """Energy stored in the joint elements (their springs) at angles q."""
+    stored = 0.0
+    for e in range(int(p[T_NELEM])):
+        o = element_offset(p, e)
+        theta = q[int(p[o + 1])] - q[int(p[o + 2])]
+        stored += element_energy(int(p[o]), theta, p[o + ELEMENT_HEAD : o + ELEMENT_FIELDS])
+    return stored
+
+
+@kernel
+def tree_element_power(p: np.ndarray, x: np.ndarray) -> float:
+    """Power the joint elements dissipate at state x (their dampers'), >= 0."""
+    n = coords(p)
+    dissipated = 0.0
+    for e in range(int(p[T_NELEM])):
+        dissipated += _element(p, e, x[:n], x[n:])[3]
+    return dissipated
+
+
+@kernel
 def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
-    """out = dx/dt: Kane's equations with the locked stops as constraints."""
+    """out = dx/dt: Kane's equations with the locked stops as constraints, the joint elements' torques among the
+    generalized forces."""
     n = coords(p)
     m = n + int(p[T_NLOCK])
     q, qd = x[:n], x[n:]
@@ -233,6 +281,7 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     w = work_offset(p)
     r = w + m * m
     used = _assemble(p, 0, w, m, qd, True, False)
+    _element_forces(p, q, qd, r)
     _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
     _light_tier(p, 0, q, qd, FLOW, w, m, r)
@@ -243,7 +292,8 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
 
 @kernel
 def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
-    """(kinetic, potential) energy of the rows of table 0 (potential zero with every point on the ground line)."""
+    """(kinetic, potential) energy of the rows of table 0 (gravity's potential zero with every point on the ground
+    line) and the joint elements' stored energy among the potential."""
     n = coords(p)
     q, qd = x[:n], x[n:]
     fill_trig(p, q)
@@ -256,7 +306,7 @@ def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
         px, py = point_at(p, w_offset(p, 0, i), q)
         kinetic += 0.5 * mass * (vx * vx + vy * vy) + 0.5 * inertia * qd[own] * qd[own]
         potential -= mass * (gx * px + gy * py)
-    return kinetic, potential
+    return kinetic, potential + tree_element_energy(p, q)
 
 
 @kernel

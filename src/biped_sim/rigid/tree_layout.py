@@ -4,11 +4,11 @@
 Layout of ``p``: the header (P_NQ, P_L the leg length, P_R the stance foot's radius, P_LEAN the locked leg's foot
 lean phi, P_GX and P_GY the gravity vector in the slope frame, P_FALL), T_NLOCK, T_NPHASE, T_NPTS, T_RSW (the
 landing foot's radius), T_NLIGHT, T_NOFF and T_FALL_OFF (the bodies off the legs, a torso, and their fall angle),
-the offsets T_ROWS ... T_TRIG; per table: the rolling coordinate, then per row
-(mass, inertia, coordinate, w (2 n)), heavy rows first; the hip's and the landing foot's w (2 n each, table 0); per
-lock (parent, child, limit, sign: +1 upper / -1 lower, active); per phase (kind, lock); the permutation (n), the
-shift (n) and each table's light flags (n each); a workspace (the solves); the sines and cosines of the angles last
-evaluated (2 n).
+T_NELEM, the offsets T_ROWS ... T_TRIG; per table: the rolling coordinate, then per row (mass, inertia,
+coordinate, w (2 n)), heavy rows first; the hip's and the landing foot's w (2 n each, table 0); per lock (parent,
+child, limit, sign: +1 upper / -1 lower, active); per phase (kind, lock); the permutation (n), the shift (n) and
+each table's light flags (n each); per joint element (law, child, other, the law's parameters); a workspace (the
+solves); the sines and cosines of the angles last evaluated (2 n).
 """
 
 from __future__ import annotations
@@ -17,26 +17,32 @@ import math
 
 import numpy as np
 
+from biped_sim.contact.joint_element import N_ELEMENT_PARAMS
 from biped_sim.kernel import kernel
 
 P_NQ, P_L, P_R, P_LEAN, P_GX, P_GY, P_FALL, T0 = 0, 1, 2, 3, 4, 5, 6, 7
 T_NLOCK, T_NPHASE, T_NPTS, T_RSW, T_NLIGHT = T0, T0 + 1, T0 + 2, T0 + 3, T0 + 4
 T_NOFF, T_FALL_OFF = T0 + 5, T0 + 6  # the bodies off the legs (the last coordinates) and their fall angle
+T_NELEM = T0 + 7  # the joint elements (springs, dampers)
 # where each part starts (written by layout_offsets): the two tables' first rows, the hip's and landing foot's w,
-# the locks, the phases, the permutation, the workspace, the sines and cosines of the last state's angles
-T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM, T_WORK, T_TRIG = T0 + 7, T0 + 9, T0 + 10, T0 + 11, T0 + 12, T0 + 13, T0 + 14
-T_TABLES = T0 + 15
+# the locks, the phases, the permutation, the elements, the workspace, the sines and cosines of the last angles
+T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM = T0 + 8, T0 + 10, T0 + 11, T0 + 12, T0 + 13
+T_ELEM, T_WORK, T_TRIG = T0 + 14, T0 + 15, T0 + 16
+T_TABLES = T0 + 17
 LOCK_FIELDS, PHASE_FIELDS, ROW_HEAD = 5, 2, 3
+ELEMENT_HEAD = 3  # an element's law, child coordinate and other coordinate; its law's parameters follow
+ELEMENT_FIELDS = ELEMENT_HEAD + N_ELEMENT_PARAMS
 
 
-def layout_offsets(n: int, n_points: int, n_light: int, n_lock: int, n_phase: int) -> dict[int, int]:
+def layout_offsets(n: int, n_points: int, n_light: int, n_lock: int, n_phase: int, n_elem: int) -> dict[int, int]:
     """The header's offsets (T_ROWS, T_ROWS + 1, T_EXTRA, ...) and the total length ('size') of a tree's vector."""
     table = 1 + (n_points + n_light) * (ROW_HEAD + 2 * n)
     offsets = {T_ROWS: T_TABLES + 1, T_ROWS + 1: T_TABLES + table + 1, T_EXTRA: T_TABLES + 2 * table}
     offsets[T_LOCK] = offsets[T_EXTRA] + 4 * n
     offsets[T_PHASE] = offsets[T_LOCK] + LOCK_FIELDS * n_lock
     offsets[T_PERM] = offsets[T_PHASE] + PHASE_FIELDS * n_phase
-    offsets[T_WORK] = offsets[T_PERM] + 4 * n  # the permutation, the shift and the light flags of both tables
+    offsets[T_ELEM] = offsets[T_PERM] + 4 * n  # the permutation, the shift and the light flags of both tables
+    offsets[T_WORK] = offsets[T_ELEM] + ELEMENT_FIELDS * n_elem
     m = n + n_lock
     offsets[T_TRIG] = offsets[T_WORK] + m * m + m + 2 * (n_points + n_light) + 3 * n
     return offsets
@@ -72,6 +78,12 @@ def w_offset(p: np.ndarray, t: int, i: int) -> int:
 def lock_offset(p: np.ndarray, j: int) -> int:
     """Offset of lock j's fields."""
     return int(p[T_LOCK]) + LOCK_FIELDS * j
+
+
+@kernel
+def element_offset(p: np.ndarray, e: int) -> int:
+    """Offset of joint element e's fields (law, child, other, the law's parameters)."""
+    return int(p[T_ELEM]) + ELEMENT_FIELDS * e
 
 
 @kernel

@@ -68,7 +68,7 @@ from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
-RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "push_work", "residual")
+RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "dissipated_elements", "push_work", "residual")
 
 
 @dataclass(repr=False)  # RunResult.__repr__: one line, not every array

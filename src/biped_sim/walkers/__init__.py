@@ -16,6 +16,7 @@ from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described
 from biped_sim.walkers.four_legged import build_four_legged, build_four_legged_sagittal
 from biped_sim.walkers.model import BuiltModel, minimal_model
+from biped_sim.walkers.space_walker import build_space_walker
 from biped_sim.walkers.spatial_compass import spatial_compass
 
 
@@ -30,6 +31,7 @@ BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {  # planar;
 SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
     "compass": _spatial_compass,
     "four_legged": build_four_legged,
+    "description3d": build_space_walker,
 }
 
 

@@ -79,7 +79,7 @@ def sagittal_initial_state(
     com_offsets: tuple[tuple[float, float], tuple[float, float]],
     static_penetration: float,
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """Initial planar state of a stance and a swing leg rolling on the stance foot (README conventions), from ``init``.
+    """Initial planar state of a stance and a swing leg rolling on the stance foot (docs/guide/model.md), from ``init``.
 
     ``com_offsets`` place each leg body's centre of mass from the hip: (along the leg towards the foot, across
     it, downhill when vertical). The stance foot's arc centre (offset ``walker.foot_offset`` across the leg)
