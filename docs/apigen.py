@@ -42,9 +42,10 @@ def exports(package: ModuleType) -> list[str]:
 
 
 def directive(name: str, argument: str, options: dict[str, str]) -> list[str]:
-    """A MyST directive block."""
-    lines = [f"```{{{name}}} {argument}"]
-    lines += [f":{key}: {value}".rstrip() for key, value in options.items()]
+    """An autodoc directive, in an ``eval-rst`` block: autodoc writes reStructuredText, which MyST would
+    otherwise show as text."""
+    lines = ["```{eval-rst}", f".. {name}:: {argument}"]
+    lines += [f"   :{key}: {value}".rstrip() for key, value in options.items()]
     return [*lines, "```", ""]
 
 
@@ -54,12 +55,14 @@ def export_entries(package: ModuleType) -> list[str]:
     for name in exports(package):
         obj = getattr(package, name)
         full = f"{package.__name__}.{name}"
+        # no-index: the object is indexed once, under its module (a package re-exports it, and an export may share
+        # its name with a module, as ``biped_sim.simulate``)
         if isinstance(obj, type):
-            lines += directive("autoclass", full, {"members": ""})
+            lines += directive("autoclass", full, {"members": "", "no-index": ""})
         elif callable(obj):
-            lines += directive("autofunction", full, {})
+            lines += directive("autofunction", full, {"no-index": ""})
         else:
-            lines += directive("autodata", full, {"annotation": ""})
+            lines += directive("autodata", full, {"annotation": "", "no-index": ""})
     return lines
 
 

@@ -22,6 +22,7 @@ sys.path.insert(0, str(DOCS.parent / "src"))
 sys.path.insert(0, str(DOCS))
 
 import apigen  # noqa: E402  (docs/apigen.py, beside this file)
+from docstrings import literal_if_unclean  # noqa: E402
 from gallery_figures import PackageFigures  # noqa: E402
 
 apigen.write_pages(DOCS / "api" / "generated")
@@ -64,10 +65,16 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "matplotlib_animations": False,
     "show_signature": False,
-    "image_scrapers": ("matplotlib", PackageFigures()),
+    "image_scrapers": (PackageFigures(), "matplotlib"),  # this order: see gallery_figures.py
 }
 
 html_theme = "furo"
 html_title = "biped-sim"
 html_static_path: list[str] = []
-suppress_warnings = ["config.cache"]
+# a relative :mod: reference that two packages could satisfy (``.ground``) resolves to one of them: not an error
+suppress_warnings = ["config.cache", "ref.python"]
+
+
+def setup(app: object) -> None:
+    """Docstrings that are not valid reStructuredText are shown verbatim (docs/docstrings.py)."""
+    app.connect("autodoc-process-docstring", literal_if_unclean)  # type: ignore[attr-defined]

@@ -2,7 +2,8 @@
 
 ``biped_sim.plots`` draws on :class:`matplotlib.figure.Figure` objects made directly (no pyplot state), so the
 gallery's matplotlib scraper, which reads pyplot's open figures, does not see them. This one shows every such
-figure that a tutorial's code block leaves in a variable (or as the block's last value), once.
+figure that a tutorial's code block leaves in a variable, once. It runs before the matplotlib scraper, so that
+it can tell pyplot's figures (which that scraper shows, then closes) from the package's.
 """
 
 from __future__ import annotations
@@ -23,13 +24,14 @@ class PackageFigures:
         return "PackageFigures"
 
     def __call__(self, block: Any, block_vars: dict[str, Any], gallery_conf: dict[str, Any]) -> str:
-        names = block_vars["example_globals"]
-        figures = [value for value in names.values() if isinstance(value, Figure) and value.canvas.manager is None]
+        figures = [value for value in block_vars["example_globals"].values() if isinstance(value, Figure)]
         paths = []
         for figure in figures:
             if any(figure is seen for seen in self.shown):
                 continue
             self.shown.append(figure)
+            if figure.canvas.manager is not None:
+                continue  # pyplot's: the matplotlib scraper, which runs next, shows it (and closes it)
             path = next(block_vars["image_path_iterator"])
             figure.savefig(path, dpi=150)
             paths.append(path)

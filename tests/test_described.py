@@ -33,7 +33,6 @@ from biped_sim.simulate import CompliantRunResult, simulate
 from biped_sim.studies.convergence import converge
 from biped_sim.testing import default_walker, pendulum
 from biped_sim.walkers import build_model
-from biped_sim.walkers.compass import build_compass
 
 from .conftest import ROOT
 
@@ -190,35 +189,24 @@ def test_the_tree_solve_equals_the_star_solve_on_the_compass_to_rounding() -> No
 # ---------------------------------------------------------------- the builder
 
 
-def compass_description(config: Config) -> dict:
-    """The compass walker of ``config`` written as a description: each leg a body with half the hip mass."""
-    w = config.walker
-    leg = {"mass": w.leg_mass, "inertia": w.leg_inertia, "com": [w.leg_com_offset, -w.leg_com_from_hip]}
-    foot = {"centre": [w.foot_offset, -(w.leg_length - w.foot_radius)], "radius": w.foot_radius}
-    return {
-        "bodies": [{"name": "leg0", **leg}, {"name": "leg1", **leg}],
-        "point_masses": [{"name": f"hip{b}", "body": f"leg{b}", "mass": 0.5 * w.hip_mass} for b in (0, 1)],
-        "joints": [{"name": "hip", "parent": "leg0", "child": "leg1"}],
-        "feet": [{"name": "foot0", "body": "leg0", **foot}, {"name": "foot1", "body": "leg1", **foot}],
-        "legs": [["leg0"], ["leg1"]],
-    }
-
-
 @pytest.mark.parametrize("offsets", [(), ("walker.foot_offset=0.01", "walker.leg_com_offset=0.004")])
-def test_the_compass_described_builds_the_compass_system(offsets: tuple[str, ...]) -> None:
+def test_the_compass_preset_builds_the_compass_of_model_md(offsets: tuple[str, ...]) -> None:
+    """The compass preset, built from its description, is MODEL.md's compass: each leg with half the hip mass at
+    the hip, its centre of mass d = m c / (m + M_H/2) along and d_w = m w / (m + M_H/2) across the leg, its inertia
+    by parallel axes, the foot arc centre l - R along and d across the leg, rolling on its stance foot."""
     config = default_walker(*offsets)
-    described = config_from_dict(
-        {
-            **config.model_dump(mode="json"),
-            "walker": {"kind": "description", "description": compass_description(config)},
-        }
-    )
-    compass, built = build_compass(config, config.simulation.initial), build_model(described)
-    for name in PlanarSystem._fields:
-        if name not in ("ground", "stops"):
-            assert np.array_equal(getattr(built.system, name), getattr(compass.system, name)), name
-    np.testing.assert_allclose(built.y0, compass.y0, rtol=0, atol=1e-15)
-    assert np.array_equal(built.modes0, compass.modes0)
+    w = config.walker
+    m, c, across, half_hip = w.leg_mass, w.leg_com_from_hip, w.leg_com_offset, 0.5 * w.hip_mass
+    mass = m + half_hip
+    d, d_w = m * c / mass, m * across / mass
+    inertia = w.leg_inertia + m * ((c - d) ** 2 + (across - d_w) ** 2) + half_hip * (d**2 + d_w**2)
+    system = build_model(config).system
+    np.testing.assert_allclose(system.body_mass, [mass, mass], rtol=1e-15)
+    np.testing.assert_allclose(system.body_inertia, [inertia, inertia], rtol=1e-15)
+    np.testing.assert_allclose(system.joint_points, [[-d_w, d, -d_w, d]], rtol=1e-15, atol=1e-17)
+    centre = [w.foot_offset - d_w, -(w.leg_length - w.foot_radius - d)]
+    np.testing.assert_allclose(system.foot_center, [centre, centre], rtol=1e-15)
+    assert np.array_equal(system.foot_partner, [1, 0]) and np.array_equal(system.foot_radius, [w.foot_radius] * 2)
 
 
 def test_without_latches_the_stance_knee_of_chens_walker_flexes_and_it_falls() -> None:
@@ -258,6 +246,15 @@ def test_a_knee_latch_engages_at_the_knee_strike_and_lets_go_after_the_toe_off_a
     swinging = (run.t > release) & (run.t < release + 0.2)  # the released knee's next swing, before its strike
     assert np.all(stance[between] == RELEASING) and np.all(stance[swinging] == FREE)
     assert np.all(swing[(run.t > latched) & (run.t < run.strike_t[1])] == HELD)
+
+
+def test_a_swing_foot_starting_below_the_ground_is_refused_without_the_scuffing_guard() -> None:
+    """The stance leg leaning, the swing leg straight down: its foot starts under the ground, which the scuffing
+    guard would ignore (mid-stance scuffing) and a run without it could not start from."""
+    swing_down = ["simulation.initial.swing_thigh_angle=0", "simulation.initial.swing_shank_angle=0"]
+    assert build_model(_kneed(*swing_down)).y0.size  # the guard ignores the scuffing swing foot
+    with pytest.raises(ConfigError, match=r"^simulation\.initial: the swing foot starts below the ground"):
+        build_model(_kneed(*swing_down, "contact.scuffing_guard=false"))
 
 
 def test_a_latch_needs_a_joint_within_a_leg_one_line_naming_the_field() -> None:

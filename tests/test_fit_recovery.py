@@ -28,7 +28,7 @@ def test_the_parametrised_kneed_walker_is_the_bundled_one() -> None:
     assert [(b.name, b.mass) for b in heavier if b.name.startswith("thigh")] == [("thigh_1", 0.55), ("thigh_2", 0.55)]
 
 
-@pytest.mark.slow  # 20 two-parameter fits each: minutes per pair with 2 workers (README, "Calibration")
+@pytest.mark.slow  # 20 two-parameter fits each: minutes per pair with 2 workers (docs/experiments.md, "Cost, profiled")
 @pytest.mark.parametrize("pair", list(PAIRS))
 def test_hidden_values_drawn_at_random_are_recovered(pair: str) -> None:
     start = start_config(pair, ROOT)

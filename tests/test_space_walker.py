@@ -10,17 +10,20 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from biped_sim.config import config_from_dict, load_config
+from biped_sim.config import Config, config_from_dict, load_config
 from biped_sim.errors import ConfigError
 from biped_sim.rigid import space_dynamics as dyn
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.space_cycle import SpaceSection, space_limit_cycle, space_walker_model
+from biped_sim.rigid.space_cycle import SpaceSection, space_branch, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_flow, space_params
 from biped_sim.rigid.space_model import MIRROR, swing_clearance
 from tests.conftest import invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
+KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one branch of gaits
+KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
+KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
 STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # heading .. hinge rate, contact x, y
 
 
@@ -55,7 +58,7 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
         ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
         ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
         ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
-        ("dynamics=compliant", "walker.kind: 'description3d' is available with dynamics: rigid only"),
+        ("dynamics=compliant", "walker.kind: 'description3d' needs formulation.kind: spatial with dynamics: compliant"),
         ("walker.description={}", "walker.description: unknown key"),
     ],
 )
@@ -183,3 +186,25 @@ def test_the_tinkertoy_walks_stably() -> None:
     moduli = sorted(abs(complex(*m)) for m in cycle["multipliers"])
     np.testing.assert_allclose(moduli, [0.21839504, 0.70796054, 0.70796054, 0.83139588, 0.83139588, 0.83915586,
                                         0.83915586], atol=1e-6)  # fmt: skip
+
+
+def kuo_compass(radius: float) -> Config:
+    """configs/space/kuo_compass_3d.yaml with sphere feet of ``radius``, their bottom 1 m below the hip."""
+    foot = [f"walker.space.leg.foot.radius={radius}", f"walker.space.leg.foot.centre=[0, 0, {radius - 1.0}]"]
+    return load_config(CONFIGS / "space" / "kuo_compass_3d.yaml", foot)
+
+
+@pytest.mark.slow
+def test_the_kuo_compass_rocks_unstably_until_its_feet_are_round_enough() -> None:
+    """Its point-footed gait's unstable mode is the lateral rocking (the eigenvector's largest part the roll rate,
+    then the bank); rounder feet shrink that multiplier, along one branch of gaits (README's table)."""
+    cycles = space_branch([kuo_compass(r) for r in KUO_RADII])
+    assert [c.converged for c in cycles] == [True] * len(KUO_RADII)
+    values, vectors = np.linalg.eig(cycles[0].jacobian)
+    k = int(np.argmax(np.abs(values)))
+    assert values[k] == pytest.approx(KUO_POINT_MULTIPLIER, abs=1e-5)
+    roll = np.abs(np.real(vectors[:, k]))
+    names = list(cycles[0].section_names)
+    assert np.argmax(roll) == names.index("omega_x") and roll[names.index("bank")] > roll[names.index("pitch")]
+    largest = [c.max_multiplier_modulus for c in cycles]
+    assert largest == pytest.approx(KUO_LARGEST, abs=1e-5)

@@ -1,6 +1,6 @@
 """The benchmark walker in MuJoCo: the same compass walker as MJCF, stepped with MuJoCo's RK4.
 
-How the model is matched (the README's Performance section says the same):
+How the model is matched (docs/guide/performance.md says the same):
 
 * Geometry and inertia come from the config through the formulas of the compass builder: each
   leg is a body with mass m + M_H/2, centre of mass d = m c / (m + M_H/2) below the hip and

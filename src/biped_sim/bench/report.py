@@ -1,6 +1,6 @@
 """Presentation of the benchmark: the Markdown table (printed and written), targets, bench.json.
 
-``bench.md`` is exactly what ``biped-sim bench`` prints, so the README's table can be pasted
+``bench.md`` is exactly what ``biped-sim bench`` prints, so the performance table (docs/guide/) can be pasted
 from either.
 """
 

@@ -16,6 +16,7 @@ from pydantic import (
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
 from biped_sim.config.description import LEG_KEYS
+from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
@@ -175,7 +176,7 @@ Number = Annotated[float, BeforeValidator(_not_a_boolean)]  # YAML's true is not
 
 
 class InitialState(Strict):
-    """Leg angles from the slope normal, positive when the foot is downhill of the hip (README)."""
+    """Leg angles from the slope normal, positive when the foot is downhill of the hip (docs/guide/model.md)."""
 
     stance_angle: float = Field(0.25, description="Stance leg angle theta_st [rad].")
     stance_rate: float = Field(-1.6, description="Stance leg angular rate [rad/s].")
@@ -292,6 +293,8 @@ class Config(Strict):
     def initial_keys(self) -> tuple[str, ...]:
         """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
         described = self.walker.description
+        if capabilities(self.walker.kind).space:
+            return SPACE_STATE_KEYS
         return described.state_keys() if described is not None else LEG_KEYS
 
     def hash(self) -> str:

@@ -28,6 +28,9 @@ Vector3 = tuple[float, float, float]
 # a thin rod's principal moments (0, I, I) meet the triangle inequality with equality: its published tensor, rounded
 # to 4 digits (Coleman et al.'s legs), misses it by a few 1e-4 of the largest moment, which is taken as rounding
 INERTIA_ROUNDING = 1e-3
+# simulation.initial of a walker in space: the rigid gait's post-strike state (the stance leg's attitude and angular
+# velocity in the slope frame, the hinge angle and rate; rigid.space_model's STATE_NAMES)
+SPACE_STATE_KEYS = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate")
 
 
 class InertiaSpec(Strict):

@@ -54,8 +54,10 @@ WALKERS: dict[str, WalkerCapabilities] = {
     "description": WalkerCapabilities(
         {"compliant": ("planar", "minimal"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
     ),
-    # a walker in space: its rigid period-1 gait only, for now (formulation.kind is not read by rigid dynamics)
-    "description3d": WalkerCapabilities({"rigid": ("planar",)}, False, False, ("limit_cycle",), space=True),
+    # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs
+    "description3d": WalkerCapabilities(
+        {"rigid": ("planar",), "compliant": ("spatial",)}, False, False, ("limit_cycle",), space=True
+    ),
 }
 
 

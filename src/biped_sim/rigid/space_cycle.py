@@ -194,6 +194,25 @@ def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> Limit
     return _cycle(step_map, z, converged, iterations, residual, how, tried)
 
 
+def space_branch(configs: list[Config], settle_steps: int = SETTLE_STEPS) -> list[LimitCycle]:
+    """One branch of gaits through a series of walkers (e.g. a foot radius stepped up): the first walker's gait
+    found by :func:`space_limit_cycle`, each next one by Newton from the last fixed point (small changes keep to
+    the branch where a new search could land on another gait); the series stops at the first that does not
+    converge (its record included)."""
+    cycles = [space_limit_cycle(configs[0], settle_steps)]
+    for config in configs[1:]:
+        if not cycles[-1].converged:
+            break
+        step_map = SpaceMap(space_walker_model(config))
+        try:
+            z, converged, iterations, residual = newton_fixed_point(step_map, cycles[-1].section_point, RIGID_TOLERANCE)
+        except StepFailedError:
+            break
+        how = "the previous walker's fixed point"
+        cycles.append(_cycle(step_map, z, converged, iterations, residual, how, how))
+    return cycles
+
+
 def _cycle(
     step_map: SpaceMap, z: np.ndarray, converged: bool, iterations: int, residual: float, how: str, tried: str
 ) -> LimitCycle:

@@ -19,36 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config.space_description import SpaceDescription, SpaceFoot
+from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, rot_x, rot_y, rot_z
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
-MIRROR = np.diag([1.0, -1.0, 1.0])  # y -> -y: the right leg is the left's image
-EZ = np.array([0.0, 0.0, 1.0])
 POINT, SPHERE, RING = 0, 1, 2
 SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING}
-
-
-def rot_x(a: float) -> np.ndarray:
-    """Rotation by ``a`` about x."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def rot_y(a: float) -> np.ndarray:
-    """Rotation by ``a`` about y."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def rot_z(a: float) -> np.ndarray:
-    """Rotation by ``a`` about z."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def attitude(psi: float, phi: float, theta: float) -> np.ndarray:
-    """The stance leg's rotation Rz(psi) Rx(phi) Ry(theta) (leg frame -> slope frame)."""
-    return rot_z(psi) @ rot_x(phi) @ rot_y(theta)
 
 
 def attitude_angles(r: np.ndarray) -> tuple[float, float, float]:

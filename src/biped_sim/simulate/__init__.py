@@ -17,9 +17,11 @@ from collections.abc import Callable
 from pathlib import Path
 
 from biped_sim.config import Config, InitialState
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
+from biped_sim.rigid.space_cycle import space_limit_cycle
 from biped_sim.rigid.start import RigidStart, rigid_start
 from biped_sim.simulate.budget import check_run_size
 from biped_sim.simulate.compliant import CompliantRunResult, simulate_compliant
@@ -39,9 +41,17 @@ __all__ = [
 ]
 
 
-def initial_state(config: Config) -> InitialState:
-    """The compliant run's initial leg state: as configured, or the rigid model's limit cycle."""
+def initial_state(config: Config) -> InitialState | dict[str, float]:
+    """The compliant run's initial leg state: as configured, or the rigid model's limit cycle (a walker in space:
+    its own rigid model's post-strike fixed point)."""
     initial = config.simulation.initial
+    if initial == "rigid_limit_cycle" and capabilities(config.walker.kind).space:
+        cycle = space_limit_cycle(config)
+        if not cycle.converged:
+            raise ConfigError(
+                "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
+            )
+        return cycle.fixed_point
     if initial == "rigid_limit_cycle":
         return InitialState(**rigid_limit_cycle_initial(config))
     return initial

@@ -1,6 +1,6 @@
 """Step periods against a contact parameter under both impact-velocity memories (``contact.impact_memory``).
 
-The study behind the choice of the default (README, "Modelling choices to know"): for each value of a
+The study behind the choice of the default (docs/guide/contact.md, "Modelling choices to know"): for each value of a
 numeric config key (restitution by default) and each memory, the first ``steps`` step periods (step 1
 from the release to the first heel strike) and the number of rebounds (a touchdown of a foot less than
 ``contact.recontact_time`` after its own lift-off). Under ``touchdown`` every rebound resets the

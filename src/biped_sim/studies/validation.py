@@ -193,7 +193,7 @@ def rigid_physics_checks() -> list[Check]:
 
 
 def contact_law_checks() -> list[Check]:
-    """The drop-test claims of the README: effective restitution of each normal law."""
+    """The drop-test claims of the user guide (docs/guide/contact.md): effective restitution of each normal law."""
 
     rows = drop_test_table()
     out = []

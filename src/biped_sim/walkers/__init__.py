@@ -1,6 +1,9 @@
 """Walker builders: a walker config becomes bodies, joints and feet (a :class:`BuiltModel`).
 
-The engine knows nothing of walkers; another walker is another builder registered here.
+The engine knows nothing of walkers. Every planar walker is built from its description (a described walker's
+own, a bundled kind's expansion by :func:`describe`) by :func:`build_described`, unless its kind registers a
+builder of its own here (the four-legged machine, whose pairs stand on two feet each); the spatial builders lift
+a planar model (the compass) or build a kind's own (the four-legged machine).
 """
 
 from __future__ import annotations
@@ -9,21 +12,26 @@ from collections.abc import Callable
 
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
-from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described
 from biped_sim.walkers.four_legged import build_four_legged, build_four_legged_sagittal
 from biped_sim.walkers.model import BuiltModel, minimal_model
-from biped_sim.walkers.spatial_compass import build_spatial_compass
+from biped_sim.walkers.space_walker import build_space_walker
+from biped_sim.walkers.spatial_compass import spatial_compass
+
+
+def _spatial_compass(config: Config, initial: InitialState) -> BuiltModel:
+    return spatial_compass(build_described(config, initial), config)
+
 
 BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {  # planar; minimal converts them
-    "compass": build_compass,
     "four_legged": build_four_legged_sagittal,  # the config allows it in minimal coordinates only
-    "description": build_described,
 }
+"""The planar builders of the kinds built otherwise than from their description (:func:`build_described`)."""
 SPATIAL_BUILDERS: dict[str, Callable[[Config, InitialState], BuiltModel]] = {
-    "compass": build_spatial_compass,
+    "compass": _spatial_compass,
     "four_legged": build_four_legged,
+    "description3d": build_space_walker,
 }
 
 
@@ -38,7 +46,7 @@ def build_model(config: Config, initial: InitialState | dict[str, float] | None 
             raise ValueError("build_model: simulation.initial is rigid_limit_cycle; use simulate.prepare_model")
         initial = config.simulation.initial
     spatial = config.formulation.kind == "spatial"
-    builder = (SPATIAL_BUILDERS if spatial else BUILDERS).get(config.walker.kind)
+    builder = SPATIAL_BUILDERS.get(config.walker.kind) if spatial else BUILDERS.get(config.walker.kind, build_described)
     if builder is None:
         raise ConfigError(
             "walker.kind",

@@ -1,7 +1,15 @@
 """The bundled walker kinds as walker descriptions (:class:`~biped_sim.config.WalkerDescription`).
 
 ``describe(config)`` is the one place where a bundled kind's parameters become bodies, joints and feet; a
-``walker.kind: description`` config is its own description. Names follow the builders' (``leg0``, ``foot0``).
+``walker.kind: description`` config is its own description. Every model is built from the result: rigid
+(:mod:`biped_sim.rigid.build`) and compliant (:mod:`biped_sim.walkers.described`; only the four-legged machine,
+whose pairs stand on two feet each, keeps a builder of its own). Body and foot names: ``leg0``, ``foot0``, ...
+
+A preset stays a typed record of its parameters (the schema's member of its kind, ``walker.parameters.NAME``
+addressing its fields) expanded here, rather than a description template of named parameters: its fields carry
+units, bounds and cross-checks (a foot radius below the leg length, a centre of mass within reach) that a
+description's named parameters, plain numbers, do not; the rimless wheel's spoke count makes feet, which no
+arithmetic expression can; and its resolved config stays the few numbers a user wrote.
 """
 
 from __future__ import annotations

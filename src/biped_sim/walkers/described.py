@@ -1,4 +1,5 @@
-"""The compliant walker built from its description (``walker.kind: description``): any planar tree of bodies.
+"""The compliant walker built from its description (a described walker's own, a bundled kind's expansion by
+:func:`~biped_sim.walkers.describe.describe`): any planar tree of bodies.
 
 The description (:class:`~biped_sim.config.description.WalkerDescription`) gives bodies in frames whose
 origin is the joint to the parent (the root's: the hip), joints placing a child's origin in its parent's
@@ -28,6 +29,7 @@ from biped_sim.contact.response import IMPACT_SPEED, TOUCHING
 from biped_sim.contact.stop import FOOT, HELD, LATCHED, NOT_LATCHING, Stops, make_stops
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
+from biped_sim.walkers.describe import describe
 from biped_sim.walkers.model import (
     BuiltModel,
     contact_arrays,
@@ -253,12 +255,25 @@ def tree_start(
             origin[c], velocity[c] = origin[p] + arm, velocity[p] + angles[p, 1] * _perp(arm)
     if origin[0, 1] <= config.simulation.fall_hip_height * length:
         raise ConfigError("simulation.initial", "the hip starts below simulation.fall_hip_height")
+    if not config.contact.scuffing_guard:
+        _check_swing_feet(tree, angles, origin)
     arms = np.array([_rotate(angles[c, 0], tree.com[c]) for c in range(nb)])
     coms = origin + arms
     com_velocity = velocity + angles[:, 1:2] * np.array([_perp(a) for a in arms])
+    com_velocity[b] = angles[b, 1] * _perp(coms[b] - contact)  # the rolling body: about the contact point
     coords = np.column_stack([coms, angles[:, 0]])
     rates = np.column_stack([com_velocity, angles[:, 1]])
     return coords, rates, float(np.hypot(*velocity[0])), foot
+
+
+def _check_swing_feet(tree: Tree, angles: np.ndarray, origin: np.ndarray) -> None:
+    """ConfigError when a foot off the stance leg starts below the ground (which no scuffing guard lifts)."""
+    for foot in (f for leg in _leg_feet(tree)[1:] for f in leg):
+        b = int(tree.foot_body[foot])
+        if origin[b, 1] + _rotate(angles[b, 0], tree.foot_centre[foot])[1] - tree.foot_radius[foot] < 0.0:
+            raise ConfigError(
+                "simulation.initial", "the swing foot starts below the ground (and contact.scuffing_guard is off)"
+            )
 
 
 def _perp(v: np.ndarray) -> np.ndarray:
@@ -267,11 +282,9 @@ def _perp(v: np.ndarray) -> np.ndarray:
 
 
 def build_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
-    """Bodies, joints, stops and feet of ``walker.description``, started rolling on its stance foot, the stance
+    """Bodies, joints, stops and feet of the walker's description, started rolling on its stance foot, the stance
     leg's latches engaged (their approach rate the stance foot's remembered impact speed over the leg length)."""
-    description = config.walker.description
-    if description is None:
-        raise ConfigError("walker.description", "walker.kind: description needs walker.description")
+    description = describe(config)
     if description.joint_elements():
         raise ConfigError("walker.description.joints", "joint elements: compliant dynamics does not take them yet")
     tree = resolve_tree(description)

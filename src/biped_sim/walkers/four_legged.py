@@ -31,6 +31,8 @@ minimal-coordinate formulation integrates (``formulation.kind: minimal``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from biped_sim.config import Config, InitialState
@@ -38,7 +40,6 @@ from biped_sim.contact.profile import profile_ground
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
-from biped_sim.walkers.compass import sagittal_initial_state
 from biped_sim.walkers.model import (
     BuiltModel,
     contact_arrays,
@@ -54,6 +55,66 @@ from biped_sim.walkers.spatial_compass import (
     sagittal_to_spatial,
     spatial_gravity,
 )
+
+
+def _leg_direction(theta: float) -> np.ndarray:
+    """Unit vector from hip to foot for leg angle theta."""
+    return np.array([math.sin(theta), -math.cos(theta)])
+
+
+def _leg_across(theta: float) -> np.ndarray:
+    """Unit vector across the leg (the body's +x'), downhill when the leg is vertical: d/dtheta of the direction."""
+    return np.array([math.cos(theta), math.sin(theta)])
+
+
+def _rolling_velocity(omega: float, point: np.ndarray, pivot: np.ndarray) -> np.ndarray:
+    """Velocity of ``point`` on a body rotating at ``omega`` about the instantaneous centre ``pivot``."""
+    rel = point - pivot
+    return omega * np.array([-rel[1], rel[0]])
+
+
+def sagittal_initial_state(
+    config: Config,
+    init: InitialState,
+    com_offsets: tuple[tuple[float, float], tuple[float, float]],
+    static_penetration: float,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Initial planar state of a stance and a swing leg rolling on the stance foot (docs/guide/model.md), from ``init``.
+
+    ``com_offsets`` place each leg body's centre of mass from the hip: (along the leg towards the foot, across
+    it, downhill when vertical). The stance foot's arc centre (offset ``walker.foot_offset`` across the leg)
+    is R above the contact point at x = 0, sunk by ``static_penetration``. Returns
+    (coords, rates, hip speed): coords (2, 3) = (x, y, phi) of the stance and swing bodies, rates
+    (2, 3) their velocities. Raises ConfigError when the walker would start fallen or with its swing
+    foot in the ground while the scuffing guard is off.
+    """
+    l, R, d = config.walker.leg_length, config.walker.foot_radius, config.walker.foot_offset
+    for name in ("stance_angle", "swing_angle"):
+        if abs(getattr(init, name)) >= config.simulation.fall_leg_angle:
+            raise ConfigError(
+                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
+            )
+    contact_point = np.array([0.0, -static_penetration])
+    arc_centre = contact_point + np.array([0.0, R])
+    hip = arc_centre - (l - R) * _leg_direction(init.stance_angle) - d * _leg_across(init.stance_angle)
+    if hip[1] <= config.simulation.fall_hip_height * l:
+        raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")
+    (along_st, across_st), (along_sw, across_sw) = com_offsets
+    com_stance = hip + along_st * _leg_direction(init.stance_angle) + across_st * _leg_across(init.stance_angle)
+    com_swing = hip + along_sw * _leg_direction(init.swing_angle) + across_sw * _leg_across(init.swing_angle)
+    v_hip = _rolling_velocity(init.stance_rate, hip, contact_point)
+    v_stance = _rolling_velocity(init.stance_rate, com_stance, contact_point)
+    v_swing = v_hip + _rolling_velocity(init.swing_rate, com_swing, hip)
+    swing_centre = hip + (l - R) * _leg_direction(init.swing_angle) + d * _leg_across(init.swing_angle)
+    swing_foot_bottom = swing_centre[1] - R
+    if not config.contact.scuffing_guard and swing_foot_bottom < 0.0:
+        raise ConfigError(
+            "simulation.initial.swing_angle",
+            "the swing foot starts below the ground (and contact.scuffing_guard is off)",
+        )
+    coords = np.array([[*com_stance, init.stance_angle], [*com_swing, init.swing_angle]])
+    rates = np.array([[*v_stance, init.stance_rate], [*v_swing, init.swing_rate]])
+    return coords, rates, float(np.hypot(*v_hip))
 
 
 def pair_properties(config: Config, spacing: float) -> tuple[float, tuple[float, float], np.ndarray]:

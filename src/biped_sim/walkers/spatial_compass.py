@@ -4,7 +4,8 @@ Body frames: x' forward, y' along the leg towards the hip, z' lateral (the hip a
 rotation phi about z' is the planar leg angle. A planar state (x, y, phi) maps to r = (x, y, 0),
 p = (cos phi/2, 0, 0, sin phi/2) and omega = (0, 0, phidot) to pdot = (omega/2) (-sin phi/2, 0, 0, cos phi/2).
 
-The spatial compass is the planar compass (same bodies, same initial state, converted) with a
+The spatial compass is the planar compass (its description's planar model, :mod:`biped_sim.walkers.described`:
+same bodies, same initial state, converted) with a
 disc foot in each leg's sagittal plane, a revolute hip (a SPHERICAL and two PERPENDICULAR
 primitives) and a planar joint from leg 0 to the ground frame (IN_PLANE z = 0 and leg 0's axle
 perpendicular to x and y): the motion stays in the sagittal plane by construction, not only by
@@ -19,10 +20,9 @@ import math
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import Config
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
-from biped_sim.walkers.compass import build_compass
 from biped_sim.walkers.model import BuiltModel
 
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
@@ -77,9 +77,9 @@ def spatial_gravity(config: Config) -> np.ndarray:
     return np.array([g * math.sin(gamma), -g * math.cos(gamma), 0.0])
 
 
-def build_spatial_compass(config: Config, initial: InitialState) -> BuiltModel:
-    """The compass walker of :func:`build_compass` in Euler parameters, kept planar by a planar joint."""
-    planar = build_compass(config, initial)
+def spatial_compass(planar: BuiltModel, config: Config) -> BuiltModel:
+    """The planar compass walker ``planar`` (two legs hinged at the hip) in Euler parameters, kept planar by a
+    planar joint."""
     ps = planar.system
     nb, nf = 2, 2
     hip_a, hip_b = (

@@ -11,9 +11,9 @@ fitted value lies within ``TOLERANCE_SE`` standard errors of the truth, the RMS 
 (below ``ROUNDING_RMS_S``) and the verdict is converged; a case not recovered must at least not be a confident
 wrong answer: its verdict must be "not converged" or "not identifiable" (``honest``).
 
-The kneed walker's reference is shorter because each of its runs costs far more than the default walker's (README,
-"Calibration"): three periods, which its thigh mass and foot stiffness move in different proportions, so the pair
-is identifiable from them.
+The kneed walker's reference is shorter because each of its runs costs far more than the default walker's
+(docs/experiments.md, "Cost, profiled"): three periods, which its thigh mass and foot stiffness move in different
+proportions, so the pair is identifiable from them.
 """
 
 from __future__ import annotations

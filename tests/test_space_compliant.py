@@ -1,0 +1,89 @@
+"""The walker in space with compliant contact (walker.kind: description3d, formulation.kind: spatial): its model
+built from the description and the rigid gait's state, its refusals, and its walk."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from biped_sim.config import load_config
+from biped_sim.errors import ConfigError
+from biped_sim.multibody.spatial_kernels import foot_kinematics, mechanical_energy, violation
+from biped_sim.simulate import prepare_model, simulate
+from biped_sim.simulate.compliant import summarize
+from biped_sim.walkers import build_model
+from biped_sim.walkers.space_geometry import leg_geometry, rolling_states, with_point_mass
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+TINKERTOY = CONFIGS / "space" / "tinkertoy_compliant.yaml"
+# the tinkertoy's rigid gait (tests/test_space_walker.py: test_the_tinkertoy_walks_stably), to 8 digits
+GAIT = {"heading": 0.09866766, "bank": -0.00924861, "pitch": -0.16016583, "swing_angle": 0.29424124,
+        "omega_x": -0.06623178, "omega_y": 0.46696908, "omega_z": -0.13656793, "swing_rate": -0.39255917}  # fmt: skip
+RIGID_PERIOD = 1.00711404
+
+
+def tinkertoy(*overrides: str) -> Any:
+    """The compliant tinkertoy starting on its rigid gait (given, not searched: the search takes minutes)."""
+    initial = "simulation.initial=" + repr(GAIT).replace("'", '"')
+    return load_config(TINKERTOY, [initial, *overrides])
+
+
+def test_the_start_is_the_rigid_gait_sunk_by_the_static_penetration() -> None:
+    """The hinge holds, the stance foot's contact point is at rest and sunk by the static penetration, the trailing
+    foot on the ground as the rigid strike left it, and the kinetic energy is the rigid state's."""
+    config = tinkertoy()
+    model = build_model(config, GAIT)
+    y, system = model.y0, model.system
+    assert max(violation(y, system)) < 1e-14
+    sinkage = model.meta["static_penetration"]
+    stance, trailing = foot_kinematics(y, system, 0), foot_kinematics(y, system, 1)
+    assert stance[0] == pytest.approx(sinkage, abs=1e-14)
+    assert np.abs([stance[1], stance[2], stance[3], stance[4], stance[5]]).max() < 1e-14  # at rest, at the origin
+    assert trailing[0] == pytest.approx(sinkage, abs=1e-7)  # the 8-digit gait: the strike put it on the ground
+    legs = (leg_geometry(config.walker.space, 0), leg_geometry(config.walker.space, 1))
+    states = rolling_states(legs, GAIT)
+    rigid_kinetic = sum(
+        0.5 * leg.mass * v @ v + 0.5 * w @ r @ leg.inertia @ r.T @ w
+        for leg, v, w, r in zip(legs, states.velocity, states.omega, states.rotation, strict=True)
+    )
+    assert mechanical_energy(y, system, model.modes0)[0] == pytest.approx(rigid_kinetic, rel=1e-12)
+
+
+def test_a_hip_mass_on_the_hinge_axis_keeps_the_walkers_centre_of_mass_and_inertia() -> None:
+    config = tinkertoy("walker.space.hip_mass=0.5")
+    leg = leg_geometry(config.walker.space, 0)
+    loaded = with_point_mass(leg, 0.5)
+    assert loaded.mass == 1.5 and loaded.com == pytest.approx(leg.com / 1.5)
+    about_origin = loaded.inertia + loaded.mass * (loaded.com @ loaded.com * np.eye(3) - np.outer(*[loaded.com] * 2))
+    expected = leg.inertia + leg.mass * (leg.com @ leg.com * np.eye(3) - np.outer(leg.com, leg.com))
+    np.testing.assert_allclose(about_origin, expected, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ('simulation.initial={"pitch": 0.1}', "simulation.initial: expected the keys heading, bank, pitch"),
+        ("formulation.kind=planar", "walker.kind: 'description3d' needs formulation.kind: spatial"),
+    ],
+)
+def test_a_walker_in_space_refuses_a_start_or_formulation_it_has_no_model_for(override: str, message: str) -> None:
+    with pytest.raises(ConfigError) as caught:
+        load_config(TINKERTOY, [override])
+    assert str(caught.value).startswith(message)
+
+
+@pytest.mark.slow
+def test_the_compliant_tinkertoy_walks_near_its_rigid_gait_and_its_energy_balance_closes() -> None:
+    """Six simulated seconds: it walks, every step within 1 % of the rigid period (the contact's compliance
+    lengthens it), the energy audit closes to 1e-6 of m g l and the hinge holds."""
+    config = tinkertoy("simulation.t_end=6")
+    result = simulate(config, model=prepare_model(config))
+    summary = summarize(result)
+    assert result.status == "walking"
+    assert len(result.step_periods) >= 4
+    np.testing.assert_allclose(result.step_periods, RIGID_PERIOD, rtol=0.01)
+    assert summary["energy_residual_max_relative"] < 1e-6
+    assert summary["constraint_violation_max"]["position"] < 1e-8
