@@ -60,8 +60,14 @@ def contact_solref(config: Config) -> tuple[float, float]:
     """(k, b) of MuJoCo's direct solref matching our contact's frequency and restitution at static load."""
     w = config.walker
     mass = 2.0 * w.leg_mass + w.hip_mass
+    return matched_solref(config, mass, contact_stiffness(config), static_penetration(config))
+
+
+def matched_solref(config: Config, mass: float, stiffness: float, penetration: float) -> tuple[float, float]:
+    """(k, b) of MuJoCo's direct solref: our law's frequency linearised at the static ``penetration`` under
+    ``mass``, and the damping ratio of a linear oscillator with our restitution."""
     n = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
-    omega = math.sqrt(n * contact_stiffness(config) * static_penetration(config) ** (n - 1.0) / mass)
+    omega = math.sqrt(n * stiffness * penetration ** (n - 1.0) / mass)
     e = config.contact.restitution
     zeta = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2) if e < 1.0 else 0.0
     return omega**2 / IMPEDANCE, 2.0 * zeta * omega / IMPEDANCE
@@ -141,6 +147,10 @@ class MujocoWalker:
             out.append((q[0] + self.reach * math.sin(theta), q[1] - self.reach * math.cos(theta) - self.radius))
         return out[0], out[1]
 
+    def hip_height(self) -> float:
+        """The hip's height above the slope [m]."""
+        return float(self.data.qpos[1])
+
     def run(self, t_end: float) -> dict[str, Any]:
         """Simulate from the initial state to ``t_end`` (or a fall); heel-strike times and step count."""
         model, data = self.model, self.data
@@ -179,7 +189,7 @@ class MujocoWalker:
                     last_strike = i
                 touching[i] = now_touching
                 height_prev[i] = height
-            if data.qpos[1] < fall_height:
+            if self.hip_height() < fall_height:
                 return {"status": "fell", "t_final": float(data.time), "steps": steps, "strikes": strikes}
         return {"status": "walking", "t_final": float(data.time), "steps": steps, "strikes": strikes}
 
