@@ -52,6 +52,7 @@ from biped_sim.contact.response import (
 )
 from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import inlined, kernel
+from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 from biped_sim.multibody.tree import (
@@ -337,8 +338,10 @@ def star_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, topolog
         ax = c * system.body_com[b, 0] - s * system.body_com[b, 1]
         ay = s * system.body_com[b, 0] + c * system.body_com[b, 1]
         vx, vy = y[n] - om * ay, y[n + 1] + om * ax
-        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * system.body_inertia[b] * om * om
-        potential -= m * (system.gravity[0] * (y[0] + ax) + system.gravity[1] * (y[1] + ay))
+        gx, gy = system.gravity[0], system.gravity[1]
+        body_kinetic, body_potential = body_energy(m, system.body_inertia[b], vx, vy, om, y[0] + ax, y[1] + ay, gx, gy)
+        kinetic += body_kinetic
+        potential += body_potential
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
         b, fx, fy = system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]

@@ -44,6 +44,7 @@ from biped_sim.contact.response import (
 )
 from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import kernel
+from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
 
@@ -263,8 +264,12 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     for b in range(nb):
         m = system.body_mass[b]
         vx, vy, om = y[n + 3 * b], y[n + 3 * b + 1], y[n + 3 * b + 2]
-        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * system.body_inertia[b] * om * om
-        potential -= m * (system.gravity[0] * y[3 * b] + system.gravity[1] * y[3 * b + 1])
+        gx, gy = system.gravity[0], system.gravity[1]
+        body_kinetic, body_potential = body_energy(
+            m, system.body_inertia[b], vx, vy, om, y[3 * b], y[3 * b + 1], gx, gy
+        )
+        kinetic += body_kinetic
+        potential += body_potential
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = _foot_arc(y, system, i)

@@ -20,6 +20,7 @@ from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
 from biped_sim.kernel import kernel
+from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
 
@@ -231,8 +232,10 @@ def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree)
         ay = s * system.body_com[b, 0] + c * system.body_com[b, 1]
         ox, oy, vx, vy = body_origin(y, system, b)
         vx, vy = vx - om * ay, vy + om * ax
-        kinetic += 0.5 * m * (vx * vx + vy * vy) + 0.5 * system.body_inertia[b] * om * om
-        potential -= m * (system.gravity[0] * (ox + ax) + system.gravity[1] * (oy + ay))
+        gx, gy = system.gravity[0], system.gravity[1]
+        body_kinetic, body_potential = body_energy(m, system.body_inertia[b], vx, vy, om, ox + ax, oy + ay, gx, gy)
+        kinetic += body_kinetic
+        potential += body_potential
     elastic = 0.0
     for i in range(system.foot_body.shape[0]):
         _, _, _, _, _, cx, cy = foot_motion(y, system, i)

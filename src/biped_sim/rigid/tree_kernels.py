@@ -34,6 +34,7 @@ import numpy as np
 
 from biped_sim.contact.joint_element import element_energy, element_torque
 from biped_sim.kernel import kernel
+from biped_sim.multibody.bodies import body_energy
 from biped_sim.rigid.tree_layout import (
     ELEMENT_FIELDS,
     ELEMENT_HEAD,
@@ -304,8 +305,9 @@ def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
         mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
         vx, vy = velocity_at(p, 0, w_offset(p, 0, i), qd)
         px, py = point_at(p, w_offset(p, 0, i), q)
-        kinetic += 0.5 * mass * (vx * vx + vy * vy) + 0.5 * inertia * qd[own] * qd[own]
-        potential -= mass * (gx * px + gy * py)
+        body_kinetic, body_potential = body_energy(mass, inertia, vx, vy, qd[own], px, py, gx, gy)
+        kinetic += body_kinetic
+        potential += body_potential
     return kinetic, potential + tree_element_energy(p, q)
 
 
