@@ -14,7 +14,8 @@ import numpy as np
 
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_attitude, system_contact, system_energy, system_hip, system_violation
-from biped_sim.rigid.tree_kernels import tree_element_power, tree_energy
+from biped_sim.rigid.tree_elements import tree_element_power
+from biped_sim.rigid.tree_kernels import tree_energy
 from biped_sim.rigid.tree_layout import coords, point
 
 

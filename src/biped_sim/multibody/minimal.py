@@ -383,6 +383,11 @@ def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspa
 # ---------------------------------------------------------------- conversion and post-processing (Python side)
 
 
+# the system arrays the minimal formulation takes from the planar one unchanged (copied)
+SHARED_WITH_PLANAR = ("body_mass", "body_inertia", "foot_body", "foot_radius", "foot_partner", "gravity",
+                      "normal_params", "friction_params", "switches", "limits", "body_falls")  # fmt: skip
+
+
 def tree_system(planar: PlanarSystem) -> MinimalSystem:
     """The same walker as the planar tree ``planar`` (:func:`tree_origins`) in minimal coordinates; a star
     without joint stops or elements is flagged for the arrow solve. The stops' and the elements' indices move to
@@ -391,25 +396,15 @@ def tree_system(planar: PlanarSystem) -> MinimalSystem:
     stops, elements = planar.stops, planar.elements
     plain = stops.law.shape[0] == 0 and elements.law.shape[0] == 0
     return MinimalSystem(
-        body_mass=planar.body_mass.copy(),
-        body_inertia=planar.body_inertia.copy(),
+        **{name: getattr(planar, name).copy() for name in SHARED_WITH_PLANAR},
         body_com=-origin,
         body_parent=parent,
         body_joint=joint,
         topology=STAR if bool(np.all(joint == 0.0)) and plain else TREE,
-        foot_body=planar.foot_body.copy(),
         foot_center=planar.foot_center - origin[planar.foot_body],
-        foot_radius=planar.foot_radius.copy(),
-        foot_partner=planar.foot_partner.copy(),
-        gravity=planar.gravity.copy(),
-        normal_params=planar.normal_params.copy(),
-        friction_params=planar.friction_params.copy(),
-        switches=planar.switches.copy(),
-        limits=planar.limits.copy(),
         ground=planar.ground,
         stops=stops._replace(index=minimal_angles(stops.index, planar.body_mass.shape[0])),
         elements=elements._replace(index=minimal_angles(elements.index, planar.body_mass.shape[0])),
-        body_falls=planar.body_falls.copy(),
     )
 
 

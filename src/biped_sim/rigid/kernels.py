@@ -7,12 +7,31 @@ import numpy as np
 
 from biped_sim.kernel import inlined, kernel
 from biped_sim.rigid.tree_kernels import (
-    tree_fall,
     tree_guard,
     tree_guard_rate,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import T_NOFF, T_NPHASE
+from biped_sim.rigid.tree_layout import P_FALL, P_L, T_FALL_OFF, T_NOFF, T_NPHASE, T_NPTS, coords, perm_offset, point
+
+FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
+
+
+@kernel
+def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
+    """Fall function i (positive while standing): 0, 1: the fall angle minus |each leg's hip body's angle|; 2: the
+    hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): their fall angle minus the largest
+    |angle| among them."""
+    if i < 2:
+        return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
+    n = coords(p)
+    if i == 3:
+        tilt = 0.0
+        for k in range(n - int(p[T_NOFF]), n):
+            tilt = max(tilt, abs(x[k]))
+        return p[T_FALL_OFF] - tilt
+    _, hip_y = point(p, int(p[T_NPTS]), x[:n])
+    return hip_y - FALL_HIP_FRACTION * p[P_L]
+
 
 # the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
 # its arguments' words and reference counts at every evaluation

@@ -32,28 +32,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from biped_sim.contact.joint_element import element_energy, element_torque
 from biped_sim.kernel import kernel
 from biped_sim.multibody.bodies import body_energy
+from biped_sim.rigid.tree_elements import element_forces, tree_element_energy
 from biped_sim.rigid.tree_layout import (
-    ELEMENT_FIELDS,
-    ELEMENT_HEAD,
-    P_FALL,
     P_GX,
     P_GY,
-    P_L,
     P_LEAN,
     P_R,
     ROW_HEAD,
-    T_FALL_OFF,
-    T_NELEM,
     T_NLIGHT,
     T_NLOCK,
-    T_NOFF,
     T_NPHASE,
     T_NPTS,
     coords,
-    element_offset,
     fill_trig,
     jacobian_column,
     light_flags,
@@ -74,7 +66,6 @@ from biped_sim.rigid.tree_layout import (
 STOP, PAST, STRIKE = 0, 1, 2  # phase kinds: a swing stop strikes; the hip passes over the stance foot; heel strike
 FLOW, IMPACT, AT_REST = 0, 1, 2  # the light rows' right side: gravity and bias; their velocity just before; none
 RELEASED = 2.0  # a lock's active field: held through the stance, released through the heel strike
-FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
 
 
 @kernel
@@ -230,48 +221,6 @@ def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int,
 
 
 @kernel
-def _element(p: np.ndarray, e: int, q: np.ndarray, qd: np.ndarray) -> tuple[int, int, float, float]:
-    """(child, other, torque on the child, dissipated power) of joint element e: its law's one source
-    (:mod:`biped_sim.contact.joint_element`) at the relative angle and rate of the child to the other body."""
-    o = element_offset(p, e)
-    child, other = int(p[o + 1]), int(p[o + 2])
-    params = p[o + ELEMENT_HEAD : o + ELEMENT_FIELDS]
-    tau, power = element_torque(int(p[o]), q[child] - q[other], qd[child] - qd[other], params)
-    return child, other, tau, power
-
-
-@kernel
-def _element_forces(p: np.ndarray, q: np.ndarray, qd: np.ndarray, r: int) -> None:
-    """Add the joint elements' torques to the generalized forces at p[r:]: with absolute angles as coordinates a
-    couple tau on (child, other) is tau on the child's coordinate and -tau on the other's."""
-    for e in range(int(p[T_NELEM])):
-        child, other, tau, _ = _element(p, e, q, qd)
-        p[r + child] += tau
-        p[r + other] -= tau
-
-
-@kernel
-def tree_element_energy(p: np.ndarray, q: np.ndarray) -> float:
-    """Energy stored in the joint elements (their springs) at angles q."""
-    stored = 0.0
-    for e in range(int(p[T_NELEM])):
-        o = element_offset(p, e)
-        theta = q[int(p[o + 1])] - q[int(p[o + 2])]
-        stored += element_energy(int(p[o]), theta, p[o + ELEMENT_HEAD : o + ELEMENT_FIELDS])
-    return stored
-
-
-@kernel
-def tree_element_power(p: np.ndarray, x: np.ndarray) -> float:
-    """Power the joint elements dissipate at state x (their dampers'), >= 0."""
-    n = coords(p)
-    dissipated = 0.0
-    for e in range(int(p[T_NELEM])):
-        dissipated += _element(p, e, x[:n], x[n:])[3]
-    return dissipated
-
-
-@kernel
 def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt: Kane's equations with the locked stops as constraints, the joint elements' torques among the
     generalized forces."""
@@ -282,7 +231,7 @@ def tree_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     w = work_offset(p)
     r = w + m * m
     used = _assemble(p, 0, w, m, qd, True, False)
-    _element_forces(p, q, qd, r)
+    element_forces(p, q, qd, r)
     _pin_light(p, 0, w, m, r)
     _solve(p, w, m, used, r)
     _light_tier(p, 0, q, qd, FLOW, w, m, r)
@@ -441,23 +390,6 @@ def after_phase(p: np.ndarray, phase: int, x: np.ndarray, out: np.ndarray) -> No
 def skip_phase(p: np.ndarray, phase: int, x: np.ndarray) -> bool:
     """The hip already past the stance foot (after a late stop strike): that phase has nothing to wait for."""
     return int(p[phase_offset(p, phase)]) == PAST and tree_guard(p, phase, x) <= 0.0
-
-
-@kernel
-def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
-    """Fall function i (positive while standing): 0, 1: the fall angle minus |each leg's hip body's angle|; 2: the
-    hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): their fall angle minus the largest
-    |angle| among them."""
-    if i < 2:
-        return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
-    n = coords(p)
-    if i == 3:
-        tilt = 0.0
-        for k in range(n - int(p[T_NOFF]), n):
-            tilt = max(tilt, abs(x[k]))
-        return p[T_FALL_OFF] - tilt
-    _, hip_y = point(p, int(p[T_NPTS]), x[:n])
-    return hip_y - FALL_HIP_FRACTION * p[P_L]
 
 
 @kernel

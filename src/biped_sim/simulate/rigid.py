@@ -62,10 +62,10 @@ from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hi
 from biped_sim.measure.steps import STEP_COLUMNS, StepTable
 from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.start import INTEGRATOR, NONDIMENSIONAL, RigidStart, rigid_start, rigid_units
 from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 
 RIGID_ENERGY_TERMS = ("kinetic", "potential", "dissipated_impact", "dissipated_elements", "push_work", "residual")

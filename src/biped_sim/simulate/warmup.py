@@ -25,7 +25,7 @@ from multiprocessing import get_context
 from typing import get_args
 
 from biped_sim._compiled_cache import recording_compilations
-from biped_sim.config import Config, FormulationConfig, config_from_dict, derive
+from biped_sim.config import Config, FormulationConfig, derive
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.simulate import simulate
@@ -144,11 +144,11 @@ def group_config(formulation: str, family: str, ground: str) -> Config:
     if (formulation, family) == RIGID:
         values: dict[str, object] = {"dynamics": "rigid"}
     else:
-        method = config_from_dict({}).integrator.method if family == "explicit" else STIFF_METHODS[0]
+        method = Config().integrator.method if family == "explicit" else STIFF_METHODS[0]
         values = {"formulation.kind": formulation, "integrator.method": method}
     if ground.removesuffix(JOINT_STOPS) == "profile":
         values["ground.profile"] = WARM_UP_PROFILE
-    config = derive(config_from_dict({}), values)
+    config = derive(Config(), values)  # the schema's defaults
     return _with_a_joint_stop(config) if ground.endswith(JOINT_STOPS) else config
 
 
