@@ -53,7 +53,7 @@ EXPORTS: dict[str, list[str]] = {
     ],
     "biped_sim.walkers": ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model", "describe"],
 }  # fmt: skip
-OPTIONAL = {"biped_sim.bench.mujoco_walker"}  # needs the bench extra (MuJoCo)
+OPTIONAL = {"biped_sim.bench.mujoco_walker", "biped_sim.bench.mujoco_space"}  # need the bench extra (MuJoCo)
 
 
 def every_module() -> list[str]:
