@@ -105,11 +105,14 @@ def test_the_integration_loop_counts_no_references() -> None:
     assert isinstance(advance, Kernel) and advance.targetoptions["_nrt"] is False
 
 
+OPTIONAL = {"biped_sim.bench.mujoco_walker", "biped_sim.bench.mujoco_space"}  # need the bench extra (MuJoCo)
+
+
 def test_every_cached_engine_function_is_a_kernel_or_inlined() -> None:
     """A plain ``@njit(cache=True)`` in the package would compile the large Python wrapper again."""
     plain = []
     for info in pkgutil.walk_packages(biped_sim.__path__, "biped_sim."):
-        if info.name in ("biped_sim.bench.mujoco_walker", "biped_sim.cli.__main__"):  # an optional extra; the CLI
+        if info.name in OPTIONAL | {"biped_sim.cli.__main__"}:  # the optional extra's modules; the CLI
             continue
         module = importlib.import_module(info.name)
         for name, value in vars(module).items():

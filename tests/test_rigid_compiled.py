@@ -11,8 +11,8 @@ from biped_sim import load_config
 from biped_sim.config import Config
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import FELL, STALLED, STRIKE, rigid_step, walk_starts
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.tree_kernels import FALL_HIP_FRACTION
 
 from .conftest import CONFIGS
 

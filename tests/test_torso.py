@@ -49,9 +49,10 @@ def test_the_torso_starts_where_its_keys_say(formulation: str) -> None:
         (["simulation.initial.torso_angel=0.1"], "simulation.initial: expected the keys stance_angle, stance_rate, "
          "swing_angle, swing_rate, torso_angle, torso_rate (optional: torso_angle, torso_rate; not given: 0)"),
         (["simulation.initial.torso_angle=true"], "simulation.initial"),
-        (["simulation.initial.torso_angle=1.5"], "simulation.initial: the body 'torso' beyond its fall angle"),
+        (["simulation.initial.torso_angle=1.5"],
+         "simulation.initial.torso_angle: beyond the fall_angle of the body 'torso'"),
         (["walker.description.bodies.torso.fall_angle=0.4", "simulation.initial.torso_angle=0.5"],
-         "simulation.initial: the body 'torso' beyond its fall angle"),
+         "simulation.initial.torso_angle: beyond the fall_angle of the body 'torso'"),
     ],
 )  # fmt: skip
 def test_a_wrong_torso_state_is_one_line(overrides: list[str], message: str) -> None:

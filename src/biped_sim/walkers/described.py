@@ -259,22 +259,31 @@ def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: l
     return state
 
 
+def _angle_key(tree: Tree, keys: list[str], b: int) -> tuple[str, str]:
+    """(body b's initial angle key, the limit it is held to): a leg's body in ``keys``' order (stance leg, then swing
+    leg, hip down) against simulation.fall_leg_angle, a body off the legs its ``<name>_angle`` against its own."""
+    per_leg = 2 * len(tree.legs[0])
+    for leg, bodies in enumerate(tree.legs[:2]):
+        if b in bodies:
+            return keys[leg * per_leg + 2 * list(bodies).index(b)], "simulation.fall_leg_angle"
+    return f"{tree.names[b]}_angle", f"the fall_angle of the body {tree.names[b]!r}"
+
+
 def tree_start(
-    tree: Tree, angles: np.ndarray, static_penetration: float, config: Config, length: float
+    tree: Tree, angles: np.ndarray, static_penetration: float, config: Config, length: float, keys: list[str]
 ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """(coords (nb, 3), rates (nb, 3), hip speed, stance foot) of the walker rolling on its stance foot.
 
     The stance foot (the first foot of the stance leg's last body) touches the ground at x = 0, sunk by
     ``static_penetration``; its body rolls about the contact point, and each body's origin follows up the
-    stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError when
-    the walker would start fallen.
+    stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError naming
+    the initial-state key (of ``keys``) of a body that would start fallen.
     """
     limits = fall_angles(tree, config)
     for b in range(len(tree.names)):
         if abs(angles[b, 0]) >= limits[b]:
-            raise ConfigError(
-                "simulation.initial", f"the body {tree.names[b]!r} beyond its fall angle: the walker starts fallen"
-            )
+            key, limit = _angle_key(tree, keys, b)
+            raise ConfigError(f"simulation.initial.{key}", f"beyond {limit}: the walker starts fallen")
     foot = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
     contact = np.array([0.0, -static_penetration])
     nb = len(tree.names)
@@ -332,8 +341,9 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     total_mass = float(np.sum(tree.mass))
     system = planar_tree_system(tree, config, stiffness, length)
     static_penetration = static_contact_penetration(config, total_mass, stiffness, length)
-    angles = body_angles(tree, initial, description.state_keys())
-    coords, rates, hip_speed, foot = tree_start(tree, angles, static_penetration, config, length)
+    keys = description.state_keys()
+    angles = body_angles(tree, initial, keys)
+    coords, rates, hip_speed, foot = tree_start(tree, angles, static_penetration, config, length, keys)
     impact = max(hip_speed, config.contact.impact_velocity_floor)
     y0, modes0 = standing_start(system, coords, rates, (foot,), impact)
     latch_stance(system, tree, modes0, impact / length)
