@@ -6,9 +6,9 @@ by the slope, the ground the plane z = 0). The left leg floats on a free joint, 
 about y. Masses, centres of mass and full inertia tensors are the compliant builder's (the hip mass on the left
 leg, each principal moment floored as there); each foot is a sphere geom. Our start (the rigid gait's state, the
 stance foot's contact point at the origin) sets the free joint and the hinge. The contact is matched as for the
-planar benchmark walker (:func:`~biped_sim.bench.mujoco_walker.matched_solref`: our law's frequency linearised
-at the static penetration under the whole weight, the damping ratio of our restitution), and the scuffing guard,
-heel-strike log and fall check are its loop (:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
+planar benchmark walker (:func:`~biped_sim.bench.mujoco_contact.matched_solref`: our law's frequency linearised at
+the static penetration under the whole weight, the damping ratio whose clipped contact loses what ours loses), and
+the scuffing guard, heel-strike log and fall check are its loop (:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
 
 What each side assumes: MuJoCo's contact is a soft constraint on the acceleration, linear in penetration with its
 damping acting from the first instant, and its friction an elliptic cone that holds true stick within the
@@ -24,7 +24,8 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from biped_sim.bench.mujoco_walker import IMPEDANCE, TIMESTEP, MujocoWalker, matched_solref
+from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
+from biped_sim.bench.mujoco_walker import TIMESTEP, MujocoWalker
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.model import contact_stiffness, static_contact_penetration

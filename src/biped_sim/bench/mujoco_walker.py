@@ -14,7 +14,7 @@ How the model is matched (docs/guide/performance.md says the same):
 * Contact: MuJoCo's soft constraint is linear in penetration and acts on accelerations
   (a + d (b v + k r) = (1 - d) a0), not a force law. We match its natural frequency to our Hertz
   law linearised at the static penetration, omega^2 = 1.5 K delta_s^0.5 / M, and its damping
-  ratio to the restitution (zeta from e for a linear oscillator), with impedance d = 0.95
+  ratio to our law's effective restitution (:mod:`.mujoco_contact`: the clipped oscillator's), with impedance d = 0.95
   (``solref = -k -b``). Friction is MuJoCo's cone with mu = mu_kinetic and no regularisation velocity.
 * Scuffing guard: MuJoCo has none, so the loop applies ours (the same arming rule) every
   :data:`GUARD_STEPS` steps by switching a foot's collision on or off. "In the air" means higher
@@ -38,6 +38,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers import build_model
@@ -45,7 +46,6 @@ from biped_sim.walkers.model import contact_stiffness
 
 TIMESTEP = 1e-4  # [s] MuJoCo step of the comparison
 GUARD_STEPS = 5  # MuJoCo steps between two applications of the scuffing guard (0.5 ms)
-IMPEDANCE = 0.95  # solimp d (constant): the fraction of the reference acceleration the contact enforces
 
 
 def static_penetration(config: Config) -> float:
@@ -61,16 +61,6 @@ def contact_solref(config: Config) -> tuple[float, float]:
     w = config.walker
     mass = 2.0 * w.leg_mass + w.hip_mass
     return matched_solref(config, mass, contact_stiffness(config), static_penetration(config))
-
-
-def matched_solref(config: Config, mass: float, stiffness: float, penetration: float) -> tuple[float, float]:
-    """(k, b) of MuJoCo's direct solref: our law's frequency linearised at the static ``penetration`` under
-    ``mass``, and the damping ratio of a linear oscillator with our restitution."""
-    n = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
-    omega = math.sqrt(n * stiffness * penetration ** (n - 1.0) / mass)
-    e = config.contact.restitution
-    zeta = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2) if e < 1.0 else 0.0
-    return omega**2 / IMPEDANCE, 2.0 * zeta * omega / IMPEDANCE
 
 
 def walker_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
