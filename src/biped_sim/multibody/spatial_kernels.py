@@ -305,6 +305,7 @@ FORMULATION = Formulation(
         contact_names=(*CONTACT_NAMES, "friction_force_lateral", "slip_velocity_lateral"),
         hip=hip_position,
         attitude=lambda y, system, body: attitude(y, system.body_mass.shape[0], body),
+        foot_point=lambda y, system, foot: foot_kinematics(y, system, foot)[4:6],
     ),
     coordinates=("x", "y", "z", "e0", "e1", "e2", "e3"),
     rates=("vx", "vy", "vz", "e0dot", "e1dot", "e2dot", "e3dot"),

@@ -59,7 +59,7 @@ from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
-from biped_sim.measure.steps import STEP_COLUMNS, StepTable
+from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.kernels import FALL_HIP_FRACTION
@@ -133,7 +133,8 @@ class RigidRunResult(RunResult):
         channels = [Channel(f"energy/{name}", getattr(self.energy, name), energy_units) for name in RIGID_ENERGY_TERMS]
         channels.append(Channel("hip", self.hip, self.unit("m")))
         channels += [
-            Channel(f"steps/{name}", getattr(self.steps, name), self.unit(units), False) for name, units in STEP_COLUMNS
+            Channel(f"steps/{name}", getattr(self.steps, name), self.unit(units), False)
+            for name, units in self.steps.columns
         ]
         channels.append(Channel("strikes/time", self.strike_time, self.unit("s"), False))
         channels.append(Channel("strikes/pre_impact", self.strike_pre, state_units, False))
