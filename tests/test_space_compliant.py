@@ -119,10 +119,10 @@ def test_sphere_feet_walk_their_first_steps_near_the_rigid_gait_and_mujoco_agree
 
 def test_the_mujoco_walker_in_space_takes_sphere_feet_only() -> None:
     pytest.importorskip("mujoco")
-    from biped_sim.bench.mujoco_space import space_mjcf
+    from biped_sim.bench.mujoco_space import MujocoSpaceWalker
 
     with pytest.raises(ConfigError) as caught:
-        space_mjcf(tinkertoy())
+        MujocoSpaceWalker(tinkertoy(), GAIT)
     assert str(caught.value).startswith("walker.space.leg.foot.shape: the MuJoCo walker in space takes sphere feet")
 
 
