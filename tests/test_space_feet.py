@@ -1,5 +1,6 @@
-"""Feet of the walker in space and the gaits' stability: Coleman et al.'s toy on spheres instead of rings, and the
-ring thickened into a torus on the way (docs/guide/rigid.md's tables)."""
+"""Feet of the walker in space and the gaits' stability: Coleman et al.'s toy on spheres instead of rings (the ring
+thickened into a torus on the way), and the Kuo-type compass on feet rounded sideways (docs/guide/rigid.md's
+tables)."""
 
 from __future__ import annotations
 
@@ -51,3 +52,33 @@ def test_rounding_the_rings_sideways_leaves_the_toy_stable() -> None:
     assert [c.converged for c in cycles] == [True] * (1 + len(TUBES))
     largest = [c.max_multiplier_modulus for c in cycles[1:]]
     assert largest == pytest.approx(TUBE_LARGEST, abs=1e-5)
+
+
+KUO = SPACE / "kuo_compass_3d.yaml"
+KUO_LATERAL = (0.2, 0.4, 0.6, 0.8, 1.0, 1.2)  # the torus's lateral radius [m]; fore-aft a point (tube 1 mm)
+KUO_LATERAL_LARGEST = (4.452758, 2.999402, 2.244578, 1.924145, 1.776766, 1.669714)
+
+
+def kuo_torus(lateral: float, tube: float = 0.001) -> Config:
+    """The Kuo-type compass on a torus in its leg's y-z plane (normal x): fore-aft radius ``tube``, sideways
+    ``lateral``; its bottom 1 m below the hip."""
+    foot = ["walker.space.leg.foot.shape=torus", f"walker.space.leg.foot.radius={lateral - tube}",
+            f"walker.space.leg.foot.tube={tube}", "walker.space.leg.foot.normal=[1, 0, 0]",
+            f"walker.space.leg.foot.centre=[0, 0, {lateral - 1.0}]"]  # fmt: skip
+    return load_config(KUO, foot)
+
+
+@pytest.mark.slow
+def test_rounding_the_kuo_compass_sideways_shrinks_its_unstable_mode() -> None:
+    """From point feet (1 mm spheres), along one branch: the largest multiplier falls with the feet's lateral radius
+    (6.59 -> 1.67 at 1.2 m, past the centre of mass's 0.75 m) but stays outside the unit circle, its eigenvector's
+    largest part the roll rate (docs/guide/rigid.md's table)."""
+    point = load_config(KUO, ["walker.space.leg.foot.radius=0.001", "walker.space.leg.foot.centre=[0, 0, -0.999]"])
+    cycles = space_branch([point, *(kuo_torus(v) for v in KUO_LATERAL)])
+    assert [c.converged for c in cycles] == [True] * (1 + len(KUO_LATERAL))
+    largest = [c.max_multiplier_modulus for c in cycles[1:]]
+    assert largest == pytest.approx(KUO_LATERAL_LARGEST, abs=1e-5)
+    for cycle in (cycles[1], cycles[-1]):
+        values, vectors = np.linalg.eig(cycle.jacobian)
+        mode = np.abs(vectors[:, np.argmax(np.abs(values))])
+        assert cycle.section_names[int(np.argmax(mode))] == "omega_x"
