@@ -5,8 +5,12 @@ from __future__ import annotations
 import importlib.util
 import math
 import re
+<<<<<<< HEAD
 import sys
 from dataclasses import asdict
+=======
+from dataclasses import asdict, replace
+>>>>>>> main
 from pathlib import Path
 from typing import Any
 
@@ -35,13 +39,18 @@ CONFIG = Path(__file__).resolve().parents[1] / "configs" / "round_foot_walker.ya
 
 @pytest.fixture(scope="module")
 def short_bench() -> dict:
-    """The benchmark on 1 s of walking (two heel strikes), one repeat, no start-up/sweep/compile/MuJoCo runs.
+    """``bench --quick`` (no cold start-up, sweep, compile, basin, fit, uncertainty or MuJoCo rows) on 1 s of walking
+    (two heel strikes), one repeat.
 
     About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
     their step size. Slow tier only.
     """
+<<<<<<< HEAD
     quiet = {"sweep_runs": 0, "basins": False, "compile_time": False, "space": False, "mujoco": False}
     settings = BenchSettings(CONFIG, t_end=1.0, repeats=1, slow_repeats=1, **quiet)  # type: ignore[arg-type]
+=======
+    settings = replace(BenchSettings.quick_run(CONFIG), t_end=1.0, repeats=1)
+>>>>>>> main
     return run_bench(settings)
 
 

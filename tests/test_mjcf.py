@@ -105,8 +105,8 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
         ("rimless_wheel.yaml", (), "contact.stiffness: point feet have no Hertz stiffness"),
         ("simplest_walker.yaml", ("contact.stiffness=1e7",), "walker.description.bodies.leg1.mass: a body needs mass"),
         (
-            "space/kuo_compass_3d.yaml",
-            ('walker.space.leg.foot={"shape": "torus", "centre": [0, 0, -0.8], "radius": 0.1, "tube": 0.1}',),
+            "space/tinkertoy.yaml",
+            ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube=0.05"),
             "walker.space.leg.foot.shape: MuJoCo has no torus geom",
         ),
     ],

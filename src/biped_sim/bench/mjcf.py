@@ -194,7 +194,7 @@ def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
     if space.leg.foot.shape == "torus":
-        raise ConfigError("walker.space.leg.foot.shape", "MuJoCo has no torus geom (a mesh would be its convex hull)")
+        raise ConfigError("walker.space.leg.foot.shape", "MuJoCo has no torus geom: not written as MJCF")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())
     g, slope, mu = config.gravity, config.ground.slope, config.friction.mu_kinetic
