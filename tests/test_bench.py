@@ -5,12 +5,8 @@ from __future__ import annotations
 import importlib.util
 import math
 import re
-<<<<<<< HEAD
 import sys
-from dataclasses import asdict
-=======
 from dataclasses import asdict, replace
->>>>>>> main
 from pathlib import Path
 from typing import Any
 
@@ -45,12 +41,7 @@ def short_bench() -> dict:
     About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
     their step size. Slow tier only.
     """
-<<<<<<< HEAD
-    quiet = {"sweep_runs": 0, "basins": False, "compile_time": False, "space": False, "mujoco": False}
-    settings = BenchSettings(CONFIG, t_end=1.0, repeats=1, slow_repeats=1, **quiet)  # type: ignore[arg-type]
-=======
     settings = replace(BenchSettings.quick_run(CONFIG), t_end=1.0, repeats=1)
->>>>>>> main
     return run_bench(settings)
 
 
