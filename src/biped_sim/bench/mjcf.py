@@ -193,8 +193,8 @@ def _path(tree: Tree, b: int) -> list[int]:
 def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
-    if space.leg.foot.shape == "torus":
-        raise ConfigError("walker.space.leg.foot.shape", "MuJoCo has no torus geom: not written as MJCF")
+    if space.leg.foot.shape in ("torus", "ellipsoid"):
+        raise ConfigError("walker.space.leg.foot.shape", f"a {space.leg.foot.shape} foot is not written as MJCF")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())
     g, slope, mu = config.gravity, config.ground.slope, config.friction.mu_kinetic
