@@ -47,4 +47,7 @@ def test_the_recipe_runs_as_written(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert (tmp_path / "results" / "sweeps" / "radius" / "sweep.csv").exists()
-    assert "converged" in done.stdout
+    assert (tmp_path / "results" / "uncertainty").is_dir()
+    found = re.search(r"walker\.parameters\.torso_mass = ([0-9.]+);", done.stdout)  # the fit's line
+    assert found is not None and float(found.group(1)) == pytest.approx(1.1, abs=1e-3), done.stdout[-2000:]
+    assert "not identifiable" not in done.stdout
