@@ -31,10 +31,10 @@ def contact(model: str, restitution: float) -> object:
 
 
 def test_the_matched_damping_ratio_loses_what_flores_loses_and_an_elastic_law_none() -> None:
-    zeta = matched_damping_ratio(contact("flores", 0.2), 1e7)
+    zeta = matched_damping_ratio(contact("flores", 0.2))
     assert clipped_restitution(zeta) == pytest.approx(drop_test("flores", 0.2, 1e7)["effective_restitution"], 1e-8)
     assert 0.85 < zeta < 0.95  # the free oscillator's formula would give 0.456
-    assert matched_damping_ratio(contact("hertz", 0.2), 1e7) == 0.0
+    assert matched_damping_ratio(contact("hertz", 0.2)) == 0.0
 
 
 def test_a_mujoco_drop_with_the_matched_solref_returns_our_laws_restitution() -> None:
@@ -53,3 +53,10 @@ def test_a_mujoco_drop_with_the_matched_solref_returns_our_laws_restitution() ->
     mujoco.mj_step(model, data, nstep=5000)
     ours = drop_test("flores", 0.2, 1e7)["effective_restitution"]
     assert data.qvel[0] / 0.5 == pytest.approx(ours, rel=0.03)
+
+
+def test_our_kelvin_voigt_law_is_the_clipped_oscillator_so_its_damping_ratio_is_the_free_formulas() -> None:
+    """Kelvin-Voigt with D from e's free-oscillator zeta, clipped at zero force, is MuJoCo's contact exactly."""
+    e = 0.2
+    free = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2)
+    assert matched_damping_ratio(contact("kelvin_voigt", e)) == pytest.approx(free, rel=1e-6)

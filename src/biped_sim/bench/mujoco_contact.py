@@ -17,6 +17,7 @@ is clipped at zero (a contact pushes, never pulls). Two numbers are matched:
 
 from __future__ import annotations
 
+import functools
 import math
 
 from scipy.integrate import solve_ivp
@@ -43,10 +44,20 @@ def clipped_restitution(zeta: float) -> float:
     return float(-run.y_events[0][0][1])
 
 
-def matched_damping_ratio(config: Config, stiffness: float) -> float:
-    """The damping ratio of MuJoCo's clipped contact that returns our law's effective restitution (its drop test
-    at ``stiffness``); 0 for an elastic law."""
-    target = float(drop_test(config.contact.model, config.contact.restitution, stiffness)["effective_restitution"])
+def matched_damping_ratio(config: Config) -> float:
+    """The damping ratio of MuJoCo's clipped contact that returns our law's effective restitution, its drop test's
+    (at the drop test's own stiffness: every law's is free of the stiffness and mass, as Hunt-Crossley's family and
+    Kelvin-Voigt with its damping from e scale with them); 0 for an elastic law, the largest searched for a
+    plastic one (e = 0: Flores's is undefined)."""
+    return _damping_ratio(config.contact.model, config.contact.restitution)
+
+
+@functools.lru_cache(maxsize=64)
+def _damping_ratio(model: str, restitution: float) -> float:
+    """:func:`matched_damping_ratio` of a law and its nominal restitution (a drop test and a root search: kept)."""
+    if restitution == 0.0:
+        return ZETA_RANGE[1]
+    target = float(drop_test(model, restitution)["effective_restitution"])
     if target >= clipped_restitution(ZETA_RANGE[0]):
         return 0.0
     return float(brentq(lambda z: clipped_restitution(z) - target, *ZETA_RANGE, xtol=1e-10))
@@ -57,5 +68,5 @@ def matched_solref(config: Config, mass: float, stiffness: float, penetration: f
     ``mass``, and the damping ratio whose clipped contact loses what ours loses (:func:`matched_damping_ratio`)."""
     n = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
     omega = math.sqrt(n * stiffness * penetration ** (n - 1.0) / mass)
-    zeta = matched_damping_ratio(config, stiffness)
+    zeta = matched_damping_ratio(config)
     return omega**2 / IMPEDANCE, 2.0 * zeta * omega / IMPEDANCE

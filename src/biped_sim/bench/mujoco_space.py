@@ -1,14 +1,10 @@
 """A walker in space (``walker.kind: description3d``) in MuJoCo: its description as MJCF, started on our start.
 
-The MJCF's world is the rigid model's slope frame (x downhill, y left, z along the slope normal; gravity tilted
-by the slope, the ground the plane z = 0). The left leg floats on a free joint, its body frame the walker frame
-(origin at the hinge's midpoint, x forward, y along the hinge, z up the leg); the right leg hangs from it on a hinge
-about y. Masses, centres of mass and full inertia tensors are the compliant builder's (the hip mass on the left
-leg, each principal moment floored as there); each foot is a sphere geom. Our start (the rigid gait's state, the
-stance foot's contact point at the origin) sets the free joint and the hinge. The contact is matched as for the
-planar benchmark walker (:func:`~biped_sim.bench.mujoco_contact.matched_solref`: our law's frequency linearised at
-the static penetration under the whole weight, the damping ratio whose clipped contact loses what ours loses), and
-the scuffing guard, heel-strike log and fall check are its loop (:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
+The MJCF is :func:`~biped_sim.bench.mjcf.space_mjcf`'s (the left leg on a free joint, the right on the hinge, full
+inertias, the contact matched to ours); this walker takes sphere feet, whose bottom it follows. Our start (the rigid
+gait's state, the stance foot's contact point at the origin) sets the free joint and the hinge; the scuffing guard,
+heel-strike log and fall check are the planar benchmark walker's loop
+(:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
 
 What each side assumes: MuJoCo's contact is a soft constraint on the acceleration, linear in penetration with its
 damping acting from the first instant, and its friction an elliptic cone that holds true stick within the
@@ -18,19 +14,25 @@ penetration) with regularised friction that creeps below its stick velocity.
 
 from __future__ import annotations
 
-import math
+import time
+from typing import Any
 
 import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
-from biped_sim.bench.mujoco_walker import TIMESTEP, MujocoWalker
+from biped_sim.bench.mjcf import TIMESTEP, space_mjcf
+from biped_sim.bench.mujoco_walker import MujocoWalker
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
-from biped_sim.walkers.model import contact_stiffness, static_contact_penetration
-from biped_sim.walkers.space_geometry import TO_SPATIAL, LegGeometry, leg_geometry, rolling_states, with_point_mass
-from biped_sim.walkers.space_walker import body_inertia, check_initial
+from biped_sim.integrate.driver import Integration
+from biped_sim.multibody.dispatch import measures
+from biped_sim.simulate import prepare_model, simulate
+from biped_sim.walkers.model import BuiltModel, contact_stiffness, static_contact_penetration
+from biped_sim.walkers.space_geometry import LegGeometry, leg_geometry, rolling_states, with_point_mass
+from biped_sim.walkers.space_walker import check_initial
+
+STEPS_COMPARED = 3  # the laterally unstable Kuo-type compass falls after its third or fourth step
 
 
 def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
@@ -41,56 +43,16 @@ def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
     return with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1)
 
 
-def _body(leg: LegGeometry, foot: str, contact: str) -> str:
-    """A leg's inertial element and foot geom (walker frame)."""
-    j = TO_SPATIAL.T @ body_inertia(leg) @ TO_SPATIAL
-    full = " ".join(repr(float(v)) for v in (j[0, 0], j[1, 1], j[2, 2], j[0, 1], j[0, 2], j[1, 2]))
-    com = " ".join(repr(float(v)) for v in leg.com)
-    centre = " ".join(repr(float(v)) for v in leg.foot_centre)
-    return (
-        f'<inertial pos="{com}" mass="{float(leg.mass)!r}" fullinertia="{full}"/>'
-        f'<geom name="{foot}" type="sphere" pos="{centre}" size="{float(leg.foot_radius)!r}" mass="0" {contact}/>'
-    )
-
-
-def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
-    """MJCF of the walker in space of ``config`` on its slope."""
-    legs = space_legs(config)
-    mass = legs[0].mass + legs[1].mass
-    stiffness = contact_stiffness(config, legs[0].foot_radius)
-    k, b = matched_solref(config, mass, stiffness, static_contact_penetration(config, mass, stiffness))
-    mu = config.friction.mu_kinetic
-    contact = f'friction="{mu!r} 0 0" solref="{-k!r} {-b!r}" solimp="{IMPEDANCE} {IMPEDANCE} 0.001"'
-    g, slope = config.gravity, config.ground.slope
-    gravity = f"{g * math.sin(slope)!r} 0 {-g * math.cos(slope)!r}"
-    return f"""<mujoco model="walker_in_space">
-  <compiler angle="radian" inertiafromgeom="false"/>
-  <option timestep="{timestep!r}" integrator="{integrator}" gravity="{gravity}" cone="elliptic"/>
-  <worldbody>
-    <geom name="ground" type="plane" size="50 50 0.1" friction="{mu!r} 0 0"/>
-    <body name="left">
-      <freejoint name="base"/>
-      {_body(legs[0], "foot0", contact)}
-      <body name="right">
-        <joint name="hinge" type="hinge" axis="0 1 0"/>
-        {_body(legs[1], "foot1", contact)}
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
-
-
 class MujocoSpaceWalker(MujocoWalker):
     """The walker in space in MuJoCo, with the planar benchmark walker's guard, strike log and fall check."""
 
     def __init__(self, config: Config, initial: dict[str, float], timestep: float = TIMESTEP) -> None:
+        legs = space_legs(config)
         self.config = config
         self.model = mujoco.MjModel.from_xml_string(space_mjcf(config, timestep))
         self.data = mujoco.MjData(self.model)
         self.feet = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"foot{i}") for i in (0, 1)]
         self.radius = config.walker.space.leg.foot.radius  # type: ignore[union-attr]
-        legs = space_legs(config)
         mass = legs[0].mass + legs[1].mass
         self.clearance = static_contact_penetration(config, mass, contact_stiffness(config, self.radius))
         self.qpos0, self.qvel0 = self._space_state(legs, check_initial(initial))
@@ -117,3 +79,67 @@ class MujocoSpaceWalker(MujocoWalker):
     def hip_height(self) -> float:
         """The hinge midpoint's height above the slope [m]."""
         return float(self.data.qpos[2])
+
+    def run(self, t_end: float) -> dict[str, Any]:
+        """The planar walker's run, tracing the strikes' contact points and the hip's lateral path."""
+        self._places = [np.zeros(2)]  # the start: the stance foot's contact point at the origin
+        self._lateral: list[list[float]] = [[]]
+        return super().run(t_end)
+
+    def _sample(self, n_strikes: int, last_foot: int) -> None:
+        """The hip's lateral place; at a new strike (seen at the end of its chunk of steps, 0.5 ms at most after it)
+        the striking sphere's lowest point."""
+        y = float(self.data.qpos[1])
+        if n_strikes >= len(self._places):
+            self._lateral[-1].append(y)
+            self._places.append(self.data.geom_xpos[self.feet[last_foot], :2].copy())
+            self._lateral.append([])
+        self._lateral[-1].append(y)
+
+    def places(self) -> np.ndarray:
+        """(downhill, lateral) of the start's contact point and of each strike's in the last run [m]."""
+        return np.array(self._places)
+
+    def sways(self) -> np.ndarray:
+        """The hinge midpoint's lateral excursion (max - min) between consecutive strikes of the last run [m]."""
+        return np.array([max(y) - min(y) for y in self._lateral[1:-1]])
+
+
+def _our_places(model: BuiltModel, run: Integration) -> np.ndarray:
+    """(downhill, lateral) of our start's contact point (the origin) and of each strike's (the striking foot's lowest
+    point, as our step table has it)."""
+    point = measures(model.system).foot_point
+    strikes = [point(run.strike_y[k], model.system, int(run.strike_foot[k])) for k in range(len(run.strike_t))]
+    return np.array([(0.0, 0.0), *strikes])
+
+
+def side_by_side(config: Config, initial: dict[str, float], n_steps: int = STEPS_COMPARED) -> dict[str, Any]:
+    """Our compliant run and MuJoCo's of the walker in space of ``config`` from the rigid gait's state ``initial``:
+    per step of the first ``n_steps`` (the first from the start), its period, length and width (the downhill and
+    lateral distance between the contact points of the strikes that begin and end it; the lateral sign flipped on
+    our side, whose third axis points right), and from the second on the hip's lateral sway (our step table's);
+    each side's status, wall time and real-time factor."""
+    start = time.perf_counter()
+    model = prepare_model(config)
+    ours = simulate(config, model=model)
+    our_wall = time.perf_counter() - start
+    walker = MujocoSpaceWalker(config, initial)
+    start = time.perf_counter()
+    theirs = walker.run(config.simulation.t_end)
+    their_wall = time.perf_counter() - start
+    n = min(n_steps, len(ours.heel_strike_times), len(theirs["strikes"]))
+    steps = [np.diff(_our_places(model, ours.run)[: n + 1], axis=0), np.diff(walker.places()[: n + 1], axis=0)]
+    pairs = {
+        "period": (np.diff(ours.heel_strike_times[:n], prepend=0.0), np.diff(theirs["strikes"][:n], prepend=0.0)),
+        "length": (steps[0][:, 0], steps[1][:, 0]),
+        "width": (np.abs(steps[0][:, 1]), np.abs(steps[1][:, 1])),
+        "sway": (ours.steps.sway[: n - 1], walker.sways()[: n - 1]),  # from the first strike on (no start sway)
+    }
+    return {
+        "quantities": {
+            name: {"ours": a.tolist(), "mujoco": b.tolist(), "relative_difference": (b / a - 1.0).tolist()}
+            for name, (a, b) in pairs.items()
+        },
+        "ours": {"status": ours.status, "wall_s": our_wall, "rtf": ours.t_final / our_wall},
+        "mujoco": {"status": theirs["status"], "wall_s": their_wall, "rtf": theirs["t_final"] / their_wall},
+    }

@@ -24,7 +24,8 @@ import numpy as np
 from numba import njit
 
 from biped_sim.integrate.recorder import DIVERGED, ENERGY_JUMP, ENERGY_RESIDUAL, FELL, JOINT_DRIFT, Recorder
-from biped_sim.multibody.dispatch import measures, system_audit
+from biped_sim.kernel import kernel
+from biped_sim.multibody.dispatch import system_audit, system_energy
 
 DIVERGED_ENERGY = 1.0  # [m g l] an energy residual this large is a blown-up integration, not physics
 DIVERGED_ENERGY_JUMP = 0.01  # [m g l] this much energy error between two checks before a fall: a blown-up step
@@ -43,9 +44,17 @@ NO_CHECKS = Scales(0.0, 1.0)
 
 
 def start_checks(rec: Recorder, system: tuple, y: np.ndarray, modes: np.ndarray) -> None:
-    """Set the energy the residual is measured from: E + W of the state the integration starts from."""
-    kinetic, potential, elastic = measures(system).mechanical_energy(y, system, modes)
-    rec.state[0].energy_reference = plus_dissipated(kinetic + potential + elastic, y, system)
+    """Set the energy the residual is measured from: E + W of the state the integration starts from (the stiff
+    driver's start; the compiled loop sets it itself, at its first call)."""
+    rec.state[0].energy_reference = energy_reference(y, system, modes)
+
+
+@njit(cache=True, inline="always")
+def energy_reference(y: np.ndarray, system: tuple, modes: np.ndarray) -> float:
+    """E + W of the state (y, modes): the formulation's mechanical energy (its measure kernel, which the energy
+    audit's loop compiles too) plus the work dissipated so far (:func:`plus_dissipated`)."""
+    kinetic, potential, elastic = system_energy(y, system, modes)
+    return plus_dissipated(kinetic + potential + elastic, y, system)
 
 
 @njit(cache=True, inline="always")
@@ -79,12 +88,22 @@ def check(
 ) -> None:  # fmt: skip
     """The checks at the state (t, y), if it is due (``t`` past the record's check time) or ``force``d.
 
-    Stops the run (``state[0]``, the loop-state record) as diverged when the residual or the drift is too
-    large; notes the first jump of the residual since the last check, which makes a later fall a divergence.
+    Inlined, it is the due test only: the checks themselves (:func:`_check_now`, about once per ``CHECK_INTERVAL``)
+    are one compiled call, so that the loop, which checks at three places, compiles them once.
+    """
+    if scales.energy > 0.0 and (force or t >= state[0].check_time):
+        _check_now(t, y, system, modes, work, state, scales)
+
+
+@kernel(reference_counts=False)
+def _check_now(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, state: np.ndarray, scales: Scales
+) -> None:
+    """The checks at the state (t, y), due: stops the run (``state[0]``, the loop-state record) as diverged when
+    the residual or the drift is too large; notes the first jump of the residual since the last check, which makes
+    a later fall a divergence.
     """
     st = state[0]
-    if scales.energy <= 0.0 or not (force or t >= st.check_time):
-        return
     energy, drift = system_audit(y, system, modes, work)
     residual = (plus_dissipated(energy, y, system) - st.energy_reference) / scales.energy
     jump = abs(residual - st.check_residual)
@@ -99,7 +118,7 @@ def check(
         st.jump_size = jump
 
 
-@njit(cache=True, inline="always")
+@kernel(reference_counts=False)
 def fall(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, state: np.ndarray, scales: Scales,
     criterion: int,
