@@ -23,9 +23,10 @@ What is written, and how:
   of its radius) whose axis is the ring's normal: its contact with a plane is its rim's lowest point, as a ring's.
   The world is the rigid model's slope frame with gravity tilted by the slope.
 
-What MuJoCo cannot represent, refused in one line: a latch (a joint held from both sides until its leg's foot leaves
-the ground: MuJoCo's constraints are not switched by events in the model). The contact is matched
-(:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with ``mu_kinetic``.
+What MuJoCo cannot represent, refused in one line: a torus foot (no such geom), a latch (a joint held from both
+sides until its leg's foot leaves the ground: MuJoCo's constraints are not switched by events in the model). The
+contact is matched (:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with
+``mu_kinetic``.
 """
 
 from __future__ import annotations
