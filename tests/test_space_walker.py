@@ -104,6 +104,15 @@ def test_a_torus_foot_rests_on_its_tube() -> None:
     np.testing.assert_allclose(d, [0.0, 0.0, -1.0], atol=1e-15)
 
 
+def test_a_round_ellipsoid_rolls_as_a_sphere() -> None:
+    """An ellipsoid of equal semi-axes r is the sphere of radius r: the same flow (contact point, accelerations)."""
+    sphere = ["walker.space.leg.foot.shape=sphere"]
+    ellipsoid = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
+                 "walker.space.leg.foot.axes=[0.1236, 0.1236, 0.1236]"]  # fmt: skip
+    flows = [dyn.flow(space_walker_model(load_config(TINKERTOY, foot)), STATE) for foot in (sphere, ellipsoid)]
+    np.testing.assert_allclose(flows[1], flows[0], rtol=1e-13, atol=1e-14)
+
+
 @pytest.mark.parametrize("feet", list(FEET))
 def test_the_velocities_are_the_positions_rates(feet: str) -> None:
     """Every part's velocity (Kane's A u) is the time derivative of its position, the contact point rolling."""
