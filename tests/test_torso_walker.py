@@ -14,6 +14,7 @@ from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.simulate import CompliantRunResult, simulate
 from biped_sim.simulate.compliant import simulate_compliant
 from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_basin
+from biped_sim.studies.convergence import converge
 from biped_sim.studies.limit_cycle import limit_cycle
 from biped_sim.walkers import build_model
 
@@ -52,6 +53,20 @@ def test_the_torso_walker_has_a_stable_rigid_cycle_near_its_compliant_gait_and_a
     basin = map_basin(spec, None)
     assert basin.outcome[1, 1] == CONVERGED and np.count_nonzero(basin.outcome == CONVERGED) >= 5  # measured: 5
     assert basin.outcome[2, 2] == FELL  # a larger step angle with a slower stance leg: bounded
+
+
+@pytest.mark.slow
+def test_the_compliant_torso_walker_approaches_its_rigid_gait_as_the_contact_stiffens() -> None:
+    """``converge`` on the torso walker (contact 1e7, 1e8, 1e9 N/m^1.5, restitution and LuGre slip falling with
+    it, 8 steps from the rigid fixed point): the compliant step period and touchdown state (the legs' and the
+    torso's angles and rates) approach the rigid gait's level after level."""
+    _, rows = converge(load_config(TORSO_WALKER), levels=3, steps=8)
+    assert all(row.status == "walking" for row in rows)
+    periods = [abs(row.period_difference) for row in rows]
+    touchdowns = [row.touchdown_difference for row in rows]
+    assert periods == sorted(periods, reverse=True) and touchdowns == sorted(touchdowns, reverse=True)
+    assert periods[0] > 1e-3 and periods[-1] < 2e-5  # measured: 5.6e-3, 2.3e-4, 9.5e-6 s
+    assert touchdowns[-1] < 5e-4  # measured: 5.2e-2, 3.6e-3, 2.5e-4
 
 
 def _compass_with_the_torso_at_the_hip(t_end: str) -> CompliantRunResult:
