@@ -107,7 +107,7 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
         (
             "space/tinkertoy.yaml",
             ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube=0.05"),
-            "walker.space.leg.foot.shape: MuJoCo has no torus geom",
+            "walker.space.leg.foot.shape: a torus foot is not written as MJCF",
         ),
     ],
 )
