@@ -85,21 +85,51 @@ SHARED_FIXTURE_MODULES = {
     f"tests/{name}.py": "tiny_sweep"
     for name in ("test_compare", "test_report", "test_study_arguments", "test_study_faults", "test_sweep_run")
 }
+# The slow tier's costliest units, costliest first (CPU times in docs/guide/development.md, "Where CI time goes"):
+# xdist hands them out before the others, so that the tier does not end with one worker alone on a long test while
+# the other idles. A test named here (its module has no module-scoped fixture) is a unit of its own: the two
+# recovery pairs run side by side.
+LONGEST_FIRST = (
+    "tests/test_fit_recovery_kneed.py::test_hidden_kneed_values_drawn_at_random_are_recovered",
+    "tests/test_fit_recovery.py::test_hidden_values_drawn_at_random_are_recovered[inertia+restitution]",
+    "tests/test_fit_recovery.py::test_hidden_values_drawn_at_random_are_recovered[stiffness+friction]",
+    "tests/test_fit_coverage.py",
+    "tests/test_fit_contest.py",
+    "tests/test_described.py",
+    "tests/test_uncertainty.py",
+    "tests/test_validation.py",
+    "tiny_sweep",
+)
+
+
+def work_unit(nodeid: str) -> str:
+    """The unit of work xdist hands a worker for the test ``nodeid``: a test of :data:`LONGEST_FIRST`, a group of
+    :data:`SHARED_FIXTURE_MODULES`, or the test's module."""
+    if nodeid in LONGEST_FIRST:
+        return nodeid
+    module = nodeid.split("::", 1)[0]
+    return SHARED_FIXTURE_MODULES.get(module, module)
 
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """Under ``-n N`` with the default distribution, hand out tests by module (:data:`SHARED_FIXTURE_MODULES`)."""
+    """Under ``-n N`` with the default distribution, hand out tests by :func:`work_unit`, :data:`LONGEST_FIRST`
+    first (the rest as xdist orders them: the units of most tests first)."""
     if config.getoption("dist") != "load":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
-    class ModuleScheduling(LoadScopeScheduling):
+    class UnitScheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            module = nodeid.split("::", 1)[0]
-            return SHARED_FIXTURE_MODULES.get(module, module)
+            return work_unit(nodeid)
 
-    return ModuleScheduling(config, log)
+        def _assign_work_unit(self, node: Any) -> None:
+            costliest = [unit for unit in LONGEST_FIRST if unit in self.workqueue]
+            for unit in reversed(costliest):
+                self.workqueue.move_to_end(unit, last=False)
+            super()._assign_work_unit(node)
+
+    return UnitScheduling(config, log)
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:

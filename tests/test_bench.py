@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib.util
 import math
 import re
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -34,14 +34,13 @@ CONFIG = Path(__file__).resolve().parents[1] / "configs" / "round_foot_walker.ya
 
 @pytest.fixture(scope="module")
 def short_bench() -> dict:
-    """The benchmark on 1 s of walking (two heel strikes), one repeat, no start-up/sweep/compile/MuJoCo runs.
+    """``bench --quick`` (no cold start-up, sweep, compile, basin, fit, uncertainty or MuJoCo rows) on 1 s of walking
+    (two heel strikes), one repeat.
 
     About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
     their step size. Slow tier only.
     """
-    settings = BenchSettings(
-        CONFIG, t_end=1.0, repeats=1, slow_repeats=1, sweep_runs=0, basins=False, compile_time=False, mujoco=False
-    )
+    settings = replace(BenchSettings.quick_run(CONFIG), t_end=1.0, repeats=1)
     return run_bench(settings)
 
 

@@ -20,8 +20,10 @@ from biped_sim.config import Config, load_config
 from biped_sim.io.posterior import read_posterior
 from biped_sim.io.references import Reference, load_reference
 from biped_sim.studies.fit import FitParameter, FitProblem, Outcome, calibrate, fit_problems, synthetic_reference
+from biped_sim.studies.fit.bayes import parse_prior, priors_for
 from biped_sim.studies.fit.diagnose import _jump
 from biped_sim.studies.fit.evaluate import Evaluator
+from biped_sim.studies.fit.parameters import fit_parameter
 from biped_sim.studies.fit.problem import PENALTY_SCALES
 from biped_sim.sweep import local_executor
 from tests.conftest import CONFIGS, DEFAULT_CONFIG, ROOT, invoke, one_line_error
@@ -221,6 +223,13 @@ def test_bad_input_is_one_line_and_writes_nothing(
     assert result.exit_code == 2
     assert expected in one_line_error(result.stderr)
     assert not out.exists() and not (tmp_path / ".out.checkpoint").exists()
+
+
+def test_a_prior_may_name_a_presets_parameter_by_either_spelling() -> None:
+    config = load_config(DEFAULT_CONFIG)
+    fitted = (fit_parameter(config, "walker.leg_inertia", 0.0043, 0.0095),)
+    (prior,) = priors_for(fitted, (parse_prior("walker.parameters.leg_inertia=normal:0.005:0.001"),))
+    assert (prior.key, prior.kind, prior.mean) == ("walker.leg_inertia", "normal", 0.005)
 
 
 @pytest.mark.slow

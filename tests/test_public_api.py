@@ -51,7 +51,7 @@ EXPORTS: dict[str, list[str]] = {
         "local_executor", "make_executor", "pending_runs", "read_sweep", "run_sweep", "study_executor",
         "workers_for",
     ],
-    "biped_sim.walkers": ["BUILDERS", "SPATIAL_BUILDERS", "BuiltModel", "build_model", "describe"],
+    "biped_sim.walkers": ["BuiltModel", "build_model", "describe"],
 }  # fmt: skip
 OPTIONAL = {"biped_sim.bench.mujoco_walker", "biped_sim.bench.mujoco_space"}  # need the bench extra (MuJoCo)
 

@@ -16,7 +16,7 @@ from biped_sim.rigid import space_dynamics as dyn
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.space_cycle import SpaceSection, space_branch, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_flow, space_params
-from biped_sim.rigid.space_model import MIRROR, swing_clearance
+from biped_sim.rigid.space_model import MIRROR, foot_bottom, swing_clearance
 from tests.conftest import invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -25,6 +25,9 @@ KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one 
 KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
 KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
 STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # heading .. hinge rate, contact x, y
+# the tinkertoy on a torus foot in its leg's y-z plane: curved 0.3 fore-aft, 0.5 sideways, tilted off the axes
+TORUS = ["walker.space.leg.foot.shape=torus", "walker.space.leg.foot.radius=0.2", "walker.space.leg.foot.tube=0.3",
+         "walker.space.leg.foot.normal=[1, 0.2, 0.1]", "walker.space.leg.foot.centre=[0.02, 0.01, -0.5]"]  # fmt: skip
 
 
 def compass_in_space(hip_width: float = 0.0) -> dict[str, Any]:
@@ -56,6 +59,8 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
         ("walker.space.leg.inertia.xx=0.5", "walker.space.leg.inertia.xx: not an inertia tensor"),
         ("walker.space.leg.mass=0", "walker.space.leg.mass: Input should be greater than 0"),
         ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
+        ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
+        ("walker.space.leg.foot.tube=0.1", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
         ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
         ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
         ("dynamics=compliant", "walker.kind: 'description3d' needs formulation.kind: spatial with dynamics: compliant"),
@@ -75,9 +80,26 @@ def test_a_walker_in_space_refuses_the_planar_paths() -> None:
         rigid_walker(load_config(TINKERTOY))
 
 
-def test_the_velocities_are_the_positions_rates() -> None:
+def test_a_torus_foot_has_rigid_dynamics_only() -> None:
+    with pytest.raises(ConfigError) as error:
+        load_config(TINKERTOY, [*TORUS, "dynamics=compliant", "formulation.kind=spatial"])
+    assert str(error.value).startswith("walker.space.leg.foot.shape: a torus foot has rigid dynamics only")
+
+
+def test_a_torus_foot_rests_on_its_tube() -> None:
+    """Upright, the torus's bottom is its tube's radius below its ring's, straight down; the leg 0.5 + 0.2 + 0.3."""
+    config = load_config(TINKERTOY, [*TORUS[:3], "walker.space.leg.foot.centre=[0, 0, -0.5]"])
+    assert config.walker.leg_length == pytest.approx(1.0)
+    model = space_walker_model(config)
+    bottom, d = foot_bottom(model.feet[0], np.eye(3))
+    np.testing.assert_allclose(bottom, model.feet[0].centre - [0.0, 0.0, 0.5], atol=1e-15)
+    np.testing.assert_allclose(d, [0.0, 0.0, -1.0], atol=1e-15)
+
+
+@pytest.mark.parametrize("torus", [False, True], ids=["tinkertoy_ring", "torus"])
+def test_the_velocities_are_the_positions_rates(torus: bool) -> None:
     """Every part's velocity (Kane's A u) is the time derivative of its position, the contact point rolling."""
-    model = space_walker_model(load_config(TINKERTOY))
+    model = space_walker_model(load_config(TINKERTOY, TORUS if torus else []))
     rate, h = dyn.flow(model, STATE), 1e-6
 
     def positions(x: np.ndarray) -> np.ndarray:
@@ -122,16 +144,19 @@ def test_the_strike_keeps_the_angular_momenta() -> None:
 
 
 @pytest.mark.slow
-def test_the_compiled_flow_is_the_reference_flow() -> None:
-    model = space_walker_model(load_config(TINKERTOY))
+@pytest.mark.parametrize("torus", [False, True], ids=["tinkertoy_ring", "torus"])
+def test_the_compiled_flow_is_the_reference_flow(torus: bool) -> None:
+    model = space_walker_model(load_config(TINKERTOY, TORUS if torus else []))
     np.testing.assert_allclose(space_flow(space_params(model), STATE), dyn.flow(model, STATE), rtol=1e-13, atol=1e-14)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("config", [TINKERTOY, None], ids=["tinkertoy_ring", "compass_sphere"])
-def test_the_swing_keeps_its_energy(config: Path | None) -> None:
-    """Energy through 2 natural periods of the stance phase (the rolling ring's contact point moving) to 1e-10."""
-    model = space_walker_model(load_config(config) if config else config_from_dict(compass_in_space(0.2)))
+@pytest.mark.parametrize("walker", ["tinkertoy_ring", "compass_sphere", "torus"])
+def test_the_swing_keeps_its_energy(walker: str) -> None:
+    """Energy through 2 natural periods of the stance phase (the rolling foot's contact point moving) to 1e-10."""
+    configs = {"tinkertoy_ring": lambda: load_config(TINKERTOY), "torus": lambda: load_config(TINKERTOY, TORUS),
+               "compass_sphere": lambda: config_from_dict(compass_in_space(0.2))}  # fmt: skip
+    model = space_walker_model(configs[walker]())
     params = space_params(model)
     sol = solve_ivp(lambda t, x: space_flow(params, x), (0.0, 0.6), STATE, method="DOP853", rtol=1e-13, atol=1e-13)
     energies = [dyn.energy(model, x) for x in sol.y.T]

@@ -12,7 +12,7 @@ import pytest
 
 from biped_sim import load_config
 from biped_sim.errors import ConfigError
-from biped_sim.studies.uncertainty.distributions import parse_param, read_spec
+from biped_sim.studies.uncertainty.distributions import check_distributions, parse_param, read_spec
 from biped_sim.studies.uncertainty.samples import run_sample
 from biped_sim.studies.uncertainty.sampling import unit_design
 from biped_sim.studies.uncertainty.sobol import sobol_study
@@ -81,6 +81,14 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path: Path, args: t
     assert result.exit_code == 2, result.stderr
     assert field in one_line_error(result.stderr)
     assert not out.exists()
+
+
+def test_a_presets_parameter_under_both_spellings_is_one_key() -> None:
+    config = load_config(CONFIGS / "round_foot_walker.yaml")
+    both = [parse_param("walker.leg_inertia=uniform:0.004:0.006"),
+            parse_param("walker.parameters.leg_inertia=uniform:0.004:0.006")]  # fmt: skip
+    with pytest.raises(ConfigError, match="is given twice"):
+        check_distributions(config, both)
 
 
 def test_designs_are_seeded_and_sized() -> None:

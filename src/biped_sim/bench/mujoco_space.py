@@ -1,14 +1,10 @@
 """A walker in space (``walker.kind: description3d``) in MuJoCo: its description as MJCF, started on our start.
 
-The MJCF's world is the rigid model's slope frame (x downhill, y left, z along the slope normal; gravity tilted
-by the slope, the ground the plane z = 0). The left leg floats on a free joint, its body frame the walker frame
-(origin at the hinge's midpoint, x forward, y along the hinge, z up the leg); the right leg hangs from it on a hinge
-about y. Masses, centres of mass and full inertia tensors are the compliant builder's (the hip mass on the left
-leg, each principal moment floored as there); each foot is a sphere geom. Our start (the rigid gait's state, the
-stance foot's contact point at the origin) sets the free joint and the hinge. The contact is matched as for the
-planar benchmark walker (:func:`~biped_sim.bench.mujoco_walker.matched_solref`: our law's frequency linearised
-at the static penetration under the whole weight, the damping ratio of our restitution), and the scuffing guard,
-heel-strike log and fall check are its loop (:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
+The MJCF is :func:`~biped_sim.bench.mjcf.space_mjcf`'s (the left leg on a free joint, the right on the hinge, full
+inertias, the contact matched to ours); this walker takes sphere feet, whose bottom it follows. Our start (the rigid
+gait's state, the stance foot's contact point at the origin) sets the free joint and the hinge; the scuffing guard,
+heel-strike log and fall check are the planar benchmark walker's loop
+(:class:`~biped_sim.bench.mujoco_walker.MujocoWalker`).
 
 What each side assumes: MuJoCo's contact is a soft constraint on the acceleration, linear in penetration with its
 damping acting from the first instant, and its friction an elliptic cone that holds true stick within the
@@ -18,18 +14,17 @@ penetration) with regularised friction that creeps below its stick velocity.
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from biped_sim.bench.mujoco_walker import IMPEDANCE, TIMESTEP, MujocoWalker, matched_solref
+from biped_sim.bench.mjcf import TIMESTEP, space_mjcf
+from biped_sim.bench.mujoco_walker import MujocoWalker
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.model import contact_stiffness, static_contact_penetration
-from biped_sim.walkers.space_geometry import TO_SPATIAL, LegGeometry, leg_geometry, rolling_states, with_point_mass
-from biped_sim.walkers.space_walker import body_inertia, check_initial
+from biped_sim.walkers.space_geometry import LegGeometry, leg_geometry, rolling_states, with_point_mass
+from biped_sim.walkers.space_walker import check_initial
 
 
 def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
@@ -40,56 +35,16 @@ def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
     return with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1)
 
 
-def _body(leg: LegGeometry, foot: str, contact: str) -> str:
-    """A leg's inertial element and foot geom (walker frame)."""
-    j = TO_SPATIAL.T @ body_inertia(leg) @ TO_SPATIAL
-    full = " ".join(repr(float(v)) for v in (j[0, 0], j[1, 1], j[2, 2], j[0, 1], j[0, 2], j[1, 2]))
-    com = " ".join(repr(float(v)) for v in leg.com)
-    centre = " ".join(repr(float(v)) for v in leg.foot_centre)
-    return (
-        f'<inertial pos="{com}" mass="{float(leg.mass)!r}" fullinertia="{full}"/>'
-        f'<geom name="{foot}" type="sphere" pos="{centre}" size="{float(leg.foot_radius)!r}" mass="0" {contact}/>'
-    )
-
-
-def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
-    """MJCF of the walker in space of ``config`` on its slope."""
-    legs = space_legs(config)
-    mass = legs[0].mass + legs[1].mass
-    stiffness = contact_stiffness(config, legs[0].foot_radius)
-    k, b = matched_solref(config, mass, stiffness, static_contact_penetration(config, mass, stiffness))
-    mu = config.friction.mu_kinetic
-    contact = f'friction="{mu!r} 0 0" solref="{-k!r} {-b!r}" solimp="{IMPEDANCE} {IMPEDANCE} 0.001"'
-    g, slope = config.gravity, config.ground.slope
-    gravity = f"{g * math.sin(slope)!r} 0 {-g * math.cos(slope)!r}"
-    return f"""<mujoco model="walker_in_space">
-  <compiler angle="radian" inertiafromgeom="false"/>
-  <option timestep="{timestep!r}" integrator="{integrator}" gravity="{gravity}" cone="elliptic"/>
-  <worldbody>
-    <geom name="ground" type="plane" size="50 50 0.1" friction="{mu!r} 0 0"/>
-    <body name="left">
-      <freejoint name="base"/>
-      {_body(legs[0], "foot0", contact)}
-      <body name="right">
-        <joint name="hinge" type="hinge" axis="0 1 0"/>
-        {_body(legs[1], "foot1", contact)}
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
-
-
 class MujocoSpaceWalker(MujocoWalker):
     """The walker in space in MuJoCo, with the planar benchmark walker's guard, strike log and fall check."""
 
     def __init__(self, config: Config, initial: dict[str, float], timestep: float = TIMESTEP) -> None:
+        legs = space_legs(config)
         self.config = config
         self.model = mujoco.MjModel.from_xml_string(space_mjcf(config, timestep))
         self.data = mujoco.MjData(self.model)
         self.feet = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"foot{i}") for i in (0, 1)]
         self.radius = config.walker.space.leg.foot.radius  # type: ignore[union-attr]
-        legs = space_legs(config)
         mass = legs[0].mass + legs[1].mass
         self.clearance = static_contact_penetration(config, mass, contact_stiffness(config, self.radius))
         self.qpos0, self.qvel0 = self._space_state(legs, check_initial(initial))

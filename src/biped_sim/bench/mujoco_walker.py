@@ -2,7 +2,7 @@
 
 How the model is matched (docs/guide/performance.md says the same):
 
-* Geometry and inertia come from the config through the formulas of the compass builder: each
+* Geometry and inertia are the compass's description written as MJCF (:func:`.mjcf.planar_mjcf`): each
   leg is a body with mass m + M_H/2, centre of mass d = m c / (m + M_H/2) below the hip and
   inertia J = I + m (c - d)^2 + (M_H/2) d^2 about the hip-normal axis; a capsule (massless,
   visual) from the hip to the foot centre, and a sphere of radius R at l - R from the hip (the
@@ -14,7 +14,7 @@ How the model is matched (docs/guide/performance.md says the same):
 * Contact: MuJoCo's soft constraint is linear in penetration and acts on accelerations
   (a + d (b v + k r) = (1 - d) a0), not a force law. We match its natural frequency to our Hertz
   law linearised at the static penetration, omega^2 = 1.5 K delta_s^0.5 / M, and its damping
-  ratio to the restitution (zeta from e for a linear oscillator), with impedance d = 0.95
+  ratio to our law's effective restitution (:mod:`.mujoco_contact`: the clipped oscillator's), with impedance d = 0.95
   (``solref = -k -b``). Friction is MuJoCo's cone with mu = mu_kinetic and no regularisation velocity.
 * Scuffing guard: MuJoCo has none, so the loop applies ours (the same arming rule) every
   :data:`GUARD_STEPS` steps by switching a foot's collision on or off. "In the air" means higher
@@ -38,14 +38,14 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from biped_sim.bench.mjcf import TIMESTEP, planar_mjcf
+from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers import build_model
 from biped_sim.walkers.model import contact_stiffness
 
-TIMESTEP = 1e-4  # [s] MuJoCo step of the comparison
 GUARD_STEPS = 5  # MuJoCo steps between two applications of the scuffing guard (0.5 ms)
-IMPEDANCE = 0.95  # solimp d (constant): the fraction of the reference acceleration the contact enforces
 
 
 def static_penetration(config: Config) -> float:
@@ -63,63 +63,15 @@ def contact_solref(config: Config) -> tuple[float, float]:
     return matched_solref(config, mass, contact_stiffness(config), static_penetration(config))
 
 
-def matched_solref(config: Config, mass: float, stiffness: float, penetration: float) -> tuple[float, float]:
-    """(k, b) of MuJoCo's direct solref: our law's frequency linearised at the static ``penetration`` under
-    ``mass``, and the damping ratio of a linear oscillator with our restitution."""
-    n = 1.0 if config.contact.model == "kelvin_voigt" else config.contact.exponent
-    omega = math.sqrt(n * stiffness * penetration ** (n - 1.0) / mass)
-    e = config.contact.restitution
-    zeta = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2) if e < 1.0 else 0.0
-    return omega**2 / IMPEDANCE, 2.0 * zeta * omega / IMPEDANCE
-
-
-def walker_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
-    """MJCF of the compass walker of ``config`` on its slope (legs hang along -z from the hip)."""
-    w = config.walker
-    for name in ("leg_com_offset", "foot_offset"):
-        if getattr(w, name) != 0.0:
-            raise ConfigError(f"walker.{name}", "the MuJoCo benchmark's walker has no offsets: must be 0")
-    l, R, m, c, I, M_H = w.leg_length, w.foot_radius, w.leg_mass, w.leg_com_from_hip, w.leg_inertia, w.hip_mass
-    mass = m + 0.5 * M_H
-    d = m * c / mass
-    inertia = I + m * (c - d) ** 2 + 0.5 * M_H * d**2
-    k, b = contact_solref(config)
-    foot = l - R
-    leg = (
-        f'<inertial pos="0 0 {-d!r}" mass="{mass!r}" diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>'
-        f'<geom type="capsule" fromto="0 0 0 0 0 {-foot!r}" size="0.01" mass="0" contype="0" conaffinity="0"/>'
-        f'<geom name="{{foot}}" type="sphere" pos="0 0 {-foot!r}" size="{R!r}" mass="0" '
-        f'friction="{config.friction.mu_kinetic!r} 0 0" solref="{-k!r} {-b!r}" '
-        f'solimp="{IMPEDANCE} {IMPEDANCE} 0.001"/>'
-    )
-    return f"""<mujoco model="compass_walker">
-  <compiler angle="radian" inertiafromgeom="false"/>
-  <option timestep="{timestep!r}" integrator="{integrator}" gravity="0 0 {-config.gravity!r}" cone="elliptic"/>
-  <worldbody>
-    <body name="slope" euler="0 {config.ground.slope!r} 0">
-      <geom name="ground" type="plane" size="50 1 0.1" friction="{config.friction.mu_kinetic!r} 0 0"/>
-      <body name="stance_leg">
-        <joint name="x" type="slide" axis="1 0 0"/>
-        <joint name="z" type="slide" axis="0 0 1"/>
-        <joint name="theta" type="hinge" axis="0 -1 0"/>
-        {leg.format(foot="foot0")}
-        <body name="swing_leg">
-          <joint name="hip" type="hinge" axis="0 -1 0"/>
-          {leg.format(foot="foot1")}
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
-
-
 class MujocoWalker:
     """A MuJoCo model of the walker with our initial state, scuffing guard and heel-strike log."""
 
     def __init__(self, config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> None:
+        for name in ("leg_com_offset", "foot_offset"):
+            if getattr(config.walker, name) != 0.0:
+                raise ConfigError(f"walker.{name}", "the MuJoCo benchmark's walker has no offsets: must be 0")
         self.config = config
-        self.model = mujoco.MjModel.from_xml_string(walker_mjcf(config, timestep, integrator))
+        self.model = mujoco.MjModel.from_xml_string(planar_mjcf(config, timestep, integrator))
         self.data = mujoco.MjData(self.model)
         self.feet = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"foot{i}") for i in (0, 1)]
         self.reach = config.walker.leg_length - config.walker.foot_radius
@@ -232,7 +184,7 @@ def run_mujoco_bench(
         "reference_step_period_s": float(np.mean(reference[-min(5, len(reference)) :])) if len(reference) else math.nan,
         "solref": list(contact_solref(config)),
         "impedance": IMPEDANCE,
-        "mjcf": walker_mjcf(config),
+        "mjcf": planar_mjcf(config),
     }
     log(f"MuJoCo RK4 dt {out['timestep']:g}: {wall:.3f} s, {result['status']}, step period {step_period:.4f} s")
     return out

@@ -47,6 +47,12 @@ class BodySpec(Strict):
         None, ge=0, description="Or its radius of gyration about the centre of mass [m]: inertia = mass r^2."
     )
     com: Vector2 = Field((0.0, 0.0), description="Centre of mass in the body frame [m]: (across + downhill, along).")
+    spatial_inertia: tuple[float, float, float] | None = Field(
+        None,
+        description="The spatial formulation's inertia about the centre of mass across the sagittal plane: the "
+        "moments about the body's x and y axes and the tensor's xy entry (xx, yy, xy) [kg m^2], its point masses "
+        "added by parallel axes; none given: the moment of inertia about every axis (a walker kept planar).",
+    )
     fall_angle: float | None = Field(
         None,
         gt=0,
@@ -175,6 +181,12 @@ class FootSpec(Strict):
     body: str = Field(..., description="The body carrying it.")
     centre: Vector2 = Field(..., description="Arc centre in the body frame [m].")
     radius: float = Field(0.0, ge=0, description="Arc radius [m]; 0 = point foot.")
+    lateral: float = Field(
+        0.0,
+        description="The spatial formulation's place of the foot along the joints' axis (z') [m], its arc in that "
+        "plane; a planar model puts every foot in the sagittal plane. A walker with a foot off it stands on its "
+        "feet in roll and yaw; one without is held in its plane.",
+    )
 
 
 class WalkerDescription(Strict):

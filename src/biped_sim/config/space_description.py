@@ -4,9 +4,12 @@ lateral hinge (``walker.kind: description3d``, its description under ``walker.sp
 The leg is written once, as the left leg in its own frame (x forward, y along the hinge axis pointing away from
 the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
 (y -> -y). The two hip points lie on the hinge axis ``hip_width`` apart; ``splay`` turns each leg outward about
-its forward axis through its hip point. A foot is a point, a sphere or a ring (a thin circular edge whose plane
-is normal to ``normal``); a planar walker is the special case of zero hip width, a centre of mass in the leg's
-x-z plane and a sphere or ring foot in it.
+its forward axis through its hip point. A foot is a point, a sphere, a ring (a thin circular edge whose plane
+is normal to ``normal``) or a torus (a ring of radius ``radius`` thickened by a tube of radius ``tube``: at its
+bottom it is curved with radius ``radius + tube`` in the ring's plane and ``tube`` across it, so that its two
+curvatures are set apart; e.g. its plane lateral, normal x, gives a foot rounder sideways than fore-aft); a
+planar walker is the special case of zero hip width, a centre of mass in the leg's x-z plane and a sphere or
+ring foot in it.
 
 Why a member of its own (and ``walker.space`` rather than ``walker.description``): every consumer of
 ``walker.description`` reads a planar tree (the compliant builders, the planar rigid model, the pictures), so
@@ -69,13 +72,17 @@ class InertiaSpec(Strict):
 
 
 class SpaceFoot(Strict):
-    """A foot: a point, a sphere (rolling) or a ring (a thin circular edge rolling on the ground)."""
+    """A foot: a point, a sphere (rolling), a ring (a thin circular edge rolling on the ground) or a torus."""
 
-    shape: Literal["point", "sphere", "ring"] = Field(..., description="'point', 'sphere' or 'ring'.")
-    centre: Vector3 = Field(..., description="The point, or the sphere's or ring's centre, from the hip point [m].")
-    radius: float = Field(0.0, ge=0, description="Sphere or ring radius [m] (a point: 0).")
+    shape: Literal["point", "sphere", "ring", "torus"] = Field(..., description="'point', 'sphere', 'ring' or 'torus'.")
+    centre: Vector3 = Field(
+        ..., description="The point, or the sphere's, ring's or torus's centre, from the hip point [m]."
+    )
+    radius: float = Field(0.0, ge=0, description="Sphere, ring or torus (major) radius [m] (a point: 0).")
+    tube: float = Field(0.0, ge=0, description="A torus's tube radius [m] (the other shapes: 0).")
     normal: Vector3 = Field(
-        (0.0, 1.0, 0.0), description="A ring's plane normal in the leg's frame (default y: the ring in the x-z plane)."
+        (0.0, 1.0, 0.0),
+        description="A ring's or torus's plane normal in the leg's frame (default y: its plane the x-z plane).",
     )
 
     @model_validator(mode="after")
@@ -84,9 +91,16 @@ class SpaceFoot(Strict):
             raise ValueError("radius: a point foot has radius 0 (a round foot is a sphere or a ring)")
         if self.shape != "point" and self.radius <= 0.0:
             raise ValueError(f"radius: a {self.shape} foot needs a radius > 0")
-        if self.shape == "ring" and math.hypot(*self.normal) < 1e-12:
-            raise ValueError("normal: a ring's plane normal must not be zero")
+        if self.shape in ("ring", "torus") and math.hypot(*self.normal) < 1e-12:
+            raise ValueError(f"normal: a {self.shape}'s plane normal must not be zero")
+        if (self.shape == "torus") != (self.tube > 0.0):
+            raise ValueError("tube: a torus foot needs a tube radius > 0 (the other shapes have none)")
         return self
+
+    @property
+    def reach(self) -> float:
+        """From the centre to the bottom with the foot's plane upright [m]: the radius plus a torus's tube."""
+        return self.radius + self.tube
 
 
 class SpaceLeg(Strict):
@@ -113,13 +127,14 @@ class SpaceDescription(Strict):
     def _foot_below_hip(self) -> SpaceDescription:
         if self.leg_length() <= 0.0:
             raise ValueError(
-                "walker.space.leg.foot.centre: the foot's bottom must be below the hip (z of centre minus radius < 0)"
+                "walker.space.leg.foot.centre: the foot's bottom must be below the hip (z of centre minus radius and "
+                "tube < 0)"
             )
         return self
 
     def leg_length(self) -> float:
         """The hip point to the foot's bottom with the leg upright and no splay [m]: the walker's length scale."""
-        return -(self.leg.foot.centre[2] - self.leg.foot.radius)
+        return -(self.leg.foot.centre[2] - self.leg.foot.reach)
 
 
 class SpaceWalker(Strict):

@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from biped_sim.integrate.recorder import DIVERGED, ENERGY_JUMP, ENERGY_RESIDUAL, FELL, JOINT_DRIFT, Recorder
+from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import measures, system_audit
 
 DIVERGED_ENERGY = 1.0  # [m g l] an energy residual this large is a blown-up integration, not physics
@@ -79,12 +80,22 @@ def check(
 ) -> None:  # fmt: skip
     """The checks at the state (t, y), if it is due (``t`` past the record's check time) or ``force``d.
 
-    Stops the run (``state[0]``, the loop-state record) as diverged when the residual or the drift is too
-    large; notes the first jump of the residual since the last check, which makes a later fall a divergence.
+    Inlined, it is the due test only: the checks themselves (:func:`_check_now`, about once per ``CHECK_INTERVAL``)
+    are one compiled call, so that the loop, which checks at three places, compiles them once.
+    """
+    if scales.energy > 0.0 and (force or t >= state[0].check_time):
+        _check_now(t, y, system, modes, work, state, scales)
+
+
+@kernel(reference_counts=False)
+def _check_now(
+    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, state: np.ndarray, scales: Scales
+) -> None:
+    """The checks at the state (t, y), due: stops the run (``state[0]``, the loop-state record) as diverged when
+    the residual or the drift is too large; notes the first jump of the residual since the last check, which makes
+    a later fall a divergence.
     """
     st = state[0]
-    if scales.energy <= 0.0 or not (force or t >= st.check_time):
-        return
     energy, drift = system_audit(y, system, modes, work)
     residual = (plus_dissipated(energy, y, system) - st.energy_reference) / scales.energy
     jump = abs(residual - st.check_residual)
@@ -99,7 +110,7 @@ def check(
         st.jump_size = jump
 
 
-@njit(cache=True, inline="always")
+@kernel(reference_counts=False)
 def fall(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, state: np.ndarray, scales: Scales,
     criterion: int,

@@ -64,8 +64,13 @@ def fall_reason(code: int, body_names: list[str] | None = None) -> str | None:
     if code < BODY_TOO_FAR:
         return FALL_REASONS.get(code)
     body = code - BODY_TOO_FAR
-    name = repr(body_names[body]) if body_names is not None and body < len(body_names) else str(body)
-    return f"the body {name} (off the legs) past its fall_angle from the slope normal"
+    return body_fall_reason(body_names[body] if body_names is not None and body < len(body_names) else body)
+
+
+def body_fall_reason(body: str | int) -> str:
+    """Why a run fell when a body off the legs (a torso; its name, or its index unnamed) passed its fall angle: the
+    one wording of compliant and rigid runs."""
+    return f"the body {body!r} (off the legs) past its fall_angle from the slope normal"
 
 
 LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)

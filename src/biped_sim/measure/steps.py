@@ -10,13 +10,14 @@ import csv
 import io
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from biped_sim.integrate.driver import Integration
+from biped_sim.measure.loops import hip_loop
 from biped_sim.multibody.dispatch import measures, system_foot_contact
 from biped_sim.walkers.model import BuiltModel
 
@@ -34,6 +35,17 @@ class StepTable:
     stance_rate: np.ndarray
     swing_angle: np.ndarray
     swing_rate: np.ndarray
+    # spatial runs only (else None): LATERAL_STEP_COLUMNS, defined in docs/guide/outputs.md (:func:`lateral_steps`)
+    width: np.ndarray | None = None
+    heading: np.ndarray | None = None
+    sway: np.ndarray | None = None
+    bank: np.ndarray | None = None
+
+    @property
+    def columns(self) -> tuple[tuple[str, str], ...]:
+        """(name, SI unit) of the columns this table has: :data:`STEP_COLUMNS`, then a spatial run's lateral ones."""
+        present = {f.name for f in fields(self) if getattr(self, f.name) is not None}
+        return tuple((name, unit) for name, unit in (*STEP_COLUMNS, *LATERAL_STEP_COLUMNS) if name in present)
 
 
 STEP_COLUMNS = (
@@ -47,16 +59,18 @@ STEP_COLUMNS = (
     ("swing_angle", "rad"),
     ("swing_rate", "rad/s"),
 )
+LATERAL_STEP_COLUMNS = (("width", "m"), ("heading", "rad"), ("sway", "m"), ("bank", "rad"))
 
 
 def steps_csv(steps: StepTable, unit: Callable[[str], str]) -> str:
     """steps.csv: one row per heel strike (the step it begins); ``unit`` maps an SI unit to the run's."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["step"] + [f"{name} [{unit(units)}]" if units != "1" else name for name, units in STEP_COLUMNS])
+    columns = steps.columns
+    writer.writerow(["step"] + [f"{name} [{unit(units)}]" if units != "1" else name for name, units in columns])
     for k in range(len(steps.strike_time)):
         row: list[object] = [k + 1]
-        for name, _ in STEP_COLUMNS:
+        for name, _ in columns:
             value = getattr(steps, name)[k]
             row.append(int(value) if name == "foot" else ("" if not np.isfinite(value) else repr(float(value))))
         writer.writerow(row)
@@ -99,9 +113,10 @@ class StepAccess:
         """The step table as a DataFrame (what steps.csv holds): one row per heel strike k, indexed by k from 1,
         the step that strike begins; the last row's period, length and slip are NaN (its step did not end).
         The columns' units are in ``frame.attrs["units"]``."""
-        frame = pd.DataFrame({name: getattr(self.steps, name) for name, _ in STEP_COLUMNS})
+        columns = self.steps.columns
+        frame = pd.DataFrame({name: getattr(self.steps, name) for name, _ in columns})
         frame.index = pd.RangeIndex(1, len(frame) + 1, name="step")
-        frame.attrs["units"] = dict(STEP_COLUMNS)
+        frame.attrs["units"] = dict(columns)
         return frame
 
     def step_summary(self) -> dict[str, Any]:
@@ -159,4 +174,36 @@ def step_table(model: BuiltModel, run: Integration) -> StepTable:
             next_foot = int(run.strike_foot[k + 1])
             length[k] = _contact_x(y_next, system, next_foot) - _contact_x(y, system, foot)
             slip[k] = _rolling_coordinate(y_next, model, foot) - _rolling_coordinate(y, model, foot)
-    return StepTable(run.strike_t.copy(), run.strike_foot.copy(), period, length, slip, *angles.T)
+    lateral = lateral_steps(model, run) if m.foot_point is not None else {}
+    return StepTable(run.strike_t.copy(), run.strike_foot.copy(), period, length, slip, *angles.T, **lateral)
+
+
+def lateral_steps(model: BuiltModel, run: Integration) -> dict[str, np.ndarray]:
+    """A spatial run's lateral step columns (slope frame: x downhill, y the normal, z = x cross y, the walker's right).
+
+    Row k, the step strike k begins: ``width`` the lateral distance |z_(k+1) - z_k| between where the two strikes
+    put their feet (each foot's lowest point at its strike); ``heading`` and ``bank`` the new stance leg's at strike
+    k, right-handed about the slope normal (positive turning left) and about the downhill axis (positive with the
+    leg's left side up), the rigid walker's section angles; ``sway`` the hip's lateral excursion over the step,
+    max - min of its z over the samples between the two strikes and the strike states; width and sway nan for the
+    last row (its step did not end).
+    """
+    system = model.system
+    m = measures(system)
+    n = len(run.strike_t)
+    width, sway = np.full(n, np.nan), np.full(n, np.nan)
+    heading, bank = np.empty(n), np.empty(n)
+    hip = np.empty((len(run.t), 3))
+    hip_loop(run.y, system, hip)
+    strike_hip = np.empty((n, 3))
+    hip_loop(run.strike_y, system, strike_hip)
+    place = [m.foot_point(run.strike_y[k], system, int(run.strike_foot[k]))[1] for k in range(n)]
+    for k in range(n):
+        _, roll, yaw, _ = m.attitude(run.strike_y[k], system, int(system.foot_body[int(run.strike_foot[k])]))
+        heading[k], bank[k] = -yaw, -roll
+        if k + 1 < n:
+            width[k] = abs(place[k + 1] - place[k])
+            inside = (run.t >= run.strike_t[k]) & (run.t <= run.strike_t[k + 1])
+            z = np.concatenate([hip[inside, 2], strike_hip[k : k + 2, 2]])
+            sway[k] = float(z.max() - z.min())
+    return {"width": width, "heading": heading, "sway": sway, "bank": bank}

@@ -60,6 +60,8 @@ class Measures(NamedTuple):
     contact_names: tuple[str, ...]
     hip: Callable[..., tuple[float, ...]]  # (y, system): position of the hip (joint 0) in the slope frame
     attitude: Callable[..., tuple[float, float, float, float]] | None  # (y, system, body): pitch, roll, yaw, omega_z
+    # (y, system, foot): where a foot's lowest point is in the ground plane, (x, z) [m]; spatial only (the step width)
+    foot_point: Callable[..., tuple[float, float]] | None = None
 
 
 @dataclass(frozen=True)

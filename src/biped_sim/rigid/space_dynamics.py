@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.rigid.space_model import (
+    EZ,
     MIRROR,
     N_STATE,
     Pose,
@@ -58,10 +59,11 @@ class PartMotion:
 
 
 def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) -> np.ndarray:
-    """Velocity of the geometric stance contact point over the ground (the material point's is zero)."""
+    """Velocity of the geometric stance contact point over the ground (the material point's is zero): the foot's
+    centre, at -(radius d - tube z) from it, turns about it, and the bottom moves over the foot with d."""
     foot = model.feet[0]
     d_dot = bottom_direction_rate(foot, where.rotations[0], omega)
-    return np.cross(omega, -foot.radius * where.stance_d) + foot.radius * d_dot
+    return np.cross(omega, foot.tube * EZ - foot.radius * where.stance_d) + foot.radius * d_dot
 
 
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:

@@ -5,7 +5,7 @@ hinge rate) over a flat parameter vector, for the integrator's many calls. The p
 
 Parameter vector (:func:`space_params`): gravity (3, slope frame), the number of parts, then per part its frame
 (0 stance leg, 1 swing leg), mass, centre of mass (3) and inertia (9, row-major; the walker frame, hinge at zero),
-then per foot (stance, swing) its shape code, radius, centre (3) and unit normal (3).
+then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3) and tube radius.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ import math
 import numpy as np
 
 from biped_sim.kernel import kernel
-from biped_sim.rigid.space_model import RING, SPHERE, SpaceModel
+from biped_sim.rigid.space_model import RING, SPHERE, TORUS, SpaceModel
 
 MAX_PARTS = 3
 PART_SIZE = 14
-FOOT_SIZE = 8
+FOOT_SIZE = 9
 PARTS = 4
 FEET = PARTS + MAX_PARTS * PART_SIZE
 N_PARAMS = FEET + 2 * FOOT_SIZE
@@ -35,7 +35,7 @@ def space_params(model: SpaceModel) -> np.ndarray:
         p[o : o + PART_SIZE] = [part.frame, part.mass, *part.com, *part.inertia.ravel()]
     for k, foot in enumerate(model.feet):
         o = FEET + k * FOOT_SIZE
-        p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal]
+        p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal, foot.tube]
     return p
 
 
@@ -66,18 +66,22 @@ def rotations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @kernel
 def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A foot's lowest point from its frame's origin and the unit vector d from its centre to it (slope frame)."""
+    """A foot's lowest point from its frame's origin and the unit vector d from its centre toward it (slope frame;
+    a torus's: its ring's, lowered by the tube radius)."""
     o = FEET + foot * FOOT_SIZE
     centre = rotation @ p[o + 2 : o + 5]
     d = np.zeros(3)
     if p[o] == SPHERE:
         d[2] = -1.0
-    elif p[o] == RING:
+    elif p[o] == RING or p[o] == TORUS:
         n = rotation @ p[o + 5 : o + 8]
         w = -n[2] * n
         w[2] += 1.0
         d = -w / math.sqrt(w @ w)
-    return centre + p[o + 1] * d, d
+    lowest = centre + p[o + 1] * d
+    if p[o] == TORUS:
+        lowest[2] -= p[o + 8]
+    return lowest, d
 
 
 @kernel
@@ -85,8 +89,11 @@ def contact_rate(p: np.ndarray, rotation: np.ndarray, d: np.ndarray, omega: np.n
     """The stance contact point's velocity over the ground (the material point's is zero)."""
     o = FEET
     radius = p[o + 1]
-    rate = cross(omega, -radius * d)
-    if p[o] == RING:
+    arm = -radius * d
+    if p[o] == TORUS:  # the centre sits at tube z - radius d from the contact point
+        arm[2] += p[o + 8]
+    rate = cross(omega, arm)
+    if p[o] == RING or p[o] == TORUS:
         n = rotation @ p[o + 5 : o + 8]
         n_dot = cross(omega, n)
         w = -n[2] * n

@@ -23,8 +23,8 @@ from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, rot_x, rot_y,
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
-POINT, SPHERE, RING = 0, 1, 2
-SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING}
+POINT, SPHERE, RING, TORUS = 0, 1, 2, 3
+SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING, "torus": TORUS}
 
 
 def attitude_angles(r: np.ndarray) -> tuple[float, float, float]:
@@ -54,12 +54,14 @@ class Part:
 
 @dataclass(frozen=True)
 class Foot:
-    """A foot in the walker frame with the hinge at zero: its shape code, centre, radius and a ring's unit normal."""
+    """A foot in the walker frame with the hinge at zero: its shape code, centre, radius, a ring's or torus's unit
+    normal and a torus's tube radius (zero for the other shapes)."""
 
     shape: int
     centre: np.ndarray
     radius: float
     normal: np.ndarray
+    tube: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -91,7 +93,7 @@ def _leg(space: SpaceDescription, frame: int) -> tuple[Part, Foot]:
 
 
 def _foot(foot: SpaceFoot, centre: np.ndarray, normal: np.ndarray) -> Foot:
-    return Foot(SHAPES[foot.shape], centre, foot.radius, normal)
+    return Foot(SHAPES[foot.shape], centre, foot.radius, normal, foot.tube)
 
 
 def space_model(space: SpaceDescription, gravity: float, slope: float) -> SpaceModel:
@@ -103,8 +105,10 @@ def space_model(space: SpaceDescription, gravity: float, slope: float) -> SpaceM
 
 
 def foot_bottom(foot: Foot, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The foot's lowest point from its frame's origin (slope frame) and the unit vector d from its centre to it
-    (a ring: the direction in its plane most against the normal; a sphere: -z; a point: zero)."""
+    """The foot's lowest point from its frame's origin (slope frame) and the unit vector d from its centre toward it
+    (a ring: the direction in its plane most against the normal; a sphere: -z; a point: zero). A torus's lowest
+    point is its tube's centre circle's (the ring's) lowered by the tube radius: the tube's section there is a
+    circle in the vertical plane through d, its lowest point straight below its centre."""
     centre = rotation @ foot.centre
     if foot.shape == POINT:
         return centre, np.zeros(3)
@@ -113,12 +117,12 @@ def foot_bottom(foot: Foot, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarra
     n = rotation @ foot.normal
     w = EZ - n[2] * n
     d = -w / np.linalg.norm(w)
-    return centre + foot.radius * d, d
+    return centre + foot.radius * d - foot.tube * EZ, d
 
 
 def bottom_direction_rate(foot: Foot, rotation: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """Time derivative of :func:`foot_bottom`'s d for a foot turning at ``omega`` (zero but for a ring)."""
-    if foot.shape != RING:
+    """Time derivative of :func:`foot_bottom`'s d for a foot turning at ``omega`` (zero but for a ring or torus)."""
+    if foot.shape not in (RING, TORUS):
         return np.zeros(3)
     n = rotation @ foot.normal
     n_dot = np.cross(omega, n)

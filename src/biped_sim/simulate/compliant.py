@@ -27,7 +27,7 @@ from biped_sim.measure.channels import (
     violation_names,
 )
 from biped_sim.measure.energy import EnergyAudit, energy_audit
-from biped_sim.measure.steps import STEP_COLUMNS, StepTable, step_table
+from biped_sim.measure.steps import StepTable, step_table
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.simulate.result import RunResult, ordered_pushes, push_summary, wall_deadline
 from biped_sim.walkers import BuiltModel
@@ -131,7 +131,9 @@ class CompliantRunResult(RunResult):
             Channel(f"attitude/{name}", values, "rad/s" if name == "pitch_rate" else "rad")
             for name, values in self.attitude.items()
         ]
-        channels += [Channel(f"steps/{name}", getattr(self.steps, name), units, False) for name, units in STEP_COLUMNS]
+        channels += [
+            Channel(f"steps/{name}", getattr(self.steps, name), units, False) for name, units in self.steps.columns
+        ]
         channels.append(Channel("events/contact_log", run.contact_log, "s, index, +1/-1, m/s", False))
         group_attrs: dict[str, dict[str, Any]] = {"contact": {"feet": model.foot_names}}
         if self.attitude:

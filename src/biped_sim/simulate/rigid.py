@@ -54,12 +54,12 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.contact.response import LEG_TOO_FAR
 from biped_sim.integrate.driver import TIMEOUT_REASON
-from biped_sim.integrate.recorder import FALL_REASONS
+from biped_sim.integrate.recorder import FALL_REASONS, body_fall_reason
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy, RigidTrace, rigid_energy_and_hip, rigid_step_table
-from biped_sim.measure.steps import STEP_COLUMNS, StepTable
+from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
 from biped_sim.rigid.kernels import FALL_HIP_FRACTION
@@ -133,7 +133,8 @@ class RigidRunResult(RunResult):
         channels = [Channel(f"energy/{name}", getattr(self.energy, name), energy_units) for name in RIGID_ENERGY_TERMS]
         channels.append(Channel("hip", self.hip, self.unit("m")))
         channels += [
-            Channel(f"steps/{name}", getattr(self.steps, name), self.unit(units), False) for name, units in STEP_COLUMNS
+            Channel(f"steps/{name}", getattr(self.steps, name), self.unit(units), False)
+            for name, units in self.steps.columns
         ]
         channels.append(Channel("strikes/time", self.strike_time, self.unit("s"), False))
         channels.append(Channel("strikes/pre_impact", self.strike_pre, state_units, False))
@@ -184,9 +185,8 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
     x = step.x_minus
     legs = [k for k in range(walker.n_q) if k not in walker.off_legs]
     margins = {FALL_REASONS[LEG_TOO_FAR]: walker.fall_leg_angle - float(np.max(np.abs(x[legs])))}
-    for k in walker.off_legs:  # a torso
-        body = walker.state_names[k].removesuffix("_angle")
-        margins[f"the {body} past simulation.fall_leg_angle from the slope normal"] = walker.fall_leg_angle - abs(x[k])
+    for k in walker.off_legs:  # a torso, against its own fall angle
+        margins[body_fall_reason(walker.state_names[k].removesuffix("_angle"))] = walker.fall_angles[k] - abs(x[k])
     margins[f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"] = (
         walker.hip_height(x) / walker.leg_length - FALL_HIP_FRACTION
     )

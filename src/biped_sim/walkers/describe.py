@@ -2,8 +2,8 @@
 
 ``describe(config)`` is the one place where a bundled kind's parameters become bodies, joints and feet; a
 ``walker.kind: description`` config is its own description. Every model is built from the result: rigid
-(:mod:`biped_sim.rigid.build`) and compliant (:mod:`biped_sim.walkers.described`; only the four-legged machine,
-whose pairs stand on two feet each, keeps a builder of its own). Body and foot names: ``leg0``, ``foot0``, ...
+(:mod:`biped_sim.rigid.build`) and compliant (:mod:`biped_sim.walkers.described`, lifted into the spatial formulation by
+:mod:`biped_sim.walkers.spatial_described`). Body and foot names: ``leg0``, ``foot0``, ...
 
 A preset stays a typed record of its parameters (the schema's member of its kind, ``walker.parameters.NAME``
 addressing its fields) expanded here, rather than a description template of named parameters: its fields carry
@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 from biped_sim.config import BodySpec, Config, FootSpec, JointSpec, PointMassSpec, WalkerDescription
-from biped_sim.walkers.four_legged import BODY_NAMES, FOOT_BODY, FOOT_NAMES, leg_pairs
+from biped_sim.walkers.four_legged import BODY_NAMES, FOOT_BODY, FOOT_NAMES, FOOT_SIDE, leg_pairs
 
 
 def _compass(config: Config) -> WalkerDescription:
@@ -62,16 +62,19 @@ def _rimless_wheel(config: Config) -> WalkerDescription:
 
 
 def _four_legged(config: Config) -> WalkerDescription:
-    """Liu's machine in its sagittal plane: each pair of legs one body (its mass, centre of mass and sagittal
-    inertia J'_zz, the cross bar and half the hip mass folded in), two feet per pair at one sagittal place."""
+    """Liu's machine: each pair of legs one body (its mass, centre of mass and inertia tensor, the cross bar and half
+    the hip mass folded in), two feet per pair at one sagittal place, either side of it along the axle."""
     w = config.walker
     masses, offsets, inertia = leg_pairs(config)
+    spacing = (w.foot_spacing_outer, w.foot_spacing_inner)
     return WalkerDescription(
         bodies=[BodySpec(name=n, mass=float(masses[b]), inertia=float(inertia[b, 2, 2]),
+                         spatial_inertia=(float(inertia[b, 0, 0]), float(inertia[b, 1, 1]), float(inertia[b, 0, 1])),
                          com=(offsets[b][1], -offsets[b][0])) for b, n in enumerate(BODY_NAMES)],
         joints=[JointSpec(name="hip", parent=BODY_NAMES[0], child=BODY_NAMES[1])],
         feet=[FootSpec(name=n, body=BODY_NAMES[FOOT_BODY[k]], centre=(w.foot_offset, -(w.leg_length - w.foot_radius)),
-                       radius=w.foot_radius) for k, n in enumerate(FOOT_NAMES)],
+                       radius=w.foot_radius, lateral=FOOT_SIDE[k] * 0.5 * spacing[FOOT_BODY[k]])
+              for k, n in enumerate(FOOT_NAMES)],
         legs=[[BODY_NAMES[0]], [BODY_NAMES[1]]],
     )  # fmt: skip
 

@@ -51,12 +51,14 @@ class Tree:
     mass: np.ndarray  # (nb,) with its point masses
     com: np.ndarray  # (nb, 2) centre of mass in the body frame (from the origin)
     inertia: np.ndarray  # (nb,) about the centre of mass
+    spatial_inertia: np.ndarray  # (nb, 3, 3) about the centre of mass in the body frame (z' the joints' axis)
     stops: list[tuple[int, int, str, float, str, float, float, bool]]  # parent, child, side, angle, law, K, e, latch
     elements: list[tuple[int, int, str, np.ndarray]]  # child, the body it acts against, law, parameter vector
     fall_angle: list[float | None]  # per body: its own fall angle (a body off the legs), else None
     foot_body: np.ndarray  # (nf,) int
     foot_centre: np.ndarray  # (nf, 2) in the body frame
     foot_radius: np.ndarray  # (nf,)
+    foot_lateral: np.ndarray  # (nf,) along the joints' axis (the spatial formulation's)
     foot_names: list[str]
     legs: list[list[int]]  # body indices, hip down
 
@@ -84,6 +86,22 @@ def _fold(description: WalkerDescription, name: str) -> tuple[float, np.ndarray,
     return mass, com, inertia
 
 
+def _spatial_inertia(description: WalkerDescription, name: str, com: np.ndarray, inertia: float) -> np.ndarray:
+    """Body ``name``'s inertia tensor about its folded centre of mass ``com`` (3, 3): its ``spatial_inertia`` with
+    its parts added by parallel axes (all in the sagittal plane z' = 0), ``inertia`` (the folded moment) about z';
+    none given, ``inertia`` about every axis."""
+    body = next(b for b in description.bodies if b.name == name)
+    if body.spatial_inertia is None:
+        return np.eye(3) * inertia
+    xx, yy, xy = body.spatial_inertia
+    parts = [(body.mass, np.array(body.com))] + [(p.mass, np.array(p.at)) for p in description.point_masses
+                                                   if p.body == name]  # fmt: skip
+    for m, r in parts:
+        dx, dy = r - com
+        xx, yy, xy = xx + m * dy**2, yy + m * dx**2, xy - m * dx * dy
+    return np.array([[xx, xy, 0.0], [xy, yy, 0.0], [0.0, 0.0, inertia]])
+
+
 def resolve_tree(description: WalkerDescription) -> Tree:
     """The description as arrays (:class:`Tree`)."""
     names = _tree_order(description)
@@ -104,6 +122,9 @@ def resolve_tree(description: WalkerDescription) -> Tree:
         mass=np.array([f[0] for f in folded]),
         com=np.array([f[1] for f in folded]),
         inertia=np.array([f[2] for f in folded]),
+        spatial_inertia=np.array(
+            [_spatial_inertia(description, n, com, j) for n, (_, com, j) in zip(names, folded, strict=True)]
+        ),
         stops=sorted(stops, key=lambda s: s[1]),
         elements=[
             (index[joint.child], index[other], e.law, element_parameters(e.law, **e.values()))
@@ -112,6 +133,7 @@ def resolve_tree(description: WalkerDescription) -> Tree:
         foot_body=np.array([index[f.body] for f in feet], dtype=np.int64),
         foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
         foot_radius=np.array([f.radius for f in feet]),
+        foot_lateral=np.array([f.lateral for f in feet]),
         foot_names=[f.name for f in feet],
         legs=[[index[b] for b in leg] for leg in description.legs],
         fall_angle=[next(b.fall_angle for b in description.bodies if b.name == name) for name in names],
@@ -128,13 +150,28 @@ def _leg_feet(tree: Tree) -> list[list[int]]:
     return [[i for i, b in enumerate(tree.foot_body) if b in leg] for leg in tree.legs]
 
 
+def stance_feet(tree: Tree) -> tuple[int, ...]:
+    """The feet the walker starts on: the first foot of the stance leg's last body and each of that body's feet at
+    the same sagittal place (the four-legged machine's pair stands on two feet, which share its weight)."""
+    first = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
+    return tuple(
+        i
+        for i in _leg_feet(tree)[0]
+        if tree.foot_body[i] == tree.foot_body[first]
+        and tree.foot_radius[i] == tree.foot_radius[first]
+        and np.array_equal(tree.foot_centre[i], tree.foot_centre[first])
+    )
+
+
 def foot_partners(tree: Tree) -> np.ndarray:
-    """Each foot's partner (the first foot of the other leg; -1 without two legs or for a foot off the legs)."""
+    """Each foot's partner: the other leg's foot of the same rank on its leg (the four-legged machine's foot on the
+    same side), else its first; -1 without two legs or for a foot off the legs."""
     partner = np.full(len(tree.foot_names), -1, dtype=np.int64)
     feet = _leg_feet(tree)
     if len(tree.legs) == 2 and all(feet):
         for leg, other in ((0, 1), (1, 0)):
-            partner[feet[leg]] = feet[other][0]
+            for k, foot in enumerate(feet[leg]):
+                partner[foot] = feet[other][k if k < len(feet[other]) else 0]
     return partner
 
 
@@ -271,10 +308,10 @@ def _angle_key(tree: Tree, keys: list[str], b: int) -> tuple[str, str]:
 
 def tree_start(
     tree: Tree, angles: np.ndarray, static_penetration: float, config: Config, length: float, keys: list[str]
-) -> tuple[np.ndarray, np.ndarray, float, int]:
-    """(coords (nb, 3), rates (nb, 3), hip speed, stance foot) of the walker rolling on its stance foot.
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """(coords (nb, 3), rates (nb, 3), hip speed) of the walker rolling on its stance foot.
 
-    The stance foot (the first foot of the stance leg's last body) touches the ground at x = 0, sunk by
+    The stance foot (the first of :func:`stance_feet`) touches the ground at x = 0, sunk by
     ``static_penetration``; its body rolls about the contact point, and each body's origin follows up the
     stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError naming
     the initial-state key (of ``keys``) of a body that would start fallen.
@@ -284,7 +321,7 @@ def tree_start(
         if abs(angles[b, 0]) >= limits[b]:
             key, limit = _angle_key(tree, keys, b)
             raise ConfigError(f"simulation.initial.{key}", f"beyond {limit}: the walker starts fallen")
-    foot = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
+    foot = stance_feet(tree)[0]
     contact = np.array([0.0, -static_penetration])
     nb = len(tree.names)
     origin, velocity = np.zeros((nb, 2)), np.zeros((nb, 2))
@@ -312,7 +349,7 @@ def tree_start(
     com_velocity[b] = angles[b, 1] * _perp(coms[b] - contact)  # the rolling body: about the contact point
     coords = np.column_stack([coms, angles[:, 0]])
     rates = np.column_stack([com_velocity, angles[:, 1]])
-    return coords, rates, float(np.hypot(*velocity[0])), foot
+    return coords, rates, float(np.hypot(*velocity[0]))
 
 
 def _check_swing_feet(tree: Tree, angles: np.ndarray, origin: np.ndarray) -> None:
@@ -340,12 +377,13 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     stiffness = contact_stiffness(config, radius)
     total_mass = float(np.sum(tree.mass))
     system = planar_tree_system(tree, config, stiffness, length)
-    static_penetration = static_contact_penetration(config, total_mass, stiffness, length)
+    feet = stance_feet(tree)  # each carries its share of the weight
+    static_penetration = static_contact_penetration(config, total_mass / len(feet), stiffness, length)
     keys = description.state_keys()
     angles = body_angles(tree, initial, keys)
-    coords, rates, hip_speed, foot = tree_start(tree, angles, static_penetration, config, length, keys)
+    coords, rates, hip_speed = tree_start(tree, angles, static_penetration, config, length, keys)
     impact = max(hip_speed, config.contact.impact_velocity_floor)
-    y0, modes0 = standing_start(system, coords, rates, (foot,), impact)
+    y0, modes0 = standing_start(system, coords, rates, feet, impact)
     latch_stance(system, tree, modes0, impact / length)
     return BuiltModel(
         system=system,

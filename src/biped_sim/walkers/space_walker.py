@@ -40,7 +40,7 @@ from biped_sim.walkers.space_geometry import (
     rolling_states,
     with_point_mass,
 )
-from biped_sim.walkers.spatial_compass import X, Y, Z, constraint_arrays, spatial_gravity
+from biped_sim.walkers.spatial_described import X, Y, Z, constraint_arrays, spatial_gravity
 
 SLENDER_FLOOR = 1e-4  # the smallest principal moment a leg takes, of its largest (a thin rod's 0 about its axis)
 BODY_NAMES = ["left", "right"]

@@ -15,7 +15,7 @@ A chain shorter than ``TAU_FACTOR`` autocorrelation times gets a warning (emcee'
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import emcee
@@ -23,7 +23,7 @@ import numpy as np
 
 from biped_sim.errors import ConfigError
 from biped_sim.studies.fit.evaluate import Evaluator
-from biped_sim.studies.fit.parameters import FitParameter
+from biped_sim.studies.fit.parameters import FitParameter, same_key
 from biped_sim.studies.fit.problem import FitProblem
 
 TAU_FACTOR = 50
@@ -78,13 +78,14 @@ def parse_prior(text: str) -> Prior:
 def priors_for(parameters: tuple[FitParameter, ...], given: tuple[Prior, ...] = ()) -> tuple[Prior, ...]:
     """One prior per parameter: the given ones (each for a fitted key, once), bounds for the rest."""
     keys = [p.key for p in parameters]
+    fitted = [same_key(k) for k in keys]
     for prior in given:
-        if prior.key not in keys:
+        if same_key(prior.key) not in fitted:
             raise ConfigError(prior.key, f"a prior for a key that is not fitted (fitted: {', '.join(keys)})")
-    named = {p.key: p for p in given}
+    named = {same_key(p.key): p for p in given}
     if len(named) != len(given):
         raise ConfigError("priors", "a key has two priors")
-    return tuple(named.get(k, Prior(k)) for k in keys)
+    return tuple(replace(named[f], key=k) if f in named else Prior(k) for k, f in zip(keys, fitted, strict=True))
 
 
 @dataclass

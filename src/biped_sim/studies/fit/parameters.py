@@ -112,7 +112,9 @@ def same_key(key: str) -> str:
 
 
 def check_distinct(keys: list[str], reason: str) -> None:
-    """ConfigError naming the first key (in sorted order) that ``keys`` holds twice."""
-    twice = sorted({k for k in keys if keys.count(k) > 1})
+    """ConfigError naming the first key (in sorted order) that ``keys`` holds twice, either spelling of a preset's
+    parameter (:func:`same_key`) counting as one key."""
+    same = [same_key(k) for k in keys]
+    twice = sorted({k for k, s in zip(keys, same, strict=True) if same.count(s) > 1})
     if twice:
         raise ConfigError(twice[0], reason)

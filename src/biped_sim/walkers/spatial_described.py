@@ -1,28 +1,35 @@
-"""The compass walker in the spatial formulation, and the pieces every spatial builder shares.
+"""A walker's description in the spatial formulation (the compass, Liu's four-legged machine), and the pieces every
+spatial builder shares.
 
 Body frames: x' forward, y' along the leg towards the hip, z' lateral (the hip axle), so that a
 rotation phi about z' is the planar leg angle. A planar state (x, y, phi) maps to r = (x, y, 0),
 p = (cos phi/2, 0, 0, sin phi/2) and omega = (0, 0, phidot) to pdot = (omega/2) (-sin phi/2, 0, 0, cos phi/2).
 
-The spatial compass is the planar compass (its description's planar model, :mod:`biped_sim.walkers.described`:
-same bodies, same initial state, converted) with a
-disc foot in each leg's sagittal plane, a revolute hip (a SPHERICAL and two PERPENDICULAR
-primitives) and a planar joint from leg 0 to the ground frame (IN_PLANE z = 0 and leg 0's axle
-perpendicular to x and y): the motion stays in the sagittal plane by construction, not only by
-symmetry, so that a lateral round-off never grows (a single disc foot is laterally unstable). The
-legs' inertias about x' and y' do not act (the joints hold those rotations); they are taken equal
-to the sagittal one so that the mass matrix is well conditioned.
+:func:`spatial_described` lifts the description's planar model (:mod:`biped_sim.walkers.described`: same bodies,
+same initial state, converted): disc feet in their bodies' sagittal planes at their ``lateral`` places, a revolute
+joint (a SPHERICAL and two PERPENDICULAR primitives) per planar joint. A walker whose feet all lie in its
+sagittal plane (the compass) also has a planar joint from its root to the ground frame (IN_PLANE z = 0 and the
+root's axle perpendicular to x and y): its motion stays in the sagittal plane by construction, not only by
+symmetry, so that a lateral round-off never grows (a single disc foot is laterally unstable); its bodies'
+inertias about x' and y' do not act and are taken equal to the sagittal one so that the mass matrix is well
+conditioned. A walker standing on feet apart (the four-legged machine's pairs, two feet each) has no such joint:
+roll and yaw are free, and its bodies' ``spatial_inertia`` acts.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 
-from biped_sim.config import Config
+from biped_sim.config import Config, InitialState
+from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
+from biped_sim.walkers.describe import describe
+from biped_sim.walkers.described import build_described, resolve_tree
 from biped_sim.walkers.model import BuiltModel
 
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
@@ -77,20 +84,25 @@ def spatial_gravity(config: Config) -> np.ndarray:
     return np.array([g * math.sin(gamma), -g * math.cos(gamma), 0.0])
 
 
-def spatial_compass(planar: BuiltModel, config: Config) -> BuiltModel:
-    """The planar compass walker ``planar`` (two legs hinged at the hip) in Euler parameters, kept planar by a
-    planar joint."""
+def spatial_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
+    """The walker's description in Euler parameters: its planar model (:func:`build_described`, same bodies, feet
+    and start) lifted, each foot at its ``lateral`` place, each body with its spatial inertia, a revolute joint per
+    planar joint; a walker with every foot in its sagittal plane also held in it by a planar joint of its root to
+    the ground frame (a single disc foot is laterally unstable), one standing on feet apart free in roll and yaw."""
+    planar = build_described(config, initial)
+    tree = resolve_tree(describe(config))
     ps = planar.system
-    nb, nf = 2, 2
-    hip_a, hip_b = (
-        (float(ps.joint_points[0, 0]), float(ps.joint_points[0, 1])),
-        (
-            float(ps.joint_points[0, 2]),
-            float(ps.joint_points[0, 3]),
-        ),
-    )
-    inertia = np.array([np.eye(3) * j for j in ps.body_inertia])
-    kinds, bodies, vecs, rows = constraint_arrays(revolute(0, hip_a, 1, hip_b) + planar_to_ground(0))
+    primitives = [
+        p
+        for (a, b), (xa, ya, xb, yb) in zip(ps.joint_bodies, ps.joint_points, strict=True)
+        for p in revolute(int(a), (float(xa), float(ya)), int(b), (float(xb), float(yb)))
+    ]
+    if not np.any(tree.foot_lateral):
+        primitives += planar_to_ground(0)
+    inertia = tree.spatial_inertia
+    if bad := [name for name, j in zip(tree.names, inertia, strict=True) if np.linalg.eigvalsh(j).min() <= 0.0]:
+        raise ConfigError(f"walker.description.bodies.{bad[0]}.spatial_inertia", "must be positive definite")
+    kinds, bodies, vecs, rows = constraint_arrays(primitives)
     system = SpatialSystem(
         body_mass=ps.body_mass.copy(),
         body_inertia=inertia,
@@ -100,8 +112,8 @@ def spatial_compass(planar: BuiltModel, config: Config) -> BuiltModel:
         con_vecs=vecs,
         con_row=rows,
         foot_body=ps.foot_body.copy(),
-        foot_center=np.array([[c[0], c[1], 0.0] for c in ps.foot_center]),
-        foot_axis=np.array([DISC_AXIS] * nf),
+        foot_center=np.column_stack([ps.foot_center, tree.foot_lateral]),
+        foot_axis=np.array([DISC_AXIS] * len(tree.foot_names)),
         foot_radius=ps.foot_radius.copy(),
         foot_partner=ps.foot_partner.copy(),
         gravity=spatial_gravity(config),
@@ -111,7 +123,13 @@ def spatial_compass(planar: BuiltModel, config: Config) -> BuiltModel:
         switches=ps.switches,
         limits=ps.limits.copy(),
     )
-    planar_layout, layout = (formulation_of(s).layout_of(s) for s in (ps, system))
+    return replace(planar, system=system, y0=_spatial_state(planar, system))
+
+
+def _spatial_state(planar: BuiltModel, system: SpatialSystem) -> np.ndarray:
+    """The planar model's start in the spatial system's state (the planar bristles run along x)."""
+    planar_layout, layout = (formulation_of(s).layout_of(s) for s in (planar.system, system))
+    nb, nf = planar.n_bodies, planar.n_feet
     q, qd = sagittal_to_spatial(
         np.array([planar.y0[planar_layout.position(b)] for b in range(nb)]),
         np.array([planar.y0[planar_layout.velocity(b)] for b in range(nb)]),
@@ -120,16 +138,6 @@ def spatial_compass(planar: BuiltModel, config: Config) -> BuiltModel:
     for b in range(nb):
         y0[layout.position(b)] = q[b]
         y0[layout.velocity(b)] = qd[b]
-    for foot in range(nf):  # the planar bristle runs along x
+    for foot in range(nf):
         y0[layout.bristle(foot).start] = planar.y0[planar_layout.bristle(foot).start]
-    return BuiltModel(
-        system=system,
-        y0=y0,
-        modes0=planar.modes0.copy(),
-        body_names=planar.body_names,
-        foot_names=planar.foot_names,
-        leg_length=planar.leg_length,
-        total_mass=planar.total_mass,
-        stiffness=planar.stiffness,
-        meta=planar.meta,
-    )
+    return y0
