@@ -104,6 +104,11 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
         ("kneed_walker_compliant.yaml", (), "walker.description.joints.1.stops.0.latch: MuJoCo has no latch"),
         ("rimless_wheel.yaml", (), "contact.stiffness: point feet have no Hertz stiffness"),
         ("simplest_walker.yaml", ("contact.stiffness=1e7",), "walker.description.bodies.leg1.mass: a body needs mass"),
+        (
+            "space/tinkertoy.yaml",
+            ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube=0.05"),
+            "walker.space.leg.foot.shape: a torus foot is not written as MJCF",
+        ),
     ],
 )
 def test_what_mujoco_or_the_mjcf_cannot_hold_is_refused_in_one_line(name: str, overrides: tuple, message: str) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from biped_sim import config_from_dict, load_config
+from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -106,7 +107,29 @@ def test_an_unheld_upright_torso_falls_and_is_named() -> None:
     walker = rigid_walker(config_from_dict(torso_config(com_y=0.3)))
     step = rigid_step(walker, START)
     assert step.status == "fell"
-    assert fall_reason(walker, step) == "the torso past simulation.fall_leg_angle from the slope normal"
+    assert fall_reason(walker, step) == "the body 'torso' (off the legs) past its fall_angle from the slope normal"
+
+
+def test_a_rigid_torso_falls_past_its_own_fall_angle_named_as_in_compliant_runs() -> None:
+    """The torso's own fall_angle (0.8 here, the legs' limit 1.4) ends the rigid run, with the compliant wording."""
+    config = load_config(TORSO_COMPASS, ["dynamics=rigid", "walker.parameters.torso_stiffness=0",
+                                         "walker.parameters.torso_damping=0", "simulation.t_end=3",
+                                         "walker.description.bodies.torso.fall_angle=0.8"])  # fmt: skip
+    result = simulate(config)
+    assert isinstance(result, RigidRunResult) and result.status == "fell"
+    assert result.status_reason == "the body 'torso' (off the legs) past its fall_angle from the slope normal"
+    torso = np.abs(result.state[:, result.walker.state_names.index("torso_angle")])
+    assert 0.7 < np.max(torso) < 0.8 + 1e-6  # stopped at its own limit, not the legs' 1.4
+
+
+def test_a_rigid_torso_started_past_its_fall_angle_is_one_line() -> None:
+    overrides = ["dynamics=rigid", "walker.description.bodies.torso.fall_angle=0.4",
+                 "simulation.initial.torso_angle=0.5"]  # fmt: skip
+    with pytest.raises(ConfigError) as error:
+        simulate(load_config(TORSO_COMPASS, overrides))
+    message = str(error.value)
+    assert message.startswith("simulation.initial.torso_angle: beyond the fall_angle of the body 'torso'")
+    assert "\n" not in message
 
 
 def test_hip_springs_hold_an_upright_torso_and_their_energy_closes_the_swing() -> None:

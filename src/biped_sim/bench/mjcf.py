@@ -23,9 +23,10 @@ What is written, and how:
   of its radius) whose axis is the ring's normal: its contact with a plane is its rim's lowest point, as a ring's.
   The world is the rigid model's slope frame with gravity tilted by the slope.
 
-What MuJoCo cannot represent, refused in one line: a latch (a joint held from both sides until its leg's foot leaves
-the ground: MuJoCo's constraints are not switched by events in the model). The contact is matched
-(:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with ``mu_kinetic``.
+What MuJoCo cannot represent, refused in one line: a torus foot (no such geom), a latch (a joint held from both
+sides until its leg's foot leaves the ground: MuJoCo's constraints are not switched by events in the model). The
+contact is matched (:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with
+``mu_kinetic``.
 """
 
 from __future__ import annotations
@@ -192,6 +193,8 @@ def _path(tree: Tree, b: int) -> list[int]:
 def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
+    if space.leg.foot.shape in ("torus", "ellipsoid"):
+        raise ConfigError("walker.space.leg.foot.shape", f"a {space.leg.foot.shape} foot is not written as MJCF")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())
     g, slope, mu = config.gravity, config.ground.slope, config.friction.mu_kinetic

@@ -128,13 +128,13 @@ def _list_index(items: list[Any], parts: list[str], depth: int) -> int:
     raise ConfigError(where, f"no item named {quote(part)}" + (f"; the names are {listed}" if listed else ""))
 
 
-_UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\])$")
+_UNION_TAG = re.compile(r"^([A-Z][A-Za-z]*|literal\[.*\]|tuple\[.*\])$")
 
 
 def _format_validation_error(exc: ValidationError) -> ConfigError:
     """Turn pydantic's first error into one line: dotted field and reason."""
     err = exc.errors()[0]
-    # a union (simulation.initial) tags its members' errors with the member type: not part of the key
+    # a union (simulation.initial, a push's impulse) tags its members' errors with the member type: not part of the key
     loc = ".".join(str(part) for part in err["loc"] if not _UNION_TAG.match(str(part)))
     message = err["msg"]
     if message.startswith("Value error, "):

@@ -188,7 +188,16 @@ class Push(Strict):
     """An impulse on the hip (joint 0's point): an instantaneous velocity change consistent with the joints."""
 
     time: float = Field(..., ge=0, description="When [s]; before simulation.t_end.")
-    impulse: tuple[float, float] = Field(..., description="[px, py] [N s]; slope frame: x downhill, y its normal.")
+    impulse: tuple[float, float] | tuple[float, float, float] = Field(
+        ...,
+        description="[px, py] or [px, py, pz] [N s]; slope frame: x downhill (forward), y its normal (vertical), "
+        "z = x cross y (lateral, the walker's right): a nonzero pz needs a compliant walker in space.",
+    )
+
+    @property
+    def lateral(self) -> float:
+        """The lateral component pz [N s] (0 for a push given as [px, py])."""
+        return self.impulse[2] if len(self.impulse) == 3 else 0.0
 
 
 MAX_STEPS = 1_000_000_000  # heel strikes: more than any run within the integration budget can take
@@ -245,9 +254,10 @@ class Config(Strict):
         if refused := refusal(self.walker.kind, self.dynamics, self.formulation.kind):
             raise ValueError(": ".join(refused))
         caps = capabilities(self.walker.kind)
-        if caps.space and self.dynamics == "compliant" and self.walker.space.leg.foot.shape == "torus":  # type: ignore[union-attr]
-            raise ValueError("walker.space.leg.foot.shape: a torus foot has rigid dynamics only (compliant: point, "
-                             "sphere or ring)")  # fmt: skip
+        shape = self.walker.space.leg.foot.shape if caps.space else None  # type: ignore[union-attr]
+        if self.dynamics == "compliant" and shape in ("torus", "ellipsoid"):
+            raise ValueError(f"walker.space.leg.foot.shape: a {shape} foot has rigid dynamics only (compliant: "
+                             "point, sphere or ring)")  # fmt: skip
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
         if self.ground.profile.kind != "flat" and not caps.profiles:
@@ -255,6 +265,12 @@ class Config(Strict):
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
+        in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        if any(push.lateral for push in self.simulation.pushes) and not in_space:
+            raise ValueError(
+                "simulation.pushes: a lateral impulse (pz, the third component) needs a compliant walker in space "
+                "(formulation.kind: spatial)"
+            )
         if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
         hertz = self.contact.materials is not None or self.dynamics == "compliant"

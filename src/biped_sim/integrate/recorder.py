@@ -64,8 +64,13 @@ def fall_reason(code: int, body_names: list[str] | None = None) -> str | None:
     if code < BODY_TOO_FAR:
         return FALL_REASONS.get(code)
     body = code - BODY_TOO_FAR
-    name = repr(body_names[body]) if body_names is not None and body < len(body_names) else str(body)
-    return f"the body {name} (off the legs) past its fall_angle from the slope normal"
+    return body_fall_reason(body_names[body] if body_names is not None and body < len(body_names) else body)
+
+
+def body_fall_reason(body: str | int) -> str:
+    """Why a run fell when a body off the legs (a torso; its name, or its index unnamed) passed its fall angle: the
+    one wording of compliant and rigid runs."""
+    return f"the body {body!r} (off the legs) past its fall_angle from the slope normal"
 
 
 LOG_CAPACITY = 4096  # initial rows of the contact log (it grows)
@@ -138,6 +143,9 @@ def has_room(rec: Recorder, nf: int) -> bool:
     return st.n_log + nf <= rec.log.shape[0] and st.n_strikes + nf <= rec.strike_t.shape[0]
 
 
+_has_room_in_python = getattr(has_room, "py_func", has_room)  # its code run by Python: no compiled twin for a test
+
+
 def _enlarged(buffer: np.ndarray, rows: int) -> np.ndarray:
     """``buffer`` with at least ``rows`` rows: twice as many, its contents first."""
     out = np.zeros((max(rows, 2 * buffer.shape[0]), *buffer.shape[1:]), dtype=buffer.dtype)
@@ -147,7 +155,7 @@ def _enlarged(buffer: np.ndarray, rows: int) -> np.ndarray:
 
 def with_room(rec: Recorder, nf: int) -> Recorder:
     """``rec``, or a copy with larger contact-log and strike buffers (same loop state) if an event might not fit."""
-    if has_room(rec, nf):
+    if _has_room_in_python(rec, nf):
         return rec
     st = rec.state[0]
     log_rows, strike_rows = int(st.n_log) + nf, int(st.n_strikes) + nf

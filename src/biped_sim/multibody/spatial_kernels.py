@@ -261,21 +261,21 @@ def hip_position(y: np.ndarray, system: SpatialSystem) -> tuple[float, ...]:
 
 
 def hip_impulse(y: np.ndarray, system: SpatialSystem, impulse: np.ndarray) -> np.ndarray:
-    """The state just after the impulse p = [px, py] [N s] on the hip (point s_a of primitive 0, body a).
+    """The state just after the impulse p = [px, py] or [px, py, pz] [N s] on the hip (point s_a of primitive 0,
+    body a), in the slope frame (pz lateral, 0 when not given).
 
-    A push acts in the sagittal plane of the slope frame (pz = 0: the pushes of ``simulation.pushes`` are the
-    planar walker's). Positions, friction states and dissipated work are unchanged; the rates jump by the
-    constrained impulsive solution (:func:`~biped_sim.multibody.formulation.impulsive_velocity_change`) with
-    the generalized impulse (p, B(p_a, s_a)^T p) on body a, the point-force map of the right-hand side. The
-    Jacobian (normalisation rows included) and the inverse mass blocks are the right-hand side's: the modified
-    rotational block 4 G^T J' G + 4 j p p^T gives the same jump, since the normalisation row keeps p.dpdot = 0.
+    Positions, friction states and dissipated work are unchanged; the rates jump by the constrained impulsive
+    solution (:func:`~biped_sim.multibody.formulation.impulsive_velocity_change`) with the generalized impulse
+    (p, B(p_a, s_a)^T p) on body a, the point-force map of the right-hand side. The Jacobian (normalisation rows
+    included) and the inverse mass blocks are the right-hand side's: the modified rotational block
+    4 G^T J' G + 4 j p p^T gives the same jump, since the normalisation row keeps p.dpdot = 0.
     """
     nb = system.body_mass.shape[0]
     n = 7 * nb
     work = make_workspace(system)
     constrained_accelerations(y, system, work, np.zeros(n))  # fills work.phi_q and work.minv (force zero: unused)
     a = int(system.con_bodies[0, 0])
-    force = (float(impulse[0]), float(impulse[1]), 0.0)
+    force = (float(impulse[0]), float(impulse[1]), float(impulse[2]) if impulse.shape[0] > 2 else 0.0)
     generalized = np.zeros(n)
     generalized[7 * a : 7 * a + 3] = force
     generalized[7 * a + 3 : 7 * a + 7] = b_tmul(parameters(y, a), vec3(system.con_vecs, 0, 0), force)

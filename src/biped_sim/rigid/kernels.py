@@ -3,6 +3,8 @@ fall functions and the phase count, the per-evaluation ones inlined with their c
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from biped_sim.kernel import inlined, kernel
@@ -11,7 +13,7 @@ from biped_sim.rigid.tree_kernels import (
     tree_guard_rate,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import P_FALL, P_L, T_FALL_OFF, T_NOFF, T_NPHASE, T_NPTS, coords, perm_offset, point
+from biped_sim.rigid.tree_layout import P_FALL, P_L, T_NOFF, T_NPHASE, T_NPTS, coords, fall_angle, perm_offset, point
 
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
 
@@ -19,16 +21,16 @@ FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a f
 @kernel
 def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
     """Fall function i (positive while standing): 0, 1: the fall angle minus |each leg's hip body's angle|; 2: the
-    hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): their fall angle minus the largest
-    |angle| among them."""
+    hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): the least of their fall angles minus
+    their |angles| (each its own)."""
     if i < 2:
         return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
     n = coords(p)
     if i == 3:
-        tilt = 0.0
+        margin = math.inf
         for k in range(n - int(p[T_NOFF]), n):
-            tilt = max(tilt, abs(x[k]))
-        return p[T_FALL_OFF] - tilt
+            margin = min(margin, fall_angle(p, k) - abs(x[k]))
+        return margin
     _, hip_y = point(p, int(p[T_NPTS]), x[:n])
     return hip_y - FALL_HIP_FRACTION * p[P_L]
 

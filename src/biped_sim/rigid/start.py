@@ -45,10 +45,11 @@ def _check_start(config: Config, walker: RigidWalker, state: np.ndarray) -> None
     for name, value in legs.items():
         if not math.isfinite(value):
             raise ConfigError(f"simulation.initial.{name}", "must be a finite number")
-    for name in walker.state_names[: walker.n_q]:
-        if abs(legs[name]) >= walker.fall_leg_angle:
+    for k, name in enumerate(walker.state_names[: walker.n_q]):
+        if abs(legs[name]) >= walker.fall_angles[k]:
+            limit = f"the fall_angle of the body {name.removesuffix('_angle')!r}" if k in walker.off_legs else None
             raise ConfigError(
-                f"simulation.initial.{name}", "beyond simulation.fall_leg_angle: the walker starts fallen"
+                f"simulation.initial.{name}", f"beyond {limit or 'simulation.fall_leg_angle'}: the walker starts fallen"
             )
     if walker.hip_height(state) <= config.simulation.fall_hip_height * walker.leg_length:
         raise ConfigError("simulation.initial.stance_angle", "the hip starts below simulation.fall_hip_height")

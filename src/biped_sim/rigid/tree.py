@@ -43,6 +43,7 @@ from biped_sim.rigid.tree_layout import (
     T_NPHASE,
     T_NPTS,
     T_RSW,
+    fall_angle,
     perm_offset,
     phase_offset,
     point,
@@ -67,6 +68,7 @@ class RigidWalker:
         self.n_q = int(self.params[0])
         self.state_names = angles_then_rates(description.state_keys())
         self.slope, self.fall_leg_angle = config.ground.slope, config.simulation.fall_leg_angle
+        self.fall_angles = np.array([fall_angle(self.params, k) for k in range(self.n_q)])  # a torso's its own
         self.leg_length, self.foot_radius = float(self.params[1]), float(self.params[2])
         self.reference_mass = float(sum(self.params[self._row(0, i)] for i in range(self.n_points)))
         tree = Tree(description)
@@ -305,4 +307,4 @@ class RigidWalker:
 
     def fallen(self, x: np.ndarray) -> bool:
         """A leg's hip body, or a body off the legs (a torso), past the fall angle."""
-        return any(abs(x[k]) >= self.fall_leg_angle for k in (0, self.landing_index, *self.off_legs))
+        return any(abs(x[k]) >= self.fall_angles[k] for k in (0, self.landing_index, *self.off_legs))

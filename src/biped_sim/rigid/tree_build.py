@@ -181,6 +181,14 @@ def tree_elements(tree: Tree, d: WalkerDescription) -> list[list[float]]:
     ]  # fmt: skip
 
 
+def _fall_angles(tree: Tree, d: WalkerDescription, config: Config) -> list[float]:
+    """Each coordinate's fall angle from the slope normal: a leg's body simulation.fall_leg_angle, a body off the
+    legs (a torso) its own ``fall_angle`` (by default the same), as in compliant dynamics."""
+    own = {b.name: b.fall_angle for b in d.bodies if b.name in tree.off_legs}
+    angles = [own.get(name) for name in tree.order]
+    return [config.simulation.fall_leg_angle if angle is None else angle for angle in angles]
+
+
 def _relabelling(tree: Tree, n: int) -> tuple[list[int], list[float]]:
     """(perm, shift) of the heel strike: coordinate k after it is coordinate perm[k] before plus shift[k] (the legs
     swap; a body off them keeps its coordinate)."""
@@ -216,7 +224,7 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     elements = tree_elements(tree, d)
     offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases), len(elements))
     counts = [len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0]), len(tree.off_legs)]
-    p = [*header, *counts, config.simulation.fall_leg_angle, len(elements)]
+    p = [*header, *counts, len(elements)]
     p += [offsets[k] for k in range(T_ROWS, T_TABLES)]
     for t in (0, 1):
         p.append(rolling[t])
@@ -225,7 +233,8 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     p += _flat(tree.origin(tree.root, tree.feet[0]), n)
     p += _flat(tree.at(tree.feet[1].body, tree.feet[1].centre, tree.feet[0]), n)
     p += [v for lock in locks for v in lock[:5]] + [v for phase in phases for v in phase]
-    p += perm + shift + flags[0] + flags[1] + [v for element in elements for v in element]
+    p += perm + shift + flags[0] + flags[1] + _fall_angles(tree, d, config)
+    p += [v for element in elements for v in element]
     assert len(p) == offsets[T_WORK], (len(p), offsets)
     return np.array(p + [0.0] * (offsets[T_TRIG] + 2 * n - len(p)), dtype=float)
 

@@ -3,12 +3,12 @@
 
 Layout of ``p``: the header (P_NQ, P_L the leg length, P_R the stance foot's radius, P_LEAN the locked leg's foot
 lean phi, P_GX and P_GY the gravity vector in the slope frame, P_FALL), T_NLOCK, T_NPHASE, T_NPTS, T_RSW (the
-landing foot's radius), T_NLIGHT, T_NOFF and T_FALL_OFF (the bodies off the legs, a torso, and their fall angle),
-T_NELEM, the offsets T_ROWS ... T_TRIG; per table: the rolling coordinate, then per row (mass, inertia,
-coordinate, w (2 n)), heavy rows first; the hip's and the landing foot's w (2 n each, table 0); per lock (parent,
-child, limit, sign: +1 upper / -1 lower, active); per phase (kind, lock); the permutation (n), the shift (n) and
-each table's light flags (n each); per joint element (law, child, other, the law's parameters); a workspace (the
-solves); the sines and cosines of the angles last evaluated (2 n).
+landing foot's radius), T_NLIGHT, T_NOFF (the bodies off the legs, a torso), T_NELEM, the offsets T_ROWS ...
+T_TRIG; per table: the rolling coordinate, then per row (mass, inertia, coordinate, w (2 n)), heavy rows first;
+the hip's and the landing foot's w (2 n each, table 0); per lock (parent, child, limit, sign: +1 upper / -1 lower,
+active); per phase (kind, lock); the permutation (n), the shift (n), each table's light flags (n each) and each
+coordinate's fall angle (n: a body off the legs its own); per joint element (law, child, other, the law's
+parameters); a workspace (the solves); the sines and cosines of the angles last evaluated (2 n).
 """
 
 from __future__ import annotations
@@ -22,13 +22,13 @@ from biped_sim.kernel import kernel
 
 P_NQ, P_L, P_R, P_LEAN, P_GX, P_GY, P_FALL, T0 = 0, 1, 2, 3, 4, 5, 6, 7
 T_NLOCK, T_NPHASE, T_NPTS, T_RSW, T_NLIGHT = T0, T0 + 1, T0 + 2, T0 + 3, T0 + 4
-T_NOFF, T_FALL_OFF = T0 + 5, T0 + 6  # the bodies off the legs (the last coordinates) and their fall angle
-T_NELEM = T0 + 7  # the joint elements (springs, dampers)
+T_NOFF = T0 + 5  # the bodies off the legs (the last coordinates)
+T_NELEM = T0 + 6  # the joint elements (springs, dampers)
 # where each part starts (written by layout_offsets): the two tables' first rows, the hip's and landing foot's w,
 # the locks, the phases, the permutation, the elements, the workspace, the sines and cosines of the last angles
-T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM = T0 + 8, T0 + 10, T0 + 11, T0 + 12, T0 + 13
-T_ELEM, T_WORK, T_TRIG = T0 + 14, T0 + 15, T0 + 16
-T_TABLES = T0 + 17
+T_ROWS, T_EXTRA, T_LOCK, T_PHASE, T_PERM = T0 + 7, T0 + 9, T0 + 10, T0 + 11, T0 + 12
+T_ELEM, T_WORK, T_TRIG = T0 + 13, T0 + 14, T0 + 15
+T_TABLES = T0 + 16
 LOCK_FIELDS, PHASE_FIELDS, ROW_HEAD = 5, 2, 3
 ELEMENT_HEAD = 3  # an element's law, child coordinate and other coordinate; its law's parameters follow
 ELEMENT_FIELDS = ELEMENT_HEAD + N_ELEMENT_PARAMS
@@ -41,7 +41,7 @@ def layout_offsets(n: int, n_points: int, n_light: int, n_lock: int, n_phase: in
     offsets[T_LOCK] = offsets[T_EXTRA] + 4 * n
     offsets[T_PHASE] = offsets[T_LOCK] + LOCK_FIELDS * n_lock
     offsets[T_PERM] = offsets[T_PHASE] + PHASE_FIELDS * n_phase
-    offsets[T_ELEM] = offsets[T_PERM] + 4 * n  # the permutation, the shift and the light flags of both tables
+    offsets[T_ELEM] = offsets[T_PERM] + 5 * n  # the permutation, the shift, both tables' light flags, fall angles
     offsets[T_WORK] = offsets[T_ELEM] + ELEMENT_FIELDS * n_elem
     m = n + n_lock
     offsets[T_TRIG] = offsets[T_WORK] + m * m + m + 2 * (n_points + n_light) + 3 * n
@@ -102,6 +102,12 @@ def light_flags(p: np.ndarray, t: int) -> int:
     """Offset of table t's light flags: p[offset + k] != 0 when no mass, inertia or lock turns with coordinate k,
     only the feet's infinitesimal masses (Garcia's massless swing leg)."""
     return int(p[T_PERM]) + (2 + t) * coords(p)
+
+
+@kernel
+def fall_angle(p: np.ndarray, k: int) -> float:
+    """Coordinate k's fall angle from the slope normal (a leg's: simulation.fall_leg_angle; a torso's: its own)."""
+    return p[int(p[T_PERM]) + 4 * coords(p) + k]
 
 
 @kernel

@@ -54,7 +54,7 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.contact.response import LEG_TOO_FAR
 from biped_sim.integrate.driver import TIMEOUT_REASON
-from biped_sim.integrate.recorder import FALL_REASONS
+from biped_sim.integrate.recorder import FALL_REASONS, body_fall_reason
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.provenance import package_version
 from biped_sim.io.run_files import Channel, TrajectoryFile
@@ -185,9 +185,8 @@ def fall_reason(walker: RigidWalker, step: RigidStep) -> str:
     x = step.x_minus
     legs = [k for k in range(walker.n_q) if k not in walker.off_legs]
     margins = {FALL_REASONS[LEG_TOO_FAR]: walker.fall_leg_angle - float(np.max(np.abs(x[legs])))}
-    for k in walker.off_legs:  # a torso
-        body = walker.state_names[k].removesuffix("_angle")
-        margins[f"the {body} past simulation.fall_leg_angle from the slope normal"] = walker.fall_leg_angle - abs(x[k])
+    for k in walker.off_legs:  # a torso, against its own fall angle
+        margins[body_fall_reason(walker.state_names[k].removesuffix("_angle"))] = walker.fall_angles[k] - abs(x[k])
     margins[f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"] = (
         walker.hip_height(x) / walker.leg_length - FALL_HIP_FRACTION
     )
