@@ -25,7 +25,7 @@ from numba import njit
 
 from biped_sim.integrate.recorder import DIVERGED, ENERGY_JUMP, ENERGY_RESIDUAL, FELL, JOINT_DRIFT, Recorder
 from biped_sim.kernel import kernel
-from biped_sim.multibody.dispatch import measures, system_audit
+from biped_sim.multibody.dispatch import system_audit, system_energy
 
 DIVERGED_ENERGY = 1.0  # [m g l] an energy residual this large is a blown-up integration, not physics
 DIVERGED_ENERGY_JUMP = 0.01  # [m g l] this much energy error between two checks before a fall: a blown-up step
@@ -44,9 +44,17 @@ NO_CHECKS = Scales(0.0, 1.0)
 
 
 def start_checks(rec: Recorder, system: tuple, y: np.ndarray, modes: np.ndarray) -> None:
-    """Set the energy the residual is measured from: E + W of the state the integration starts from."""
-    kinetic, potential, elastic = measures(system).mechanical_energy(y, system, modes)
-    rec.state[0].energy_reference = plus_dissipated(kinetic + potential + elastic, y, system)
+    """Set the energy the residual is measured from: E + W of the state the integration starts from (the stiff
+    driver's start; the compiled loop sets it itself, at its first call)."""
+    rec.state[0].energy_reference = energy_reference(y, system, modes)
+
+
+@njit(cache=True, inline="always")
+def energy_reference(y: np.ndarray, system: tuple, modes: np.ndarray) -> float:
+    """E + W of the state (y, modes): the formulation's mechanical energy (its measure kernel, which the energy
+    audit's loop compiles too) plus the work dissipated so far (:func:`plus_dissipated`)."""
+    kinetic, potential, elastic = system_energy(y, system, modes)
+    return plus_dissipated(kinetic + potential + elastic, y, system)
 
 
 @njit(cache=True, inline="always")

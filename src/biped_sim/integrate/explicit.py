@@ -194,8 +194,10 @@ def advance(loop: Loop, cfg: Settings, step_budget: int) -> None:
     tab, system, work, _, y, modes, sc, rec = loop
     st = rec.state[0]
     t, h = st.time, st.step
-    if st.n_samples == 0:
+    if st.n_samples == 0:  # the start: its sample and the energy the blow-up checks measure from
         record_sample(rec, t, y, modes)
+        if cfg.checks.energy > 0.0:
+            st.energy_reference = blowup.energy_reference(y, system, modes)
     system_event_functions(y, system, sc.g_old)
     steps, room = 0, has_room(rec, modes.shape[0])
     while st.status == RUNNING and steps < step_budget and room:

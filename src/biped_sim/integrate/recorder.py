@@ -143,6 +143,9 @@ def has_room(rec: Recorder, nf: int) -> bool:
     return st.n_log + nf <= rec.log.shape[0] and st.n_strikes + nf <= rec.strike_t.shape[0]
 
 
+_has_room_in_python = getattr(has_room, "py_func", has_room)  # its code run by Python: no compiled twin for a test
+
+
 def _enlarged(buffer: np.ndarray, rows: int) -> np.ndarray:
     """``buffer`` with at least ``rows`` rows: twice as many, its contents first."""
     out = np.zeros((max(rows, 2 * buffer.shape[0]), *buffer.shape[1:]), dtype=buffer.dtype)
@@ -152,7 +155,7 @@ def _enlarged(buffer: np.ndarray, rows: int) -> np.ndarray:
 
 def with_room(rec: Recorder, nf: int) -> Recorder:
     """``rec``, or a copy with larger contact-log and strike buffers (same loop state) if an event might not fit."""
-    if has_room(rec, nf):
+    if _has_room_in_python(rec, nf):
         return rec
     st = rec.state[0]
     log_rows, strike_rows = int(st.n_log) + nf, int(st.n_strikes) + nf
