@@ -378,7 +378,8 @@ def after_phase(p: np.ndarray, phase: int, x: np.ndarray, out: np.ndarray) -> No
     p[lo + 4] = 1.0
     x[int(p[lo + 1])] = x[int(p[lo])] + p[lo + 2]
     tree_impact(p, x, False, out)
-    x[:] = out
+    for i in range(x.shape[0]):  # not a slice assignment: its shape check's message compiles
+        x[i] = out[i]
 
 
 @kernel
