@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import math
 import re
+import sys
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -34,8 +35,8 @@ CONFIG = Path(__file__).resolve().parents[1] / "configs" / "round_foot_walker.ya
 
 @pytest.fixture(scope="module")
 def short_bench() -> dict:
-    """``bench --quick`` (no cold start-up, sweep, compile, basin, fit, uncertainty or MuJoCo rows) on 1 s of walking
-    (two heel strikes), one repeat.
+    """``bench --quick`` (no cold start-up, sweep, compile, basin, space, fit, uncertainty or MuJoCo rows) on 1 s of
+    walking (two heel strikes), one repeat.
 
     About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
     their step size. Slow tier only.
@@ -198,6 +199,24 @@ def test_bench_markdown_reports_the_rigid_map_rows_and_the_basin_targets() -> No
     assert met["basin simplest_41x41x30, 2 workers < 60 s"] and not met["basin compliant_21x21x10, 2 workers < 600 s"]
 
 
+def test_bench_markdown_reports_the_walkers_in_space_beside_the_four_legged_walker_and_mujoco() -> None:
+    result = made_up_result()
+    agreement = {"ours": [0.7, 0.7], "mujoco": [0.7, 0.7], "relative_difference": [0.0003, -0.0121]}
+    result["space"] = {
+        "rigid_step": {"tinkertoy": {"step_us": 2500.0, "steps_per_s": 400.0}},
+        "compliant_run": {"status": "walking", "t_final": 3.0, "wall_s": 6.0, "rtf": 0.5},
+        "mujoco": {"available": True, "mujoco": {"rtf": 2.0, "status": "walking"},
+                   "quantities": dict.fromkeys(("period", "length", "width", "sway"), agreement)},
+    }  # fmt: skip
+    text = markdown(result)
+    assert "tinkertoy 2.50 ms (400 steps/s)" in text
+    four = next(r["rtf"] for r in result["rows"] if r["label"] == "dopri5 1e-6, four-legged, spatial")
+    assert f"3 s walking in 6.00 s, RTF 0.5 (four-legged walker: four-legged, spatial RTF {four:.3g}" in text
+    assert "MuJoCo on that walker: RTF 2 (walking); against ours [%], periods +0.03, -1.21;" in text
+    result["space"]["mujoco"] = {"available": False, "reason": "No module named 'mujoco'"}
+    assert "MuJoCo on the walker in space: not run (No module named 'mujoco')." in markdown(result)
+
+
 def test_bench_markdown_reports_the_uncertainty_rows_and_their_targets() -> None:
     result = made_up_result()
     result["uncertainty"] = {
@@ -267,3 +286,25 @@ def test_bench_markdown_reports_the_recovery_check_cost_per_fit_against_its_targ
     result["fit"] = {"recovery": {"inertia+restitution": row | {"wall_s_per_fit": 21.0, "target_s_per_fit": 15.0}}}
     met = {name: (shown, ok) for name, shown, ok in targets(result)}
     assert met["recovery check (inertia+restitution), per fit, 2 workers < 15 s"] == ("21.0 s", False)
+
+
+@pytest.mark.slow
+def test_the_space_rows_step_from_the_gaits_they_name() -> None:
+    """The 3D step map's rows time steps from gaits: each section point maps to itself (8-digit constants)."""
+    from biped_sim.bench.space import CONFIGS as SPACE
+    from biped_sim.bench.space import RIGID_CASES, rigid_space_steps
+    from biped_sim.config import load_config
+    from biped_sim.rigid.space_cycle import SpaceMap, space_walker_model
+
+    for config_file, overrides, point in RIGID_CASES.values():
+        step_map = SpaceMap(space_walker_model(load_config(SPACE / config_file, list(overrides))))
+        np.testing.assert_allclose(step_map(np.array(point)), point, atol=2e-7)
+    assert all(row["steps_per_s"] > 0.0 for row in rigid_space_steps(repeats=2).values())
+
+
+def test_the_space_rows_say_why_mujoco_did_not_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    from biped_sim.bench.space import mujoco_space_run
+
+    monkeypatch.setitem(sys.modules, "biped_sim.bench.mujoco_space", None)  # as without the extra
+    out = mujoco_space_run()
+    assert out["available"] is False and out["reason"].endswith("(install with make setup-bench)")

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from biped_sim.bench.mjcf import POINT_FOOT, RING_HALF_WIDTH, walker_mjcf
 from biped_sim.config import Config, load_config
@@ -102,12 +103,12 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
     ("name", "overrides", "message"),
     [
         ("kneed_walker_compliant.yaml", (), "walker.description.joints.1.stops.0.latch: MuJoCo has no latch"),
-        ("rimless_wheel.yaml", (), "contact.stiffness: point feet have no Hertz stiffness"),
+        ("rimless_wheel.yaml", (), "contact.stiffness: a foot without a radius has no Hertz stiffness"),
         ("simplest_walker.yaml", ("contact.stiffness=1e7",), "walker.description.bodies.leg1.mass: a body needs mass"),
         (
             "space/tinkertoy.yaml",
             ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube=0.05"),
-            "walker.space.leg.foot.shape: MuJoCo has no torus geom",
+            "walker.space.leg.foot.shape: a torus foot is not written as MJCF (MuJoCo has no torus)",
         ),
     ],
 )
@@ -141,3 +142,37 @@ def test_mujocos_tendon_lengths_are_the_elements_relative_angles() -> None:
     for _, element, other in describe(config("torso_walker.yaml")).joint_elements():
         k = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, f"waist.{element.name}")
         assert data.ten_length[k] == pytest.approx(angles["torso"] - angles[other], abs=1e-15)
+
+
+ELLIPSOID = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0", "walker.space.splay=0.1",
+             "walker.space.leg.foot.axes=[0.15, 0.4, 0.3]", "contact.stiffness=1e5"]  # fmt: skip
+
+
+def test_ellipsoid_feet_are_mujocos_ellipsoids_turned_by_the_splay() -> None:
+    cfg = config("space/tinkertoy.yaml", *ELLIPSOID)
+    left, right = feet(ET.fromstring(walker_mjcf(cfg)))
+    assert left.get("type") == right.get("type") == "ellipsoid" and left.get("size") == "0.15 0.4 0.3"
+    assert left.get("euler") == "0.1 0.0 0.0" and right.get("euler") == "-0.1 0.0 0.0"
+
+
+def test_mujocos_ellipsoid_has_its_lowest_point_where_the_rigid_model_has_it() -> None:
+    """The left leg pitched and banked: MuJoCo's ellipsoid geom touches a plane at the description's lowest point
+    (the rigid model's :func:`~biped_sim.rigid.space_model.foot_bottom`, found from the leg's pose)."""
+    mujoco = pytest.importorskip("mujoco")
+    from biped_sim.rigid.space_cycle import space_walker_model
+    from biped_sim.rigid.space_model import foot_bottom
+    from biped_sim.walkers.space_geometry import attitude
+
+    cfg = config("space/tinkertoy.yaml", *ELLIPSOID)
+    model = mujoco.MjModel.from_xml_string(walker_mjcf(cfg))
+    data = mujoco.MjData(model)
+    rotation = attitude(0.2, 0.15, -0.3)
+    data.qpos[3:7] = np.roll(Rotation.from_matrix(rotation).as_quat(), 1)  # (w, x, y, z)
+    mujoco.mj_kinematics(model, data)
+    foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "foot0")
+    axes, turn = np.array([0.15, 0.4, 0.3]), data.geom_xmat[foot].reshape(3, 3)
+    shape = turn @ np.diag(axes**2) @ turn.T  # the lowest point: centre - Q e_z / sqrt(e_z Q e_z)
+    lowest = data.geom_xpos[foot] - shape[:, 2] / math.sqrt(shape[2, 2])
+    rigid = space_walker_model(cfg)
+    bottom, _ = foot_bottom(rigid.feet[0], rotation)
+    np.testing.assert_allclose(lowest, bottom, atol=1e-12)

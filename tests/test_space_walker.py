@@ -28,6 +28,11 @@ STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # he
 # the tinkertoy on a torus foot in its leg's y-z plane: curved 0.3 fore-aft, 0.5 sideways, tilted off the axes
 TORUS = ["walker.space.leg.foot.shape=torus", "walker.space.leg.foot.radius=0.2", "walker.space.leg.foot.tube=0.3",
          "walker.space.leg.foot.normal=[1, 0.2, 0.1]", "walker.space.leg.foot.centre=[0.02, 0.01, -0.5]"]  # fmt: skip
+# ... on an ellipsoid foot, semi-axes 0.15 forward, 0.4 sideways, 0.3 up (curved 0.075 fore-aft, 0.53 sideways)
+ELLIPSOID = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
+             "walker.space.leg.foot.axes=[0.15, 0.4, 0.3]",
+             "walker.space.leg.foot.centre=[0.02, 0.01, -0.7]"]  # fmt: skip
+FEET = {"tinkertoy_ring": [], "torus": TORUS, "ellipsoid": ELLIPSOID}
 
 
 def compass_in_space(hip_width: float = 0.0) -> dict[str, Any]:
@@ -61,6 +66,8 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
         ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
         ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
         ("walker.space.leg.foot.tube=0.1", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
+        ("walker.space.leg.foot.axes=[1, 1, 1]", "walker.space.leg.foot.axes: an ellipsoid foot needs three semi-axes"),
+        ("walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius: an ellipsoid foot has radius 0"),
         ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
         ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
         ("dynamics=compliant", "walker.kind: 'description3d' needs formulation.kind: spatial with dynamics: compliant"),
@@ -80,10 +87,11 @@ def test_a_walker_in_space_refuses_the_planar_paths() -> None:
         rigid_walker(load_config(TINKERTOY))
 
 
-def test_a_torus_foot_has_rigid_dynamics_only() -> None:
+@pytest.mark.parametrize("shape", ["torus", "ellipsoid"])
+def test_a_torus_or_ellipsoid_foot_has_rigid_dynamics_only(shape: str) -> None:
     with pytest.raises(ConfigError) as error:
-        load_config(TINKERTOY, [*TORUS, "dynamics=compliant", "formulation.kind=spatial"])
-    assert str(error.value).startswith("walker.space.leg.foot.shape: a torus foot has rigid dynamics only")
+        load_config(TINKERTOY, [*FEET[shape], "dynamics=compliant", "formulation.kind=spatial"])
+    assert str(error.value).startswith(f"walker.space.leg.foot.shape: a {shape} foot has rigid dynamics only")
 
 
 def test_a_torus_foot_rests_on_its_tube() -> None:
@@ -96,10 +104,19 @@ def test_a_torus_foot_rests_on_its_tube() -> None:
     np.testing.assert_allclose(d, [0.0, 0.0, -1.0], atol=1e-15)
 
 
-@pytest.mark.parametrize("torus", [False, True], ids=["tinkertoy_ring", "torus"])
-def test_the_velocities_are_the_positions_rates(torus: bool) -> None:
+def test_a_round_ellipsoid_rolls_as_a_sphere() -> None:
+    """An ellipsoid of equal semi-axes r is the sphere of radius r: the same flow (contact point, accelerations)."""
+    sphere = ["walker.space.leg.foot.shape=sphere"]
+    ellipsoid = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
+                 "walker.space.leg.foot.axes=[0.1236, 0.1236, 0.1236]"]  # fmt: skip
+    flows = [dyn.flow(space_walker_model(load_config(TINKERTOY, foot)), STATE) for foot in (sphere, ellipsoid)]
+    np.testing.assert_allclose(flows[1], flows[0], rtol=1e-13, atol=1e-14)
+
+
+@pytest.mark.parametrize("feet", list(FEET))
+def test_the_velocities_are_the_positions_rates(feet: str) -> None:
     """Every part's velocity (Kane's A u) is the time derivative of its position, the contact point rolling."""
-    model = space_walker_model(load_config(TINKERTOY, TORUS if torus else []))
+    model = space_walker_model(load_config(TINKERTOY, FEET[feet]))
     rate, h = dyn.flow(model, STATE), 1e-6
 
     def positions(x: np.ndarray) -> np.ndarray:
@@ -144,19 +161,18 @@ def test_the_strike_keeps_the_angular_momenta() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("torus", [False, True], ids=["tinkertoy_ring", "torus"])
-def test_the_compiled_flow_is_the_reference_flow(torus: bool) -> None:
-    model = space_walker_model(load_config(TINKERTOY, TORUS if torus else []))
+@pytest.mark.parametrize("feet", list(FEET))
+def test_the_compiled_flow_is_the_reference_flow(feet: str) -> None:
+    model = space_walker_model(load_config(TINKERTOY, FEET[feet]))
     np.testing.assert_allclose(space_flow(space_params(model), STATE), dyn.flow(model, STATE), rtol=1e-13, atol=1e-14)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("walker", ["tinkertoy_ring", "compass_sphere", "torus"])
+@pytest.mark.parametrize("walker", [*FEET, "compass_sphere"])
 def test_the_swing_keeps_its_energy(walker: str) -> None:
     """Energy through 2 natural periods of the stance phase (the rolling foot's contact point moving) to 1e-10."""
-    configs = {"tinkertoy_ring": lambda: load_config(TINKERTOY), "torus": lambda: load_config(TINKERTOY, TORUS),
-               "compass_sphere": lambda: config_from_dict(compass_in_space(0.2))}  # fmt: skip
-    model = space_walker_model(configs[walker]())
+    compass = config_from_dict(compass_in_space(0.2)) if walker == "compass_sphere" else None
+    model = space_walker_model(compass or load_config(TINKERTOY, FEET[walker]))
     params = space_params(model)
     sol = solve_ivp(lambda t, x: space_flow(params, x), (0.0, 0.6), STATE, method="DOP853", rtol=1e-13, atol=1e-13)
     energies = [dyn.energy(model, x) for x in sol.y.T]

@@ -1,4 +1,5 @@
-"""The bundled torso walker (configs/torso_walker.yaml): it walks, and its torso held still is a mass at the hip."""
+"""The bundled torso walker (configs/torso_walker.yaml): it walks in compliant and rigid dynamics (a stable rigid
+cycle and its basin), and its torso held still is a mass at the hip."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, element_paramete
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.simulate import CompliantRunResult, simulate
 from biped_sim.simulate.compliant import simulate_compliant
+from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_basin
+from biped_sim.studies.limit_cycle import limit_cycle
 from biped_sim.walkers import build_model
 
 from .conftest import CONFIGS
@@ -30,6 +33,25 @@ def test_the_torso_walker_walks_a_periodic_gait_held_by_its_springs() -> None:
     assert 0.1 < np.max(np.abs(torso)) < 0.4  # it sways, held up by the springs
     audit = result.energy
     assert np.max(np.abs(audit.residual)) < 1e-6 * result.model.total_mass * 9.81 * result.model.leg_length
+
+
+@pytest.mark.slow
+def test_the_torso_walker_has_a_stable_rigid_cycle_near_its_compliant_gait_and_a_basin_around_it() -> None:
+    """Rigid dynamics, the same file: a stable period-1 gait (measured: period 0.70926 s against the compliant
+    0.7149 s, multipliers 0.289 +- 0.590i, 0.075, 0.011 +- ...), and its basin: on a 3 x 3 grid over the stance
+    angle and rate around it (+-0.02 rad, +-0.1 rad/s; the other keys its fixed point's) the fixed point's cell and
+    four others come back to the gait within 20 steps, and the corner of the larger angle and slower rate falls."""
+    config = load_config(TORSO_WALKER, ["dynamics=rigid"])
+    cycle = limit_cycle(config)
+    assert cycle.converged and cycle.stable and np.max(np.abs(cycle.multipliers)) < 0.7
+    assert cycle.step_period == pytest.approx(0.7149, rel=0.01)  # the compliant gait's period
+    start = load_config(TORSO_WALKER, ["dynamics=rigid", f"simulation.initial={dict(cycle.fixed_point)}"])
+    angle, rate = cycle.fixed_point["stance_angle"], cycle.fixed_point["stance_rate"]
+    spec = BasinSpec(start, GridAxis("stance_angle", angle - 0.02, angle + 0.02, 3),
+                     GridAxis("stance_rate", rate - 0.1, rate + 0.1, 3), steps=20, tolerance=1e-3)  # fmt: skip
+    basin = map_basin(spec, None)
+    assert basin.outcome[1, 1] == CONVERGED and np.count_nonzero(basin.outcome == CONVERGED) >= 5  # measured: 5
+    assert basin.outcome[2, 2] == FELL  # a larger step angle with a slower stance leg: bounded
 
 
 def _compass_with_the_torso_at_the_hip(t_end: str) -> CompliantRunResult:

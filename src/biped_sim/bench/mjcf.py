@@ -20,12 +20,14 @@ What is written, and how:
   frame: origin at the hinge's midpoint, x forward, y along the hinge, z up the leg), the right leg on a hinge about
   y; full inertia tensors (each principal moment floored as in the compliant builder); a sphere foot a sphere, a
   point foot a sphere of ``POINT_FOOT`` l above the point, a ring a flat cylinder (half-thickness ``RING_HALF_WIDTH``
-  of its radius) whose axis is the ring's normal: its contact with a plane is its rim's lowest point, as a ring's.
+  of its radius) whose axis is the ring's normal: its contact with a plane is its rim's lowest point, as a ring's;
+  an ellipsoid MuJoCo's ellipsoid, its axes the leg's (turned by the splay).
   The world is the rigid model's slope frame with gravity tilted by the slope.
 
-What MuJoCo cannot represent, refused in one line: a latch (a joint held from both sides until its leg's foot leaves
-the ground: MuJoCo's constraints are not switched by events in the model). The contact is matched
-(:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with ``mu_kinetic``.
+What MuJoCo cannot represent, refused in one line: a torus foot (no such geom), a latch (a joint held from both
+sides until its leg's foot leaves the ground: MuJoCo's constraints are not switched by events in the model). The
+contact is matched (:mod:`.mujoco_contact`) at the whole weight on one foot, friction is MuJoCo's elliptic cone with
+``mu_kinetic``.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import numpy as np
 
 from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config, WalkerDescription
+from biped_sim.config.space_description import SpaceDescription
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.describe import describe
@@ -60,7 +63,7 @@ def contact_attributes(config: Config, mass: float, foot_radius: float, leg_leng
     """A foot geom's friction, solref and solimp: our contact matched at ``mass``'s weight on one foot."""
     stiffness = contact_stiffness(config, foot_radius)
     if stiffness <= 0.0:
-        raise ConfigError("contact.stiffness", "point feet have no Hertz stiffness: give one to write the MJCF")
+        raise ConfigError("contact.stiffness", "a foot without a radius has no Hertz stiffness: give one for MJCF")
     k, b = matched_solref(config, mass, stiffness, static_contact_penetration(config, mass, stiffness, leg_length))
     return (
         f'friction="{config.friction.mu_kinetic!r} 0 0" solref="{-k!r} {-b!r}" solimp="{IMPEDANCE} {IMPEDANCE} 0.001"'
@@ -193,17 +196,18 @@ def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
     if space.leg.foot.shape == "torus":
-        raise ConfigError("walker.space.leg.foot.shape", "MuJoCo has no torus geom: not written as MJCF")
+        raise ConfigError("walker.space.leg.foot.shape", "a torus foot is not written as MJCF (MuJoCo has no torus)")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
+    shapes = [_foot_shape(space, leg, side) for leg, side in zip(legs, (1.0, -1.0), strict=True)]
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())
     g, slope, mu = config.gravity, config.ground.slope, config.friction.mu_kinetic
     world = f"""    <geom name="ground" type="plane" size="50 50 0.1" friction="{mu!r} 0 0"/>
     <body name="left">
       <freejoint name="base"/>
-      {_space_leg(legs[0], "foot0", contact, space.leg_length())}
+      {_space_leg(legs[0], "foot0", contact, shapes[0])}
       <body name="right">
         <joint name="hinge" type="hinge" axis="0 1 0"/>
-        {_space_leg(legs[1], "foot1", contact, space.leg_length())}
+        {_space_leg(legs[1], "foot1", contact, shapes[1])}
       </body>
     </body>"""
     gravity = numbers(g * math.sin(slope), 0.0, -g * math.cos(slope))
@@ -219,20 +223,29 @@ def balanced(inertia: np.ndarray) -> np.ndarray:
     return axes @ np.diag(moments) @ axes.T
 
 
-def _space_leg(leg: LegGeometry, foot: str, contact: str, length: float) -> str:
+def _foot_shape(space: SpaceDescription, leg: LegGeometry, side: float) -> str:
+    """A foot geom's type, size, place and orientation (walker frame; ``side`` -1 for the right leg, the mirror)."""
+    foot = space.leg.foot
+    if foot.axes is not None:  # an ellipsoid: its axes the leg's, turned by the splay (the mirror turns it back)
+        return (
+            f'type="ellipsoid" size="{numbers(*foot.axes)}" euler="{numbers(side * space.splay, 0.0, 0.0)}" '
+            f'pos="{numbers(*leg.foot_centre)}"'
+        )
+    if leg.foot_normal is not None:
+        return (
+            f'type="cylinder" size="{leg.foot_radius!r} {RING_HALF_WIDTH * leg.foot_radius!r}" '
+            f'zaxis="{numbers(*leg.foot_normal)}" pos="{numbers(*leg.foot_centre)}"'
+        )
+    radius = leg.foot_radius or POINT_FOOT * space.leg_length()
+    centre = leg.foot_centre + np.array([0.0, 0.0, radius - leg.foot_radius])
+    return f'type="sphere" size="{radius!r}" pos="{numbers(*centre)}"'
+
+
+def _space_leg(leg: LegGeometry, foot: str, contact: str, shape: str) -> str:
     """A leg's inertial element and foot geom (walker frame)."""
     j = balanced(TO_SPATIAL.T @ body_inertia(leg) @ TO_SPATIAL)
     inertial = (
         f'<inertial pos="{numbers(*leg.com)}" mass="{float(leg.mass)!r}" '
         f'fullinertia="{numbers(j[0, 0], j[1, 1], j[2, 2], j[0, 1], j[0, 2], j[1, 2])}"/>'
     )
-    if leg.foot_normal is not None:
-        shape = (
-            f'type="cylinder" size="{leg.foot_radius!r} {RING_HALF_WIDTH * leg.foot_radius!r}" '
-            f'zaxis="{numbers(*leg.foot_normal)}" pos="{numbers(*leg.foot_centre)}"'
-        )
-    else:
-        radius = leg.foot_radius or POINT_FOOT * length
-        centre = leg.foot_centre + np.array([0.0, 0.0, radius - leg.foot_radius])
-        shape = f'type="sphere" size="{radius!r}" pos="{numbers(*centre)}"'
     return f'{inertial}<geom name="{foot}" {shape} mass="0" {contact}/>'

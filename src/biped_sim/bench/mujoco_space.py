@@ -14,6 +14,9 @@ penetration) with regularised friction that creeps below its stick velocity.
 
 from __future__ import annotations
 
+import time
+from typing import Any
+
 import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -22,9 +25,14 @@ from biped_sim.bench.mjcf import TIMESTEP, space_mjcf
 from biped_sim.bench.mujoco_walker import MujocoWalker
 from biped_sim.config import Config
 from biped_sim.errors import ConfigError
-from biped_sim.walkers.model import contact_stiffness, static_contact_penetration
+from biped_sim.integrate.driver import Integration
+from biped_sim.multibody.dispatch import measures
+from biped_sim.simulate import prepare_model, simulate
+from biped_sim.walkers.model import BuiltModel, contact_stiffness, static_contact_penetration
 from biped_sim.walkers.space_geometry import LegGeometry, leg_geometry, rolling_states, with_point_mass
 from biped_sim.walkers.space_walker import check_initial
+
+STEPS_COMPARED = 3  # the laterally unstable Kuo-type compass falls after its third or fourth step
 
 
 def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
@@ -71,3 +79,67 @@ class MujocoSpaceWalker(MujocoWalker):
     def hip_height(self) -> float:
         """The hinge midpoint's height above the slope [m]."""
         return float(self.data.qpos[2])
+
+    def run(self, t_end: float) -> dict[str, Any]:
+        """The planar walker's run, tracing the strikes' contact points and the hip's lateral path."""
+        self._places = [np.zeros(2)]  # the start: the stance foot's contact point at the origin
+        self._lateral: list[list[float]] = [[]]
+        return super().run(t_end)
+
+    def _sample(self, n_strikes: int, last_foot: int) -> None:
+        """The hip's lateral place; at a new strike (seen at the end of its chunk of steps, 0.5 ms at most after it)
+        the striking sphere's lowest point."""
+        y = float(self.data.qpos[1])
+        if n_strikes >= len(self._places):
+            self._lateral[-1].append(y)
+            self._places.append(self.data.geom_xpos[self.feet[last_foot], :2].copy())
+            self._lateral.append([])
+        self._lateral[-1].append(y)
+
+    def places(self) -> np.ndarray:
+        """(downhill, lateral) of the start's contact point and of each strike's in the last run [m]."""
+        return np.array(self._places)
+
+    def sways(self) -> np.ndarray:
+        """The hinge midpoint's lateral excursion (max - min) between consecutive strikes of the last run [m]."""
+        return np.array([max(y) - min(y) for y in self._lateral[1:-1]])
+
+
+def _our_places(model: BuiltModel, run: Integration) -> np.ndarray:
+    """(downhill, lateral) of our start's contact point (the origin) and of each strike's (the striking foot's lowest
+    point, as our step table has it)."""
+    point = measures(model.system).foot_point
+    strikes = [point(run.strike_y[k], model.system, int(run.strike_foot[k])) for k in range(len(run.strike_t))]
+    return np.array([(0.0, 0.0), *strikes])
+
+
+def side_by_side(config: Config, initial: dict[str, float], n_steps: int = STEPS_COMPARED) -> dict[str, Any]:
+    """Our compliant run and MuJoCo's of the walker in space of ``config`` from the rigid gait's state ``initial``:
+    per step of the first ``n_steps`` (the first from the start), its period, length and width (the downhill and
+    lateral distance between the contact points of the strikes that begin and end it; the lateral sign flipped on
+    our side, whose third axis points right), and from the second on the hip's lateral sway (our step table's);
+    each side's status, wall time and real-time factor."""
+    start = time.perf_counter()
+    model = prepare_model(config)
+    ours = simulate(config, model=model)
+    our_wall = time.perf_counter() - start
+    walker = MujocoSpaceWalker(config, initial)
+    start = time.perf_counter()
+    theirs = walker.run(config.simulation.t_end)
+    their_wall = time.perf_counter() - start
+    n = min(n_steps, len(ours.heel_strike_times), len(theirs["strikes"]))
+    steps = [np.diff(_our_places(model, ours.run)[: n + 1], axis=0), np.diff(walker.places()[: n + 1], axis=0)]
+    pairs = {
+        "period": (np.diff(ours.heel_strike_times[:n], prepend=0.0), np.diff(theirs["strikes"][:n], prepend=0.0)),
+        "length": (steps[0][:, 0], steps[1][:, 0]),
+        "width": (np.abs(steps[0][:, 1]), np.abs(steps[1][:, 1])),
+        "sway": (ours.steps.sway[: n - 1], walker.sways()[: n - 1]),  # from the first strike on (no start sway)
+    }
+    return {
+        "quantities": {
+            name: {"ours": a.tolist(), "mujoco": b.tolist(), "relative_difference": (b / a - 1.0).tolist()}
+            for name, (a, b) in pairs.items()
+        },
+        "ours": {"status": ours.status, "wall_s": our_wall, "rtf": ours.t_final / our_wall},
+        "mujoco": {"status": theirs["status"], "wall_s": their_wall, "rtf": theirs["t_final"] / their_wall},
+    }

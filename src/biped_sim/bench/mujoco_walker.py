@@ -141,9 +141,14 @@ class MujocoWalker:
                     last_strike = i
                 touching[i] = now_touching
                 height_prev[i] = height
+            self._sample(len(strikes), last_strike)
             if self.hip_height() < fall_height:
                 return {"status": "fell", "t_final": float(data.time), "steps": steps, "strikes": strikes}
         return {"status": "walking", "t_final": float(data.time), "steps": steps, "strikes": strikes}
+
+    def _sample(self, n_strikes: int, last_foot: int) -> None:
+        """Called after every chunk of steps with the strikes so far and the last striking foot: a subclass's
+        per-step measures (the planar walker has none)."""
 
     def _set_contact(self, foot: int, on: bool) -> None:
         self.model.geom_contype[self.feet[foot]] = 1 if on else 0

@@ -213,6 +213,7 @@ def notes(result: dict[str, Any]) -> list[str]:
         )  # fmt: skip
     lines += compile_notes(result.get("compile"))
     lines += rigid_map_notes(result.get("rigid_map"))
+    lines += space_notes(result.get("space"), result.get("rows", []))
     lines += uncertainty_notes(result.get("uncertainty"))
     mj = result.get("mujoco")
     if mj is not None:
@@ -257,6 +258,32 @@ def rigid_map_notes(rigid: dict[str, Any] | None) -> list[str]:
             f"Basin {name}: {basin['cells']} cells x {basin['steps']} steps in {basin['wall_s']:.1f} s with "
             f"{basin['workers']} workers (pool start included; {basin['fraction_walking']:.1%} of the cells walk)."
         )
+    return lines
+
+
+def space_notes(space: dict[str, Any] | None, rows: list[dict[str, Any]]) -> list[str]:
+    """The walkers in space: the 3D rigid step map's rate, the compliant 3D run's real-time factor beside the
+    four-legged walker's rows, and MuJoCo's run of that walker with the first steps' agreement."""
+    if not space:
+        return []
+    steps = ", ".join(f"{name} {v['step_us'] / 1e3:.2f} ms ({v['steps_per_s']:.0f} steps/s)"
+                      for name, v in space["rigid_step"].items())  # fmt: skip
+    run = space["compliant_run"]
+    four = ", ".join(f"{r['label'].split(', ', 1)[1]} RTF {r['rtf']:.3g}" for r in rows if "four-legged" in r["label"])
+    lines = [
+        f"Rigid step in space from the gait (compiled): {steps}.",
+        f"Compliant Kuo-type compass on spheres (3D, K = 1e7, dopri5 rtol 1e-8): {run['t_final']:g} s {run['status']} "
+        f"in {run['wall_s']:.2f} s, RTF {run['rtf']:.3g}" + (f" (four-legged walker: {four})." if four else "."),
+    ]
+    mj = space.get("mujoco")
+    if mj and mj.get("available"):
+        diff = {k: ", ".join(f"{100 * d:+.2f}" for d in v["relative_difference"]) for k, v in mj["quantities"].items()}
+        lines.append(
+            f"MuJoCo on that walker: RTF {mj['mujoco']['rtf']:.3g} ({mj['mujoco']['status']}); against ours [%], "
+            f"periods {diff['period']}; lengths {diff['length']}; widths {diff['width']}; sways {diff['sway']}."
+        )
+    elif mj:
+        lines.append(f"MuJoCo on the walker in space: not run ({mj['reason']}).")
     return lines
 
 

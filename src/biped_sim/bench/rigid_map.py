@@ -56,7 +56,8 @@ BASINS = {  # name -> (config, x, y, steps, target wall time [s])
 BASIN_WORKERS = 2
 
 
-def _median_time(func, repeats: int) -> float:  # type: ignore[no-untyped-def]
+def median_time(func, repeats: int) -> float:  # type: ignore[no-untyped-def]
+    """The median wall time [s] of ``repeats`` calls of ``func``."""
     walls = []
     for _ in range(repeats):
         clock = time.perf_counter()
@@ -108,16 +109,16 @@ def _run_step_times(repeats: int) -> dict[str, float]:
     profile = ProfileStrike(walker, ground, Footing(0.0, 0.0))
     cw = compile_walker(walker)
     rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw)  # warm-up
-    run_s = _median_time(lambda: rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw), repeats)
-    plain_s = _median_time(lambda: rigid_step(walker, x0, cw=cw), repeats)
+    run_s = median_time(lambda: rigid_step(walker, x0, RUN_STEP_RATE, RUN_STEP_PUSHES, profile, cw=cw), repeats)
+    plain_s = median_time(lambda: rigid_step(walker, x0, cw=cw), repeats)
     return {"compiled_us": run_s * 1e6, "plain_us": plain_s * 1e6, "over_plain": run_s / plain_s}
 
 
 def _step_times(reference: Callable[[], object], compiled: Callable[[], object], repeats: int) -> dict[str, float]:
     """Median wall times [us] of a step by the scipy baseline and compiled (after a warm-up that loads the code)."""
     compiled()
-    scipy_s = _median_time(reference, max(3, repeats // 4))
-    compiled_s = _median_time(compiled, repeats)
+    scipy_s = median_time(reference, max(3, repeats // 4))
+    compiled_s = median_time(compiled, repeats)
     return {"scipy_us": scipy_s * 1e6, "compiled_us": compiled_s * 1e6, "speedup": scipy_s / compiled_s}
 
 

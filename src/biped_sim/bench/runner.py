@@ -36,6 +36,7 @@ from biped_sim.bench.compile import cold_compile_per_group
 from biped_sim.bench.fit import fit_bench
 from biped_sim.bench.rigid_map import rigid_map_bench
 from biped_sim.bench.run_cost import run_cost_bench
+from biped_sim.bench.space import space_bench
 from biped_sim.bench.startup import startup_times, sweep_throughput
 from biped_sim.bench.uncertainty import uncertainty_bench
 from biped_sim.config import Config, load_config
@@ -99,12 +100,13 @@ class BenchSettings:
         True  # the 1,024-sample ensemble, the N = 256 Sobol study, MuJoCo's rollouts (bench.uncertainty)
     )
     compile_time: bool = True  # the cold start-up and the cold compile per group
+    space: bool = True  # the walkers in space: 3D rigid steps, the compliant 3D run (and MuJoCo's; bench.space)
     mujoco: bool = True
     quick: bool = False
 
     @classmethod
     def quick_run(cls, config_path: Path) -> BenchSettings:
-        """The reduced benchmark of ``bench --quick``: 2 s simulated, 3 repeats, no sweep, compile or MuJoCo."""
+        """The reduced benchmark of ``bench --quick``: 2 s simulated, 3 repeats, no sweep, compile, space or MuJoCo."""
         return cls(
             config_path,
             t_end=2.0,
@@ -115,6 +117,7 @@ class BenchSettings:
             fits=False,
             uncertainty=False,
             compile_time=False,
+            space=False,
             mujoco=False,
             quick=True,
         )
@@ -361,6 +364,9 @@ def run_bench(settings: BenchSettings, log: Callable[[str], None] = lambda _: No
     log(f"run cost: {json.dumps(result['run_cost'])}")
     result["rigid_map"] = rigid_map_bench(settings.basins)
     log(f"rigid map: {json.dumps(result['rigid_map'])}")
+    if settings.space:
+        result["space"] = space_bench(settings.repeats, settings.mujoco)
+        log(f"walkers in space: {json.dumps(result['space'])}")
     if settings.fits:
         result["fit"] = fit_bench()
         log(f"fit: {json.dumps(result['fit'])}")

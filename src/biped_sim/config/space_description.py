@@ -5,16 +5,11 @@ The leg is written once, as the left leg in its own frame (x forward, y along th
 the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
 (y -> -y). The two hip points lie on the hinge axis ``hip_width`` apart; ``splay`` turns each leg outward about
 its forward axis through its hip point. A foot is a point, a sphere, a ring (a thin circular edge whose plane
-is normal to ``normal``) or a torus (a ring of radius ``radius`` thickened by a tube of radius ``tube``: at its
+is normal to ``normal``), a torus (a ring of radius ``radius`` thickened by a tube of radius ``tube``: at its
 bottom it is curved with radius ``radius + tube`` in the ring's plane and ``tube`` across it, so that its two
-curvatures are set apart; e.g. its plane lateral, normal x, gives a foot rounder sideways than fore-aft); a
-planar walker is the special case of zero hip width, a centre of mass in the leg's x-z plane and a sphere or
-ring foot in it.
-
-Why a member of its own (and ``walker.space`` rather than ``walker.description``): every consumer of
-``walker.description`` reads a planar tree (the compliant builders, the planar rigid model, the pictures), so
-a spatial walker kept apart never reaches a planar path by accident, and a planar description stays valid and
-unchanged.
+curvatures are set apart; e.g. its plane lateral, normal x, gives a foot rounder sideways than fore-aft) or an
+ellipsoid (semi-axes along the leg's axes); a planar walker is the special case of zero hip width, a centre of
+mass in the leg's x-z plane and a sphere or ring foot in it.
 """
 
 from __future__ import annotations
@@ -72,14 +67,17 @@ class InertiaSpec(Strict):
 
 
 class SpaceFoot(Strict):
-    """A foot: a point, a sphere (rolling), a ring (a thin circular edge rolling on the ground) or a torus."""
+    """A foot: a point, a sphere (rolling), a ring (a thin circular edge rolling on the ground), a torus or an
+    ellipsoid (semi-axes ``axes`` along the leg's x, y, z: at its bottom, upright, curved ax^2 / az fore-aft and
+    ay^2 / az sideways)."""
 
-    shape: Literal["point", "sphere", "ring", "torus"] = Field(..., description="'point', 'sphere', 'ring' or 'torus'.")
-    centre: Vector3 = Field(
-        ..., description="The point, or the sphere's, ring's or torus's centre, from the hip point [m]."
+    shape: Literal["point", "sphere", "ring", "torus", "ellipsoid"] = Field(
+        ..., description="'point', 'sphere', 'ring', 'torus' or 'ellipsoid'."
     )
-    radius: float = Field(0.0, ge=0, description="Sphere, ring or torus (major) radius [m] (a point: 0).")
+    centre: Vector3 = Field(..., description="The point, or the round foot's centre, from the hip point [m].")
+    radius: float = Field(0.0, ge=0, description="Sphere, ring or torus (major) radius [m] (a point, an ellipsoid: 0).")
     tube: float = Field(0.0, ge=0, description="A torus's tube radius [m] (the other shapes: 0).")
+    axes: Vector3 | None = Field(None, description="An ellipsoid's semi-axes along the leg's x, y, z [m].")
     normal: Vector3 = Field(
         (0.0, 1.0, 0.0),
         description="A ring's or torus's plane normal in the leg's frame (default y: its plane the x-z plane).",
@@ -89,18 +87,28 @@ class SpaceFoot(Strict):
     def _radius_fits_shape(self) -> SpaceFoot:
         if self.shape == "point" and self.radius != 0.0:
             raise ValueError("radius: a point foot has radius 0 (a round foot is a sphere or a ring)")
-        if self.shape != "point" and self.radius <= 0.0:
+        if self.shape == "ellipsoid" and self.radius != 0.0:
+            raise ValueError("radius: an ellipsoid foot has radius 0 (its size is its axes)")
+        if self.shape not in ("point", "ellipsoid") and self.radius <= 0.0:
             raise ValueError(f"radius: a {self.shape} foot needs a radius > 0")
         if self.shape in ("ring", "torus") and math.hypot(*self.normal) < 1e-12:
             raise ValueError(f"normal: a {self.shape}'s plane normal must not be zero")
         if (self.shape == "torus") != (self.tube > 0.0):
             raise ValueError("tube: a torus foot needs a tube radius > 0 (the other shapes have none)")
+        if (self.shape == "ellipsoid") != (self.axes is not None) or (self.axes is not None and min(self.axes) <= 0):
+            raise ValueError("axes: an ellipsoid foot needs three semi-axes > 0 (the other shapes have none)")
         return self
 
     @property
     def reach(self) -> float:
-        """From the centre to the bottom with the foot's plane upright [m]: the radius plus a torus's tube."""
-        return self.radius + self.tube
+        """From the centre to the bottom with the leg upright [m]: the radius plus a torus's tube (the foot's plane
+        upright), an ellipsoid's z semi-axis."""
+        return self.axes[2] if self.axes is not None else self.radius + self.tube
+
+    def quadric(self) -> np.ndarray:
+        """An ellipsoid's diag(ax^2, ay^2, az^2) in the leg's frame: its points are centre + Q^(1/2) u, |u| = 1
+        (zero for the other shapes)."""
+        return np.diag(np.square(self.axes)) if self.axes is not None else np.zeros((3, 3))
 
 
 class SpaceLeg(Strict):

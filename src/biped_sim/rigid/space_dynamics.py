@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.rigid.space_model import (
+    ELLIPSOID,
     EZ,
     MIRROR,
     N_STATE,
@@ -60,10 +61,12 @@ class PartMotion:
 
 def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) -> np.ndarray:
     """Velocity of the geometric stance contact point over the ground (the material point's is zero): the foot's
-    centre, at -(radius d - tube z) from it, turns about it, and the bottom moves over the foot with d."""
+    centre, at -(radius d - tube z) from it (an ellipsoid's: -d), turns about it, and the bottom moves over the foot
+    with d."""
     foot = model.feet[0]
     d_dot = bottom_direction_rate(foot, where.rotations[0], omega)
-    return np.cross(omega, foot.tube * EZ - foot.radius * where.stance_d) + foot.radius * d_dot
+    scale = 1.0 if foot.shape == ELLIPSOID else foot.radius
+    return np.cross(omega, foot.tube * EZ - scale * where.stance_d) + scale * d_dot
 
 
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:

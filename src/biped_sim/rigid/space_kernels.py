@@ -5,7 +5,8 @@ hinge rate) over a flat parameter vector, for the integrator's many calls. The p
 
 Parameter vector (:func:`space_params`): gravity (3, slope frame), the number of parts, then per part its frame
 (0 stance leg, 1 swing leg), mass, centre of mass (3) and inertia (9, row-major; the walker frame, hinge at zero),
-then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3) and tube radius.
+then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3), tube radius and an ellipsoid's
+quadric (9, row-major).
 """
 
 from __future__ import annotations
@@ -15,11 +16,11 @@ import math
 import numpy as np
 
 from biped_sim.kernel import kernel
-from biped_sim.rigid.space_model import RING, SPHERE, TORUS, SpaceModel
+from biped_sim.rigid.space_model import ELLIPSOID, RING, SPHERE, TORUS, SpaceModel
 
 MAX_PARTS = 3
 PART_SIZE = 14
-FOOT_SIZE = 9
+FOOT_SIZE = 18
 PARTS = 4
 FEET = PARTS + MAX_PARTS * PART_SIZE
 N_PARAMS = FEET + 2 * FOOT_SIZE
@@ -35,7 +36,7 @@ def space_params(model: SpaceModel) -> np.ndarray:
         p[o : o + PART_SIZE] = [part.frame, part.mass, *part.com, *part.inertia.ravel()]
     for k, foot in enumerate(model.feet):
         o = FEET + k * FOOT_SIZE
-        p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal, foot.tube]
+        p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal, foot.tube, *foot.quadric.ravel()]
     return p
 
 
@@ -71,6 +72,10 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
     o = FEET + foot * FOOT_SIZE
     centre = rotation @ p[o + 2 : o + 5]
     d = np.zeros(3)
+    if p[o] == ELLIPSOID:  # d: the whole offset -Q z / sqrt(z' Q z)
+        q = ellipsoid_quadric(p, o, rotation)
+        d = -q[:, 2] / math.sqrt(q[2, 2])
+        return centre + d, d
     if p[o] == SPHERE:
         d[2] = -1.0
     elif p[o] == RING or p[o] == TORUS:
@@ -85,9 +90,29 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
 
 
 @kernel
+def ellipsoid_quadric(p: np.ndarray, o: int, rotation: np.ndarray) -> np.ndarray:
+    """The ellipsoid foot at parameter offset ``o``: its quadric turned into the slope frame, R Q R^T."""
+    q = np.ascontiguousarray(p[o + 9 : o + 18]).reshape((3, 3))
+    return rotation @ q @ np.ascontiguousarray(rotation.T)
+
+
+@kernel
+def ellipsoid_offset_rate(p: np.ndarray, o: int, rotation: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """The rate of an ellipsoid's offset -Q z / sqrt(z' Q z) to its bottom as it turns at ``omega``
+    (Q' = [omega]x Q - Q [omega]x)."""
+    q = ellipsoid_quadric(p, o, rotation)
+    spin = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
+    q_dot = spin @ q - q @ spin
+    s = math.sqrt(q[2, 2])
+    return -q_dot[:, 2] / s + q[:, 2] * q_dot[2, 2] / (2.0 * s**3)
+
+
+@kernel
 def contact_rate(p: np.ndarray, rotation: np.ndarray, d: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """The stance contact point's velocity over the ground (the material point's is zero)."""
     o = FEET
+    if p[o] == ELLIPSOID:
+        return cross(omega, -d) + ellipsoid_offset_rate(p, o, rotation, omega)
     radius = p[o + 1]
     arm = -radius * d
     if p[o] == TORUS:  # the centre sits at tube z - radius d from the contact point

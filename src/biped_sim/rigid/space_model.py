@@ -14,17 +14,17 @@ the ground: ``STATE_NAMES``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from biped_sim.config.space_description import SpaceDescription, SpaceFoot
+from biped_sim.config.space_description import SpaceDescription
 from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, rot_x, rot_y, rot_z
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
-POINT, SPHERE, RING, TORUS = 0, 1, 2, 3
-SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING, "torus": TORUS}
+POINT, SPHERE, RING, TORUS, ELLIPSOID = 0, 1, 2, 3, 4
+SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING, "torus": TORUS, "ellipsoid": ELLIPSOID}
 
 
 def attitude_angles(r: np.ndarray) -> tuple[float, float, float]:
@@ -55,13 +55,15 @@ class Part:
 @dataclass(frozen=True)
 class Foot:
     """A foot in the walker frame with the hinge at zero: its shape code, centre, radius, a ring's or torus's unit
-    normal and a torus's tube radius (zero for the other shapes)."""
+    normal, a torus's tube radius and an ellipsoid's quadric Q (its points centre + Q^(1/2) u, |u| = 1; zero for
+    the other shapes)."""
 
     shape: int
     centre: np.ndarray
     radius: float
     normal: np.ndarray
     tube: float = 0.0
+    quadric: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
 
 
 @dataclass(frozen=True)
@@ -89,11 +91,10 @@ def _leg(space: SpaceDescription, frame: int) -> tuple[Part, Foot]:
     com = mirror @ (hip + turn @ np.array(leg.com))
     inertia = mirror @ turn @ leg.inertia.matrix() @ turn.T @ mirror
     normal = mirror @ turn @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
-    return Part(frame, leg.mass, com, inertia), _foot(foot, mirror @ (hip + turn @ np.array(foot.centre)), normal)
-
-
-def _foot(foot: SpaceFoot, centre: np.ndarray, normal: np.ndarray) -> Foot:
-    return Foot(SHAPES[foot.shape], centre, foot.radius, normal, foot.tube)
+    quadric = mirror @ turn @ foot.quadric() @ turn.T @ mirror
+    centre = mirror @ (hip + turn @ np.array(foot.centre))
+    shape = SHAPES[foot.shape]
+    return Part(frame, leg.mass, com, inertia), Foot(shape, centre, foot.radius, normal, foot.tube, quadric)
 
 
 def space_model(space: SpaceDescription, gravity: float, slope: float) -> SpaceModel:
@@ -108,10 +109,15 @@ def foot_bottom(foot: Foot, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarra
     """The foot's lowest point from its frame's origin (slope frame) and the unit vector d from its centre toward it
     (a ring: the direction in its plane most against the normal; a sphere: -z; a point: zero). A torus's lowest
     point is its tube's centre circle's (the ring's) lowered by the tube radius: the tube's section there is a
-    circle in the vertical plane through d, its lowest point straight below its centre."""
+    circle in the vertical plane through d, its lowest point straight below its centre. An ellipsoid's d is not a
+    unit vector but its whole offset -Q z / sqrt(z' Q z) (Q turned with the leg), where the normal is -z."""
     centre = rotation @ foot.centre
     if foot.shape == POINT:
         return centre, np.zeros(3)
+    if foot.shape == ELLIPSOID:
+        q = rotation @ foot.quadric @ rotation.T
+        offset = -q[:, 2] / math.sqrt(q[2, 2])
+        return centre + offset, offset
     if foot.shape == SPHERE:
         return centre - foot.radius * EZ, -EZ
     n = rotation @ foot.normal
@@ -121,7 +127,14 @@ def foot_bottom(foot: Foot, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def bottom_direction_rate(foot: Foot, rotation: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """Time derivative of :func:`foot_bottom`'s d for a foot turning at ``omega`` (zero but for a ring or torus)."""
+    """Time derivative of :func:`foot_bottom`'s d for a foot turning at ``omega`` (zero but for a ring, torus or
+    ellipsoid)."""
+    if foot.shape == ELLIPSOID:
+        q = rotation @ foot.quadric @ rotation.T
+        spin = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
+        q_dot = spin @ q - q @ spin
+        s = math.sqrt(q[2, 2])
+        return -q_dot[:, 2] / s + q[:, 2] * q_dot[2, 2] / (2.0 * s**3)
     if foot.shape not in (RING, TORUS):
         return np.zeros(3)
     n = rotation @ foot.normal
