@@ -8,7 +8,7 @@ CONFIG ?= configs/round_foot_walker.yaml
 TEST_WORKERS ?= auto
 SLOW_WORKERS ?= 2
 
-.PHONY: setup setup-bench run test test-older-cpu validate bench lint format sweep-demo golden docs clean
+.PHONY: setup setup-bench run test test-older-cpu test-slow validate bench lint format sweep-demo golden docs clean
 
 # installed: the package and its test extras; warmed: also the compiled code of the bundled configs' groups
 WARMED := $(VENV)/.warmed
@@ -46,10 +46,13 @@ test-older-cpu: $(WARMED)  ## the fast tier as on an older (AVX2) CPU
 
 # the slow tier in SLOW_WORKERS processes (by module, as the fast tier), then its serial tests alone: those that
 # time themselves or kill processes on deadlines (marked serial)
-validate: $(WARMED)        ## long physics checks: the validation report, then the slow test tier (-m slow)
-	$(BIN)/biped-sim validate
+test-slow: $(WARMED)       ## the slow test tier (-m slow; CI's, where tests/test_validation.py runs biped-sim validate)
 	$(BIN)/python -m pytest -q -n $(SLOW_WORKERS) -m 'slow and not serial'
 	$(BIN)/python -m pytest -q -m 'slow and serial'
+
+validate: $(WARMED)        ## long physics checks: the validation report (results/validation), then the slow test tier
+	$(BIN)/biped-sim validate
+	$(MAKE) --no-print-directory test-slow
 
 bench: $(WARMED)           ## performance benchmark (writes results/bench/)
 	$(BIN)/biped-sim bench

@@ -35,8 +35,8 @@ CONFIG = Path(__file__).resolve().parents[1] / "configs" / "round_foot_walker.ya
 
 @pytest.fixture(scope="module")
 def short_bench() -> dict:
-    """``bench --quick`` (no cold start-up, sweep, compile, basin, fit, uncertainty or MuJoCo rows) on 1 s of walking
-    (two heel strikes), one repeat.
+    """``bench --quick`` (no cold start-up, sweep, compile, basin, space, fit, uncertainty or MuJoCo rows) on 1 s of
+    walking (two heel strikes), one repeat.
 
     About 20 s (45 s on a busy machine): the baseline alone is pure Python, and the fixed-step rows search
     their step size. Slow tier only.

@@ -6,12 +6,15 @@ import copy
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 import pytest
 
 from biped_sim.config import config_from_dict, load_config
 from biped_sim.contact.joint_element import (
     JOINT_ELEMENT_LAWS,
+    JointElements,
+    NoElements,
     element_energy,
     element_parameters,
     element_torque,
@@ -61,6 +64,19 @@ def test_elements_act_equal_and_opposite_on_their_two_bodies() -> None:
     assert force[:3] == pytest.approx([-spring - damper, spring, damper]) and force[:3].sum() == pytest.approx(0.0)
     assert power == pytest.approx(0.7 * 0.25)
     assert elements_energy(y, elements) == pytest.approx(0.5 * 12.0 * 0.1**2)
+
+
+def test_a_walker_without_joint_elements_has_an_elements_record_of_its_own_type() -> None:
+    """No elements is a type (NoElements), on which numba specialises: such a walker compiles none of the elements'
+    code and their kernels are no-ops; a walker with elements has a JointElements record, in both formulations."""
+    plain = build_model(config_from_dict({})).system
+    torso = build_model(load_config(CONFIGS / "torso_walker.yaml")).system
+    assert type(plain.elements) is NoElements and plain.elements.law.shape == (0,)
+    assert type(torso.elements) is JointElements and numba.typeof(torso.elements) != numba.typeof(plain.elements)
+    assert type(tree_system(plain).elements) is NoElements and type(tree_system(torso).elements) is JointElements
+    y, force = np.ones(6), np.ones(3)
+    assert element_torques(y, plain.elements, force) == 0.0 and elements_energy(y, plain.elements) == 0.0
+    assert force.tolist() == [1.0] * 3
 
 
 def test_a_parameter_the_law_does_not_read_is_refused() -> None:

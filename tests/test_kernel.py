@@ -16,7 +16,7 @@ from numba.core.registry import CPUDispatcher
 
 import biped_sim
 from biped_sim.integrate.explicit import advance
-from biped_sim.kernel import PYTHON_ENTRY_SUFFIX, Kernel, kernel, missing_numba_internals, overload_by_type
+from biped_sim.kernel import PYTHON_ENTRY_SUFFIX, Kernel, inlined, kernel, missing_numba_internals, overload_by_type
 
 
 @kernel
@@ -121,6 +121,18 @@ def test_every_cached_engine_function_is_a_kernel_or_inlined() -> None:
             if value.targetoptions.get("inline", "never") != "always":
                 plain.append(f"{info.name}.{name}")
     assert plain == []
+
+
+def test_an_inlined_copy_keeps_the_callees_named_as_calls() -> None:
+    """``inlined(k, calls=...)``: a callee named there stays the kernel itself (an ordinary call), at any depth; the
+    others become inlined copies (numba's inline="always")."""
+    from biped_sim.rigid import tree_kernels
+
+    names = inlined(tree_kernels.tree_rhs, calls=frozenset({"_solve"})).py_func.__globals__
+    assert names["_solve"] is tree_kernels._solve
+    assert names["_light_tier"].py_func.__globals__["_solve"] is tree_kernels._solve  # one level down
+    assert names["_assemble"] is not tree_kernels._assemble
+    assert names["_assemble"].targetoptions["inline"] == "always"
 
 
 def test_a_missing_internal_is_named(monkeypatch: pytest.MonkeyPatch) -> None:

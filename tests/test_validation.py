@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
+import os
 from pathlib import Path
 
 import pytest
 
-from biped_sim.studies.validation import load_rigid_references, run_validation
+from biped_sim.studies.validation import load_rigid_references
+from tests.conftest import invoke
 
 
 def test_rigid_references_carry_their_sources() -> None:
@@ -18,9 +21,17 @@ def test_rigid_references_carry_their_sources() -> None:
 
 
 @pytest.mark.slow
-def test_validation_passes_and_writes_the_report(tmp_path: Path) -> None:
-    checks, extras = run_validation(tmp_path)
-    assert all(c.passed for c in checks), [c for c in checks if not c.passed]
+def test_validate_passes_and_writes_the_report(tmp_path: Path) -> None:
+    """``biped-sim validate`` (CI runs it only here, in ``make test-slow``): every check passes, exit code 0, and
+    the report is written, within 10 minutes of CPU: its wall time, in the report, is whatever else the machine
+    runs (docs/guide/development.md, "Where CI time goes")."""
+    before = os.times()
+    result = invoke("validate", "--out", str(tmp_path))
+    after = os.times()
+    assert result.exit_code == 0, result.output
     report = (tmp_path / "report.md").read_text()
     assert "| check | expected | obtained | tolerance | pass |" in report
-    assert extras["wall_time_s"] < 600
+    written = json.loads((tmp_path / "report.json").read_text())
+    assert written["checks"] and all(check["passed"] for check in written["checks"])
+    assert written["wall_time_s"] > 0.0
+    assert sum(after[:4]) - sum(before[:4]) < 600  # CPU s: user and system, this process and its finished children

@@ -100,7 +100,8 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
         "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
-        "planar explicit (dopri5, with joint stops)", "planar explicit (dopri5)",
+        "planar explicit (dopri5, with joint stops)", "planar explicit (dopri5, with joint elements)",
+        "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
@@ -117,6 +118,7 @@ def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
     assert groups <= set(warmup.BUNDLED_GROUPS)
     assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat"), (*warmup.RIGID, "flat")} <= groups
     assert ("planar", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's knees
+    assert ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS) in groups  # the torso walker's springs
 
 
 def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
@@ -129,6 +131,8 @@ def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> 
     assert {
         ("planar", "explicit", "profile" + warmup.JOINT_STOPS),
         ("minimal", "stiff", "flat" + warmup.JOINT_STOPS),
+        ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS),
+        ("minimal", "explicit", "profile" + warmup.JOINT_STOPS + warmup.JOINT_ELEMENTS),
     } <= groups
     assert ("spatial", "explicit", "flat" + warmup.JOINT_STOPS) not in groups  # the spatial one describes no walker
     assert (*warmup.RIGID, "flat") in groups

@@ -3,7 +3,8 @@
 The walker is drawn from its run directory by :mod:`biped_sim.picture`, at the poses of
 :mod:`biped_sim.measure.pose`: every walker from its description (each body as its segment, its feet as arcs
 or points, its joint stops marked), compliant runs (planar, minimal and spatial, in the sagittal view) and rigid
-runs alike; a compliant run's feet carry their contact force as an arrow. The view follows the hip over the
+runs alike; a compliant run's feet carry their contact force as an arrow. A walker in space is drawn twice, in
+its sagittal view and in 3D axes (:class:`SpaceDrawing`). The view follows the hip over the
 ground's profile. Frames are decimated to ``fps`` frames per second of playback; GIF through Pillow
 (matplotlib's PillowWriter), MP4 through ffmpeg when it is on the PATH.
 """
@@ -15,17 +16,20 @@ import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ArgumentError
 from biped_sim.io.output import check_writable_dir
 from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import run_poses
-from biped_sim.picture import WalkerPicture, draw_ground
+from biped_sim.measure.space_pose import space_poses
+from biped_sim.picture import SpaceWalkerPicture, WalkerPicture, draw_ground, draw_space_ground, space_world
 from biped_sim.plots import figure_style
 
 ARROW_LENGTH_PER_WEIGHT = 0.6  # arrow length, in walker heights, of a force equal to the walker's weight
@@ -108,6 +112,39 @@ class WalkerDrawing:
         self.stamp.set_text(f"t = {run.time[i]:6.3f}{self.time_unit}")
 
 
+class SpaceDrawing:
+    """A walker in space's frame: its sagittal view beside its 3D view, both following the hip, and a time stamp."""
+
+    def __init__(self, run: RunData, fig: Figure) -> None:
+        self.run, self.poses = run, space_poses(run)
+        slope, self.height = run.config.ground.slope, run.config.walker.space.leg_length()  # type: ignore[union-attr]
+        self.sagittal, self.ax3d = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2, projection="3d")
+        self.sagittal.set_aspect("equal")
+        self.sagittal.set_xticks([])
+        self.sagittal.set_yticks([])
+        x = self.poses.hip[:, 0]
+        draw_ground(self.sagittal, run.config, float(x.min()) - 2 * self.height, float(x.max()) + 2 * self.height, 1.0)
+        self.ground: Any = None
+        self.ax3d.set_box_aspect((1.0, 1.0, 1.0))
+        self.ax3d.set_axis_off()
+        self.walker = SpaceWalkerPicture(self.ax3d, self.sagittal, slope)
+        self.stamp = self.sagittal.text(0.03, 0.95, "", transform=self.sagittal.transAxes, va="top", family="monospace")
+
+    def draw(self, i: int) -> None:
+        """Place every artist at sample ``i`` and the views around the hip."""
+        self.walker.place(self.poses, i)
+        slope, (x, _, z), h = self.run.config.ground.slope, self.poses.hip[i], self.height
+        if self.ground is not None:
+            self.ground.remove()
+        self.ground = draw_space_ground(self.ax3d, slope, (x - 0.6 * h, x + 0.6 * h), (z - 0.6 * h, z + 0.6 * h))
+        hip = space_world(slope, self.poses.hip[i])
+        self.sagittal.set_xlim(hip[0] - 0.9 * h, hip[0] + 0.9 * h)
+        self.sagittal.set_ylim(hip[2] - 1.25 * h, hip[2] + 0.3 * h)
+        for axis, centre in zip("xyz", (hip[0], hip[1], hip[2] - 0.5 * h), strict=True):
+            getattr(self.ax3d, f"set_{axis}lim")(centre - 0.75 * h, centre + 0.75 * h)
+        self.stamp.set_text(f"t = {self.run.time[i]:6.3f} s")
+
+
 @contextlib.contextmanager
 def _temporary_beside(out: Path) -> Iterator[Path]:
     """A temporary name beside ``out`` with the same suffix (writers pick the format from it), renamed on success.
@@ -138,10 +175,11 @@ def animate_run(
     check_playback(fps, speed, t_start, t_end)
     frames = frame_indices(run.time, fps, speed, t_start, t_end)
     with figure_style():
-        fig = Figure(figsize=(4.0, 3.2))
+        space = capabilities(run.config.walker.kind).space
+        fig = Figure(figsize=(8.0, 3.2) if space else (4.0, 3.2))
         FigureCanvasAgg(fig)
         fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=0.99)
-        drawing = WalkerDrawing(run, fig)
+        drawing = SpaceDrawing(run, fig) if space else WalkerDrawing(run, fig)
         if out.suffix.lower() == ".mp4":
             writer: animation.AbstractMovieWriter = animation.FFMpegWriter(fps=fps)
         else:

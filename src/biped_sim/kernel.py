@@ -145,18 +145,20 @@ def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable
     overload(generic, jit_options=kernel_options(), **({"inline": "always"} if inline else {}))(typer)
 
 
-def inlined(kernel: Dispatcher) -> Dispatcher:
-    """The compiled ``kernel`` (same source) made to be inlined where it is called, with its compiled callees.
+def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatcher:
+    """The compiled ``kernel`` (same source) made to be inlined where it is called, with its compiled callees but
+    those named in ``calls`` (at any depth), which stay ordinary calls.
 
     A call of an ordinary kernel passes every array as seven machine words, and numba adds reference counts
-    around it; a copy inlined (numba's ``inline="always"``) has neither. The copy runs the kernel's own code
-    object, so each equation keeps one source.
+    around it; a copy inlined (numba's ``inline="always"``) has neither, but numba types and lowers it again at
+    every place it is inlined: a large callee called once per evaluation is cheaper called. The copy runs the
+    kernel's own code object, so each equation keeps one source.
     """
     function = kernel.py_func
     names = dict(function.__globals__)
     for name in function.__code__.co_names:
-        if isinstance(names.get(name), Dispatcher):
-            names[name] = inlined(names[name])
+        if isinstance(names.get(name), Dispatcher) and name not in calls:
+            names[name] = inlined(names[name], calls)
     code = FunctionType(function.__code__, names, function.__name__, function.__defaults__, function.__closure__)
     return njit(inline="always")(code)
 

@@ -5,12 +5,16 @@ The one drawing of a walker, of any description and either dynamics, shared by t
 segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as sectors of their radius about
 the body's axis (a rocker: the arc joined to its centre) or as dots (point feet), the hip as a black dot, and
 each joint stop as a square at its joint, filled when the joint is at or past its stop. The scene is drawn in the
-world frame: the slope frame turned by the slope angle, so that the ground visibly descends.
+world frame: the slope frame turned by the slope angle, so that the ground visibly descends. A walker in space
+(:class:`SpaceWalkerPicture`) is drawn in matplotlib's 3D axes (x downhill, y to the walker's left, z up) and, on
+2D axes beside them, in its sagittal view: each leg from the hinge to its hip point, its centre of mass and its
+foot centre, each foot its circle (:mod:`biped_sim.measure.space_pose`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -18,7 +22,9 @@ from matplotlib.lines import Line2D
 
 from biped_sim.config import Config
 from biped_sim.contact.profile import profile_arrays, profile_outline
+from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import Pose, Skeleton
+from biped_sim.measure.space_pose import SpacePoses, space_poses
 
 FOOT_ARC_HALF_ANGLE = 0.8  # rad of foot arc drawn on each side of the body's axis
 OFF_LEG_COLOUR = "0.35"
@@ -85,3 +91,63 @@ class WalkerPicture:
         self._set(self.hip, pose.hip)
         self._set(self.stops_free, pose.joints[~pose.engaged])
         self._set(self.stops_engaged, pose.joints[pose.engaged])
+
+
+def space_world(slope: float, points: np.ndarray) -> np.ndarray:
+    """(..., 3) slope-frame points (x downhill, y normal, z right) in the 3D axes' frame (x, left, up), the slope
+    turned so that the ground descends."""
+    world = points[..., :2] @ to_world(slope).T
+    return np.stack([world[..., 0], -points[..., 2], world[..., 1]], axis=-1)
+
+
+class SpaceWalkerPicture:
+    """The artists of a walker in space on 3D axes (and its sagittal view on 2D ones), placed by :meth:`place`."""
+
+    def __init__(self, ax3d: Axes, sagittal: Axes | None, slope: float, alpha: float = 1.0, lw: float = 2.0) -> None:
+        self.slope, self.sagittal = slope, sagittal
+        style = {"alpha": alpha, "linewidth": lw, "solid_capstyle": "round"}
+        ax3d.computed_zorder = False  # type: ignore[attr-defined]  # the walker over the ground, always
+        self.lines3d = [ax3d.plot([], [], [], color=f"C{k % 2}", zorder=2, **style)[0] for k in range(4)]
+        self.lines2d = [sagittal.plot([], [], color=f"C{k % 2}", **style)[0] for k in range(4)] if sagittal else []
+
+    def place(self, poses: SpacePoses, i: int) -> None:
+        """Every artist at sample ``i`` of ``poses``: each leg's polyline, then each foot's circle."""
+        shapes = [poses.legs[i, 0], poses.legs[i, 1], poses.feet[i, 0], poses.feet[i, 1]]
+        for k, points in enumerate(shapes):
+            world = space_world(self.slope, points)
+            self.lines3d[k].set_data_3d(world[:, 0], world[:, 1], world[:, 2])  # type: ignore[attr-defined]
+            if self.lines2d:
+                self.lines2d[k].set_data(world[:, 0], world[:, 2])
+
+
+def draw_space_ground(ax3d: Axes, slope: float, x: tuple[float, float], z: tuple[float, float]) -> Any:
+    """The slope plane over x (downhill) and z (lateral, to the right) ranges, as a pale patch on the 3D axes (3D
+    axes do not clip: the patch is the view's extent); returns its artist."""
+    corners = np.array([[x[0], 0.0, z[0]], [x[1], 0.0, z[0]], [x[1], 0.0, z[1]], [x[0], 0.0, z[1]]])
+    world = space_world(slope, corners)
+    grid = world[[0, 1, 3, 2]].reshape(2, 2, 3)
+    return ax3d.plot_surface(grid[..., 0], grid[..., 1], grid[..., 2], color="0.85", zorder=0)  # type: ignore
+
+
+def draw_space_walker(sagittal: Axes, ax3d: Axes, run: RunData, samples: np.ndarray) -> None:
+    """A walker in space at ``samples`` of ``run`` (the earlier paler): its sagittal view over the ground on
+    ``sagittal``, its 3D view over the slope plane on ``ax3d``."""
+    poses, slope = space_poses(run), run.config.ground.slope
+    for i, alpha in zip(samples, np.linspace(0.3, 1.0, len(samples)), strict=True):
+        SpaceWalkerPicture(ax3d, sagittal, slope, float(alpha), 1.2).place(poses, int(i))
+    points = np.concatenate([poses.legs[samples].reshape(-1, 3), poses.feet[samples].reshape(-1, 3)])
+    low, high = points.min(axis=0), points.max(axis=0)
+    reach = float(np.max(high - low))
+    draw_ground(sagittal, run.config, float(low[0]) - 0.2 * reach, float(high[0]) + 0.2 * reach, 0.1 * reach)
+    draw_space_ground(ax3d, slope, (low[0] - 0.2 * reach, high[0] + 0.2 * reach), (low[2] - 0.2 * reach,
+                      high[2] + 0.2 * reach))  # fmt: skip
+    sagittal.set_aspect("equal")
+    sagittal.axis("off")
+    sagittal.relim()  # the walker's lines were placed after they were made
+    sagittal.autoscale_view()
+    world = space_world(slope, points)
+    for axis, k in zip("xyz", range(3), strict=True):
+        centre = 0.5 * (world[:, k].min() + world[:, k].max())
+        getattr(ax3d, f"set_{axis}lim")(centre - 0.6 * reach, centre + 0.6 * reach)
+    ax3d.set_box_aspect((1.0, 1.0, 1.0))  # type: ignore[arg-type]
+    ax3d.set_axis_off()

@@ -23,11 +23,12 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.io.atomic import write_with
 from biped_sim.io.output import OutputKind, staged_directory
 from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import run_poses
-from biped_sim.picture import WalkerPicture, draw_ground
+from biped_sim.picture import WalkerPicture, draw_ground, draw_space_walker
 from biped_sim.studies.compare import Comparison
 
 COLUMN_WIDTH_IN = 3.5
@@ -299,11 +300,14 @@ def phase_portrait_figure(series: Series) -> Figure:
 def walker_figure(run: RunData) -> Figure:
     """The walker at :data:`WALKER_POSES` instants of a step in the middle of the run (the earlier paler) over its
     ground (the whole run if it has no complete step), drawn from its description (:mod:`biped_sim.picture`)."""
-    poses = run_poses(run)
     strikes, k = run.steps["strike_time"], middle_strike(run)
     t0, t1 = (strikes[k], strikes[k + 1]) if k is not None and k + 1 < len(strikes) else (run.time[0], run.time[-1])
     samples = np.unique(np.searchsorted(run.time, np.linspace(t0, t1, WALKER_POSES)).clip(0, len(run.time) - 1))
     fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.2), layout="constrained")
+    if capabilities(run.config.walker.kind).space:  # a walker in space: its sagittal and 3D views
+        draw_space_walker(fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2, projection="3d"), run, samples)
+        return fig
+    poses = run_poses(run)
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     ax.axis("off")

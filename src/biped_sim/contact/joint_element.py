@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import literal_unroll
 
-from biped_sim.contact.registry import registered_functions
+from biped_sim.contact.registry import by_type, registered_functions
 from biped_sim.contact.stop import (
     CHILD_ANGLE,
     CHILD_RATE,
@@ -142,11 +142,23 @@ class JointElements(NamedTuple):
     params: np.ndarray  # (ne, N_ELEMENT_PARAMS): element_parameters
 
 
+class NoElements(JointElements):
+    """The joint elements of a walker without any: a :class:`JointElements` record of no rows, of a type of its own.
+
+    As :class:`~biped_sim.contact.stop.NoStops`: the kernels over the elements (:func:`element_torques`,
+    :func:`elements_energy`) resolve at compile time from the record's type to no-ops, so that a walker without
+    elements compiles none of their code or laws; :func:`make_elements` of no rows returns one.
+    """
+
+    __slots__ = ()
+
+
 def make_elements(index: np.ndarray, law: np.ndarray, params: np.ndarray) -> JointElements:
-    """A :class:`JointElements` record with the kernels' dtypes and shapes (any number of rows, 0 included)."""
-    return JointElements(
+    """A :class:`JointElements` record with the kernels' dtypes and shapes (a :class:`NoElements` of no rows)."""
+    law = np.asarray(law, dtype=np.int64).reshape(-1)
+    return (JointElements if law.shape[0] else NoElements)(
         np.asarray(index, dtype=np.int64).reshape(-1, 4),
-        np.asarray(law, dtype=np.int64).reshape(-1),
+        law,
         np.asarray(params, dtype=np.float64).reshape(-1, N_ELEMENT_PARAMS),
     )
 
@@ -164,9 +176,7 @@ def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[floa
 
 
 @kernel
-def element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
-    """Add every element's torques to the generalized forces ``force`` (indexed as the angles in y) and return
-    the power they dissipate (W_element's rate)."""
+def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
     power = 0.0
     for e in range(elements.law.shape[0]):
         theta, theta_dot = relative_angle(y, elements, e)
@@ -179,12 +189,34 @@ def element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -
 
 
 @kernel
-def elements_energy(y: np.ndarray, elements: JointElements) -> float:
-    """Energy stored in every element of ``elements``."""
+def _no_element_torques(y: np.ndarray, elements: NoElements, force: np.ndarray) -> float:
+    return 0.0
+
+
+element_torques = by_type(
+    "element_torques", "elements", {JointElements: _element_torques, NoElements: _no_element_torques}
+)
+element_torques.__doc__ = """Add every element's torques to the generalized forces ``force`` (indexed as the angles
+in y) and return the power they dissipate (W_element's rate; none for a :class:`NoElements`)."""
+
+
+@kernel
+def _elements_energy(y: np.ndarray, elements: JointElements) -> float:
     energy = 0.0
     for e in range(elements.law.shape[0]):
         energy += element_energy(elements.law[e], relative_angle(y, elements, e)[0], elements.params[e])
     return energy
+
+
+@kernel
+def _no_elements_energy(y: np.ndarray, elements: NoElements) -> float:
+    return 0.0
+
+
+elements_energy = by_type(
+    "elements_energy", "elements", {JointElements: _elements_energy, NoElements: _no_elements_energy}
+)
+elements_energy.__doc__ = """Energy stored in every element of ``elements`` (none in a :class:`NoElements`)."""
 
 
 @kernel

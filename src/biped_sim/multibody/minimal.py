@@ -44,7 +44,6 @@ from biped_sim.contact.response import (
     NO_BODY_FALLS,
     STANDING,
     arc_contact,
-    arc_energy,
     arc_forces,
     body_fall,
     ground_forces,
@@ -52,7 +51,6 @@ from biped_sim.contact.response import (
 )
 from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import inlined, kernel
-from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.formulation import Formulation, Measures
 from biped_sim.multibody.planar import CONTACT_NAMES, PlanarSystem
 from biped_sim.multibody.tree import (
@@ -116,7 +114,7 @@ class Workspace(NamedTuple):
     """Preallocated buffers for one right-hand-side evaluation (one array: each array costs reference counts)."""
 
     # a star: (nb + nf, N_COLUMNS), a row per body, then a row per foot; the hip's Q_h are local variables.
-    # a tree: (nb + n, max(N_TREE_COLUMNS, n + 1)), a row per body, then [M | Q] (n = len(q))
+    # a tree: (nb + n, max(N_TREE_COLUMNS, n + 3)), a row per body, then [M | Q | J] (n = len(q), J a body's Jacobian)
     table: np.ndarray
 
 
@@ -126,7 +124,7 @@ def make_workspace(system: MinimalSystem) -> Workspace:
     if system.star:
         return Workspace(np.zeros((nb + system.foot_body.shape[0], N_COLUMNS)))
     n = HIP + nb
-    return Workspace(np.zeros((nb + n, max(N_TREE_COLUMNS, n + 1))))
+    return Workspace(np.zeros((nb + n, max(N_TREE_COLUMNS, n + 3))))
 
 
 # the contact response is written once for every formulation as ordinary kernels; inlined here, the call and the
@@ -326,38 +324,10 @@ def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work:
 
 
 @kernel
-def star_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, topology: Star) -> tuple[float, float, float]:
-    """:func:`mechanical_energy` of a star: each centre of mass from the hip."""
-    nb = system.body_mass.shape[0]
-    n = HIP + nb
-    kinetic = 0.0
-    potential = 0.0
-    for b in range(nb):
-        m, om = system.body_mass[b], y[n + HIP + b]
-        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
-        ax = c * system.body_com[b, 0] - s * system.body_com[b, 1]
-        ay = s * system.body_com[b, 0] + c * system.body_com[b, 1]
-        vx, vy = y[n] - om * ay, y[n + 1] + om * ax
-        gx, gy = system.gravity[0], system.gravity[1]
-        body_kinetic, body_potential = body_energy(m, system.body_inertia[b], vx, vy, om, y[0] + ax, y[1] + ay, gx, gy)
-        kinetic += body_kinetic
-        potential += body_potential
-    elastic = 0.0
-    for i in range(system.foot_body.shape[0]):
-        b, fx, fy = system.foot_body[i], system.foot_center[i, 0], system.foot_center[i, 1]
-        c, s = math.cos(y[HIP + b]), math.sin(y[HIP + b])
-        cx, cy = arc_centre(y, c, s, fx, fy)
-        elastic += arc_energy(system, modes, i, cx, cy, system.foot_radius[i], system.ground)
-    return kinetic, potential, elastic
-
-
-_energy_of = by_type("mechanical_energy", "topology", {Star: star_energy, Tree: tree_energy})
-
-
-@kernel
 def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
-    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops."""
-    return _energy_of(y, system, modes, system.topology)
+    """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops (a
+    star's too by the tree's sum: its origins are the hip)."""
+    return tree_energy(y, system, modes)
 
 
 @kernel

@@ -4,7 +4,8 @@ star's arrow solve and the formulation record; its module docstring the equation
 The kinematics go down the tree, parents first (:func:`tree_kinematics`: each body's origin, its velocity
 and the velocity products of its acceleration, into the workspace table's body rows); a force on a body
 enters the generalized forces through the body's Jacobian, J^T F (:func:`add_generalized_force`); the mass
-matrix is sum_b m_b J_b^T J_b + J_b e_b e_b^T (:func:`tree_mass_matrix`), solved by Cholesky in
+matrix is sum_b m_b J_b^T J_b + J_b e_b e_b^T, each body's terms and its gravity's by the rigid step map's
+kernel (:func:`tree_mass_matrix`, :mod:`~biped_sim.multibody.bodies`), solved by Cholesky in
 :func:`tree_rhs`. ``system`` is a :class:`~biped_sim.multibody.minimal.MinimalSystem` (not imported here:
 that module imports this one). :func:`tree_origins` reads the tree of a planar absolute-coordinate system.
 """
@@ -20,7 +21,7 @@ from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
 from biped_sim.kernel import kernel
-from biped_sim.multibody.bodies import body_energy
+from biped_sim.multibody.bodies import add_body_terms, body_energy, mirror_upper
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
 
@@ -29,7 +30,7 @@ HIP = 2  # the root's origin (x_o, y_o), the hip, comes first in q
 
 class Star(NamedTuple):
     """A system's ``topology``: every body hinged at the root's origin, no joint stops (the arrow solve). No arrays:
-    its type alone selects the compiled code (as the ground's), so a star compiles none of the tree's."""
+    its type alone selects the compiled code (as the ground's), so a star compiles none of the tree's solve."""
 
 
 class Tree(NamedTuple):
@@ -135,31 +136,41 @@ def add_generalized_force(
 
 
 @kernel
-def tree_mass_matrix(system: tuple, table: np.ndarray, mass: np.ndarray) -> None:
-    """M(q) = sum_b m_b J_b^T J_b + J_b e_b e_b^T into ``mass`` (n x n), from the body rows of ``table``."""
-    parent = system.body_parent
+def body_jacobian(table: np.ndarray, parent: np.ndarray, b: int, jacobian: np.ndarray) -> None:
+    """Body b's centre-of-mass Jacobian into ``jacobian`` (row k: column k of J_b): the identity on the base,
+    perp(A(phi_b) c_b) in its own angle's column, perp(A(phi_p) s_j) in each ancestor p's (s_j: the joint of p's
+    child on the path), zero elsewhere; from the body rows of ``table``."""
+    for k in range(jacobian.shape[0]):
+        jacobian[k, 0] = jacobian[k, 1] = 0.0
+    jacobian[0, 0] = jacobian[1, 1] = 1.0
+    k, kx, ky = b, table[b, T_ARM_X], table[b, T_ARM_Y]  # the levers of b's Jacobian, from b up to the root
+    while k >= 0:
+        jacobian[HIP + k, 0], jacobian[HIP + k, 1] = -ky, kx
+        kx, ky, k = table[k, JX], table[k, JY], parent[k]
+
+
+@kernel
+def tree_mass_matrix(
+    y: np.ndarray, system: tuple, table: np.ndarray, mass: np.ndarray, q: np.ndarray, jacobian: np.ndarray,
+    with_forces: bool,
+) -> None:  # fmt: skip
+    """M(q) = sum_b m_b J_b^T J_b + J_b e_b e_b^T into ``mass`` (n x n) and, ``with_forces``, each body's gravity
+    and velocity products at its centre of mass, J_b^T m_b (g - u_b + omega_b^2 a_b), added to ``q``
+    (:func:`~biped_sim.multibody.bodies.add_body_terms`, as the rigid step map's), from the body rows of
+    ``table``; ``jacobian`` (n x 2) holds a body's Jacobian meanwhile."""
     nb = system.body_mass.shape[0]
     n = HIP + nb
     for i in range(n):
         for k in range(n):
             mass[i, k] = 0.0
+    gx, gy = system.gravity[0], system.gravity[1]
     for b in range(nb):
-        m = system.body_mass[b]
-        mass[0, 0] += m
-        mass[1, 1] += m
-        mass[HIP + b, HIP + b] += system.body_inertia[b]
-        k, kx, ky = b, table[b, T_ARM_X], table[b, T_ARM_Y]  # the levers of b's Jacobian, from b up to the root
-        while k >= 0:
-            mass[0, HIP + k] -= m * ky
-            mass[1, HIP + k] += m * kx
-            l, lx, ly = b, table[b, T_ARM_X], table[b, T_ARM_Y]
-            while l >= 0:
-                mass[HIP + k, HIP + l] += m * (kx * lx + ky * ly)
-                lx, ly, l = table[l, JX], table[l, JY], parent[l]
-            kx, ky, k = table[k, JX], table[k, JY], parent[k]
-    for k in range(HIP, n):
-        mass[k, 0] = mass[0, k]
-        mass[k, 1] = mass[1, k]
+        m, om, ax, ay = system.body_mass[b], y[n + HIP + b], table[b, T_ARM_X], table[b, T_ARM_Y]
+        fx = m * (gx - table[b, UX] + om * om * ax)
+        fy = m * (gy - table[b, UY] + om * om * ay)
+        body_jacobian(table, system.body_parent, b, jacobian)
+        add_body_terms(mass, q, jacobian, m, system.body_inertia[b], HIP + b, fx, fy, with_forces)
+    mirror_upper(mass, n)
 
 
 @kernel
@@ -200,17 +211,11 @@ def tree_rhs(
     nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
     n = HIP + nb
     tree_kinematics(y, system, table)
-    mass, q = table[nb : nb + n, :n], table[nb : nb + n, n]
-    tree_mass_matrix(system, table, mass)
+    mass, q, jacobian = table[nb : nb + n, :n], table[nb : nb + n, n], table[nb : nb + n, n + 1 : n + 3]
     for k in range(n):
         q[k] = 0.0
         ydot[k] = y[n + k]
-    gx, gy = system.gravity[0], system.gravity[1]
-    for b in range(nb):  # gravity and velocity products at the centre of mass: m (g - u_b + omega_b^2 a_b)
-        m, om, ax, ay = system.body_mass[b], y[n + HIP + b], table[b, T_ARM_X], table[b, T_ARM_Y]
-        fx = m * (gx - table[b, UX] + om * om * ax)
-        fy = m * (gy - table[b, UY] + om * om * ay)
-        add_generalized_force(table, system.body_parent, q, b, fx, fy, ax * fy - ay * fx)
+    tree_mass_matrix(y, system, table, mass, q, jacobian, True)
     w_normal, w_friction = _tree_foot_forces(y, system, modes, table, q, ydot)
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
@@ -221,8 +226,9 @@ def tree_rhs(
 
 
 @kernel
-def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray, topology: Tree) -> tuple[float, float, float]:
-    """:func:`mechanical_energy` of a tree: each body's centre of mass from its origin (:func:`body_origin`)."""
+def tree_energy(y: np.ndarray, system: tuple, modes: np.ndarray) -> tuple[float, float, float]:
+    """:func:`mechanical_energy` of any tree, a star's too: each body's centre of mass from its origin
+    (:func:`body_origin`; a star's is the hip)."""
     n = HIP + system.body_mass.shape[0]
     kinetic = potential = 0.0
     for b in range(system.body_mass.shape[0]):
@@ -285,10 +291,9 @@ def hip_impulse(y: np.ndarray, system: tuple, impulse: np.ndarray) -> np.ndarray
     """
     nb = system.body_mass.shape[0]
     n = HIP + nb
-    table, mass = np.zeros((nb, N_TREE_COLUMNS)), np.zeros((n, n))
+    table, mass, generalized = np.zeros((nb, N_TREE_COLUMNS)), np.zeros((n, n)), np.zeros(n)
     tree_kinematics(y, system, table)
-    tree_mass_matrix(system, table, mass)
-    generalized = np.zeros(n)
+    tree_mass_matrix(y, system, table, mass, generalized, np.zeros((n, 2)), False)
     generalized[:HIP] = impulse[:HIP]
     out = np.array(y, dtype=np.float64)
     out[n : 2 * n] += np.linalg.solve(mass, generalized)

@@ -180,7 +180,8 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     riser, ends the step TRIPPED."""
     p, plan = cw.params, cw.plan
     copy_into(x_start, x_minus)
-    cw.record.counts[:] = 0
+    for i in range(cw.record.counts.shape[0]):  # not a slice assignment: its shape check's message compiles
+        cw.record.counts[i] = 0
     t = 0.0
     begin_step(p)
     last = n_phases(p) - 1

@@ -36,8 +36,11 @@ def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
 
 
 # the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
-# its arguments' words and reference counts at every evaluation
-_rhs, _guard, _fall = inlined(tree_rhs), inlined(tree_guard), inlined(tree_fall)
+# its arguments' words and reference counts at every evaluation; the flow's solve (inlined twice, with the light
+# legs' tier) and the joint elements stay one call each per evaluation: their inlined copies cost more compile time
+# than their calls cost run time (docs/architecture.md, "Compiling less")
+_rhs = inlined(tree_rhs, calls=frozenset({"_solve", "element_forces"}))
+_guard, _fall = inlined(tree_guard), inlined(tree_fall)
 
 
 @kernel

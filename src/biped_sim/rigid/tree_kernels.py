@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.kernel import kernel
-from biped_sim.multibody.bodies import body_energy
+from biped_sim.multibody.bodies import add_body_terms, body_energy, mirror_upper
 from biped_sim.rigid.tree_elements import element_forces, tree_element_energy
 from biped_sim.rigid.tree_layout import (
     P_GX,
@@ -45,6 +45,7 @@ from biped_sim.rigid.tree_layout import (
     T_NLOCK,
     T_NPHASE,
     T_NPTS,
+    block,
     coords,
     fill_trig,
     jacobian_column,
@@ -87,12 +88,14 @@ def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> 
 @kernel
 def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool, release: bool) -> int:
     """Write M of table t and the active lock rows into the (m x m) matrix at p[w:] and, for the ``flow``, the
-    generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into p[w + m m:]; returns the rows used (the workspace's
-    last 2 n floats hold a point's Jacobian meanwhile; the angles cached by :func:`fill_trig`). ``release``: the
-    locks marked RELEASED are left free (a heel strike's trailing knee)."""
+    generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into p[w + m m:] (each row's terms by
+    :func:`~biped_sim.multibody.bodies.add_body_terms`, as the compliant tree's); returns the rows used (the
+    workspace's last 2 n floats hold a row's Jacobian meanwhile; the angles cached by :func:`fill_trig`).
+    ``release``: the locks marked RELEASED are left free (a heel strike's trailing knee)."""
     n = coords(p)
     r = w + m * m
     jw = r + m + 2 * (int(p[T_NPTS]) + int(p[T_NLIGHT]))
+    matrix, forces, jacobian = block(p, w, m, m), p[r : r + m], block(p, jw, n, 2)
     gx, gy = p[P_GX], p[P_GY]
     for a in range(m * m):
         p[w + a] = 0.0
@@ -101,28 +104,20 @@ def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool,
     for i in range(int(p[T_NPTS])):
         o = row_offset(p, t, i)
         mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
-        p[w + own * m + own] += inertia
-        if mass == 0.0:
-            continue
-        bx, by = _row_jacobian(p, t, o + ROW_HEAD, qd, jw)
-        fx, fy = mass * (gx - bx), mass * (gy - by)
-        for k in range(n):
-            jkx, jky = p[jw + 2 * k], p[jw + 2 * k + 1]
-            if flow:
-                p[r + k] += jkx * fx + jky * fy
-            for col in range(k, n):
-                p[w + k * m + col] += mass * (jkx * p[jw + 2 * col] + jky * p[jw + 2 * col + 1])
-    for k in range(n):
-        for col in range(k + 1, n):
-            p[w + col * m + k] = p[w + k * m + col]
+        fx = fy = 0.0
+        if mass != 0.0:
+            bx, by = _row_jacobian(p, t, o + ROW_HEAD, qd, jw)
+            fx, fy = mass * (gx - bx), mass * (gy - by)
+        add_body_terms(matrix, forces, jacobian, mass, inertia, own, fx, fy, flow)
+    mirror_upper(matrix, n)
     used = n
     for j in range(int(p[T_NLOCK])):
         o = lock_offset(p, j)
         active = p[o + 4]
         if active != 0.0 and not (release and active == RELEASED):
             parent, child = int(p[o]), int(p[o + 1])
-            p[w + used * m + parent] = p[w + parent * m + used] = -1.0
-            p[w + used * m + child] = p[w + child * m + used] = 1.0
+            matrix[used, parent] = matrix[parent, used] = -1.0
+            matrix[used, child] = matrix[child, used] = 1.0
             used += 1
     return used
 
@@ -383,7 +378,8 @@ def after_phase(p: np.ndarray, phase: int, x: np.ndarray, out: np.ndarray) -> No
     p[lo + 4] = 1.0
     x[int(p[lo + 1])] = x[int(p[lo])] + p[lo + 2]
     tree_impact(p, x, False, out)
-    x[:] = out
+    for i in range(x.shape[0]):  # not a slice assignment: its shape check's message compiles
+        x[i] = out[i]
 
 
 @kernel

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.lib.stride_tricks import as_strided
 
 from biped_sim.contact.joint_element import N_ELEMENT_PARAMS
 from biped_sim.kernel import kernel
@@ -46,6 +47,13 @@ def layout_offsets(n: int, n_points: int, n_light: int, n_lock: int, n_phase: in
     m = n + n_lock
     offsets[T_TRIG] = offsets[T_WORK] + m * m + m + 2 * (n_points + n_light) + 3 * n
     return offsets
+
+
+@kernel
+def block(p: np.ndarray, at: int, rows: int, cols: int) -> np.ndarray:
+    """The (rows x cols) row-major block of p that starts at p[at], as a 2-D view: no copy, and none of
+    ``reshape``'s checks (an out-of-line call at every evaluation)."""
+    return as_strided(p[at:], shape=(rows, cols), strides=(cols * p.strides[0], p.strides[0]))
 
 
 @kernel

@@ -3,7 +3,8 @@
 A compliant run needs the compiled code of its group only: its formulation's kernels and its
 integrator family's loop (every explicit method shares one compiled loop, Radau and BDF share the
 scipy driver's compiled right-hand side), specialised for its ground (the flat ground, or a profile) and for
-whether its walker has joint stops (a described walker's; one without compiles none of their code).
+whether its walker has joint stops and whether it has joint elements (a described walker's; one without compiles
+none of their code).
 Every contact law is part of each group's kernels (the laws are dispatched at run time). Every rigid run
 shares one group, the compiled step map (its walker is data), warmed by one step.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
@@ -36,12 +37,15 @@ WARM_UP_TIME = 0.001  # [s] simulated by a warm-up run
 WARM_UP_PROFILE = {"kind": "steps", "steps": [{"at": 100.0, "height": -0.01}]}
 GROUNDS = ("flat", "profile")
 JOINT_STOPS = " with joint stops"  # a group's ground ends with it when its walkers have joint stops
+JOINT_ELEMENTS = " with joint elements"  # ... with this when they have joint elements (after JOINT_STOPS: both)
+JOINTS = ("", JOINT_STOPS, JOINT_ELEMENTS, JOINT_STOPS + JOINT_ELEMENTS)
 RIGID = ("rigid", "step map")  # the group of every rigid run: one compiled step map for every walker
 # (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
 # (the costliest first: the parallel warm-up ends sooner)
 BUNDLED_GROUPS = (
     (*RIGID, "flat"), ("spatial", "explicit", "flat"), ("planar", "explicit", "profile"),
-    ("planar", "explicit", "flat" + JOINT_STOPS), ("planar", "explicit", "flat"),
+    ("planar", "explicit", "flat" + JOINT_STOPS), ("planar", "explicit", "flat" + JOINT_ELEMENTS),
+    ("planar", "explicit", "flat"),
 )  # fmt: skip
 _WARMED: set[tuple[str, str, str]] = set()
 
@@ -52,7 +56,7 @@ class WarmUp:
 
     formulation: str  # or 'rigid'
     family: str  # 'explicit' or 'stiff' (or 'step map')
-    ground: str  # 'flat' or 'profile', then JOINT_STOPS for walkers with joint stops
+    ground: str  # 'flat' or 'profile', then JOINT_STOPS, JOINT_ELEMENTS for walkers with joint stops, elements
     method: str  # the integrator the group was warmed with
     compiled: tuple[str, ...]
     seconds: float
@@ -60,8 +64,8 @@ class WarmUp:
     def line(self) -> str:
         """One line for the terminal."""
         how = f"compiled {len(self.compiled)} functions" if self.compiled else "loaded from the cache"
-        plain = self.ground.removesuffix(JOINT_STOPS)
-        ground = ("" if plain == "flat" else f", on a {plain}") + (", with joint stops" if plain != self.ground else "")
+        plain, *joints = self.ground.split(" with ")
+        ground = ("" if plain == "flat" else f", on a {plain}") + "".join(f", with {joint}" for joint in joints)
         method = "" if (self.formulation, self.family) == RIGID else f" ({self.method}{ground})"
         return f"{self.formulation} {self.family}{method}: {how} in {self.seconds:.1f} s"
 
@@ -82,12 +86,20 @@ def has_joint_stops(config: Config) -> bool:
     return description is not None and any(joint.stops for joint in description.joints)
 
 
+def has_joint_elements(config: Config) -> bool:
+    """Whether the walker has joint elements (only a described one may): its kernels then compile their code."""
+    description = config.walker.description
+    return description is not None and any(joint.elements for joint in description.joints)
+
+
 def group_of(config: Config) -> tuple[str, str, str]:
-    """A run's group: (formulation, integrator family, ground, ending with JOINT_STOPS for a walker that has them);
+    """A run's group: (formulation, integrator family, ground, then JOINT_STOPS and JOINT_ELEMENTS for a walker that
+    has them);
     a rigid run's is ('rigid', 'step map', ground): the step map is one for every walker."""
     if config.dynamics == "rigid":
         return (*RIGID, ground_of(config))
-    ground = ground_of(config) + (JOINT_STOPS if has_joint_stops(config) else "")
+    joints = (JOINT_STOPS if has_joint_stops(config) else "") + (JOINT_ELEMENTS if has_joint_elements(config) else "")
+    ground = ground_of(config) + joints
     return config.formulation.kind, integrator_family(config.integrator.method), ground
 
 
@@ -146,29 +158,32 @@ def group_config(formulation: str, family: str, ground: str) -> Config:
     else:
         method = Config().integrator.method if family == "explicit" else STIFF_METHODS[0]
         values = {"formulation.kind": formulation, "integrator.method": method}
-    if ground.removesuffix(JOINT_STOPS) == "profile":
+    if ground.split(" with ")[0] == "profile":
         values["ground.profile"] = WARM_UP_PROFILE
     config = derive(Config(), values)  # the schema's defaults
-    return _with_a_joint_stop(config) if ground.endswith(JOINT_STOPS) else config
+    return _with_joints(config, JOINT_STOPS in ground, JOINT_ELEMENTS in ground) if " with " in ground else config
 
 
-def _with_a_joint_stop(config: Config) -> Config:
-    """``config``'s walker described, with a stop at its hip that its warm-up never reaches (ConfigError under a
-    formulation that does not take a described walker)."""
+def _with_joints(config: Config, stop: bool, element: bool) -> Config:
+    """``config``'s walker described, with a stop at its hip that its warm-up never reaches and (or) a hip spring
+    (ConfigError under a formulation that does not take a described walker)."""
     description = describe(config).model_dump()
-    description["joints"][0]["stops"] = [{"side": "upper", "angle": 1.0}]
+    if stop:
+        description["joints"][0]["stops"] = [{"side": "upper", "angle": 1.0}]
+    if element:
+        description["joints"][0]["elements"] = [{"name": "spring", "law": "linear_spring", "stiffness": 1.0}]
     return derive(config, {"walker": {"kind": "description", "description": description}})
 
 
 def warm_up_configs(every_group: bool = False) -> list[Config]:
     """The default walker in each of ``BUNDLED_GROUPS``; with ``every_group``, in every formulation x integrator
-    family x ground (with and without joint stops) there is, and rigid."""
+    family x ground (with and without joint stops and elements) there is, and rigid."""
     if not every_group:
         return [group_config(*group) for group in BUNDLED_GROUPS]
     configs = [group_config(*RIGID, "flat")]
     for kind in get_args(FormulationConfig.model_fields["kind"].annotation):
         for family in ("explicit", "stiff"):
-            for ground in (*GROUNDS, *(ground + JOINT_STOPS for ground in GROUNDS)):
+            for ground in (ground + joints for ground in GROUNDS for joints in JOINTS):
                 try:
                     configs.append(group_config(kind, family, ground))
                 except ConfigError:  # e.g. the spatial formulation on a profile: not modelled, nothing to compile

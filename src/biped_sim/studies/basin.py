@@ -44,6 +44,7 @@ import numpy as np
 
 from biped_sim.config import LEG_KEYS, Config, derive
 from biped_sim.config.schema import MAX_STEPS
+from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities, require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
@@ -96,7 +97,7 @@ def parse_axis(name: str, text: str) -> GridAxis:
     key, sep, rest = text.partition("=")
     key = key.strip().removeprefix(KEY_PREFIX)
     parameter = key.startswith(PARAMETER_PREFIX) and len(key) > len(PARAMETER_PREFIX)
-    if not sep or not (parameter or key.endswith(("_angle", "_rate"))):
+    if not sep or not (parameter or key.endswith(("_angle", "_rate")) or key in SPACE_STATE_KEYS):
         raise ArgumentError(
             name,
             f"expected KEY=LO:HI:N with KEY a key of {KEY_PREFIX[:-1]} ({', '.join(LEG_KEYS)}, ...) or "
@@ -123,7 +124,7 @@ class BasinSpec:
     tolerance: float = CONVERGED_TOLERANCE
 
     def __post_init__(self) -> None:
-        require_study(self.config.walker.kind, "basin", "a basin walks the walker from a grid of starts")
+        require_study(self.config.walker.kind, "basin", "a basin walks the planar rigid step map from a grid of starts")
         if self.x.key == self.y.key:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
         if self.x.is_parameter and self.y.is_parameter:
