@@ -138,8 +138,12 @@ def test_a_basin_of_a_walker_in_space_is_refused_in_one_line_naming_the_walker()
     assert one_line_error(result.stderr).startswith("error: walker.kind: a basin walks the planar rigid step map")
 
 
+FLAT_ONLY = "the description3d walker walks on flat ground only"
+
+
 def test_mfpt_of_a_walker_in_space_is_refused_in_one_line_naming_the_ground() -> None:
     """MFPT walks random ground profiles, which the walker in space does not walk on."""
-    result = invoke("mfpt", str(TINKERTOY), "--set", started(GAIT), "--seeds", "2", "-j", "1", "--roughness", "0.001")
-    assert result.exit_code == 2
-    assert one_line_error(result.stderr) == "error: ground.profile: the description3d walker walks on flat ground only"
+    for start in (["--set", started(GAIT), "-j", "1"], ["-j", "2"]):  # without a start: refused before any worker
+        result = invoke("mfpt", str(TINKERTOY), *start, "--seeds", "2", "--roughness", "0.001")
+        assert result.exit_code == 2
+        assert one_line_error(result.stderr) == f"error: ground.profile: {FLAT_ONLY}"

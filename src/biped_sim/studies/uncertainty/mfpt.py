@@ -31,7 +31,8 @@ import pandas as pd
 from scipy import optimize, stats
 
 from biped_sim.config import Config, derive
-from biped_sim.errors import ArgumentError
+from biped_sim.config.walker_registry import capabilities
+from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.tasks import results_as_done
 from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, walks_random_slopes, wheel_walks
@@ -153,6 +154,9 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
         raise ArgumentError("ground", f"unknown ground {ground!r}; expected one of {', '.join(GROUNDS)}")
     if ground == "slope" and not walks_random_slopes(config):
         raise ArgumentError("ground", "random slopes per step are walked by the rigid rimless wheel only")
+    if ground == "height" and not capabilities(config.walker.kind).profiles:
+        # refused here, before any worker: a worker would meet it only after resolving the walker's start
+        raise ConfigError("ground.profile", f"the {config.walker.kind} walker walks on flat ground only")
     if not roughness or not all(math.isfinite(h) and h >= 0 for h in roughness):
         raise ArgumentError("roughness", "give non-negative roughness levels")
     if seeds < 2:
