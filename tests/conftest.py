@@ -147,9 +147,10 @@ def plain_function(compiled: CPUDispatcher) -> Callable[..., Any]:
     caches them) in every session that calls them from Python."""
     plain = compiled.py_func
     original = getattr(sys.modules.get(plain.__module__), plain.__name__, None)
-    if isinstance(original, CPUDispatcher) and original.py_func.__code__ is plain.__code__:
-        return original.py_func
-    return plain
+    if isinstance(original, CPUDispatcher):
+        original = original.py_func
+    # the original may be plain already (its module patched first): the copy's own globals hold compiled callees
+    return original if getattr(original, "__code__", None) is plain.__code__ else plain
 
 
 def run_as_plain_python(patch: pytest.MonkeyPatch, packages: tuple[str, ...]) -> None:
