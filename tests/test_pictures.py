@@ -152,7 +152,11 @@ SPACE_START = {"heading": 0.0, "bank": 0.0, "pitch": -0.2, "swing_angle": 0.4, "
                "omega_z": 0.0, "swing_rate": -0.4}  # fmt: skip
 
 
-@pytest.mark.parametrize("config", SPACE_COMPLIANT, ids=[config.stem for config in SPACE_COMPLIANT])
+# the fast tier draws one walker in space (the same drawing code serves all); the slow tier the others
+SPACE_CASES = [pytest.param(c, id=c.stem, marks=[pytest.mark.slow] * (i > 0)) for i, c in enumerate(SPACE_COMPLIANT)]
+
+
+@pytest.mark.parametrize("config", SPACE_CASES)
 def test_every_bundled_walker_in_space_is_drawn_in_3d_and_animated(config: Path, tmp_path: Path) -> None:
     """A short run: its 3D poses put the hinge on the hip channel, the animation shows the sagittal and 3D views
     side by side, and the walker figure draws it."""
