@@ -40,7 +40,7 @@ from biped_sim.walkers.space_geometry import (
     rolling_states,
     with_point_mass,
 )
-from biped_sim.walkers.spatial_described import X, Y, Z, constraint_arrays, spatial_gravity
+from biped_sim.walkers.spatial_described import X, Y, Z, jointed_bodies, spatial_gravity
 
 SLENDER_FLOOR = 1e-4  # the smallest principal moment a leg takes, of its largest (a thin rod's 0 about its axis)
 BODY_NAMES = ["left", "right"]
@@ -97,16 +97,10 @@ def build_space_walker(config: Config, initial: object) -> BuiltModel:
     stiffness = contact_stiffness(config, space.leg.foot.radius)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
     inertia = np.array([body_inertia(leg) for leg in legs])
-    kinds, bodies, vecs, rows = constraint_arrays(hinge(legs))
     ring = space.leg.foot.shape == "ring"
     system = SpatialSystem(
         body_mass=np.array([leg.mass for leg in legs]),
-        body_inertia=inertia,
-        body_inertia_inv=np.linalg.inv(inertia),
-        con_type=kinds,
-        con_bodies=bodies,
-        con_vecs=vecs,
-        con_row=rows,
+        **jointed_bodies(inertia, hinge(legs)),
         foot_body=np.array([0, 1], dtype=np.int64),
         foot_center=np.array([TO_SPATIAL @ (leg.foot_centre - leg.com) for leg in legs]),
         foot_axis=np.array([TO_SPATIAL @ leg.foot_normal if ring else np.zeros(3) for leg in legs]),

@@ -56,15 +56,20 @@ def planar_to_ground(body: int) -> list[tuple[int, int, int, tuple[float, ...]]]
     ]
 
 
-def constraint_arrays(
-    primitives: list[tuple[int, int, int, tuple[float, ...]]],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(con_type, con_bodies, con_vecs, con_row) of a list of (type, body a, body b, 7 numbers)."""
+def jointed_bodies(
+    inertia: np.ndarray, primitives: list[tuple[int, int, int, tuple[float, ...]]]
+) -> dict[str, np.ndarray]:
+    """The :class:`SpatialSystem` fields of bodies of ``inertia`` (nb, 3, 3) joined by ``primitives``, a list of
+    (type, body a, body b, 7 numbers): the inertias and their inverses, and the constraint arrays."""
     kinds = np.array([kind for kind, _, _, _ in primitives], dtype=np.int64)
-    bodies = np.array([[a, b] for _, a, b, _ in primitives], dtype=np.int64)
-    vecs = np.array([vec for _, _, _, vec in primitives], dtype=np.float64)
-    rows = np.concatenate([[0], np.cumsum(np.where(kinds == SPHERICAL, 3, 1))[:-1]]).astype(np.int64)
-    return kinds, bodies, vecs, rows
+    return {
+        "body_inertia": inertia,
+        "body_inertia_inv": np.linalg.inv(inertia),
+        "con_type": kinds,
+        "con_bodies": np.array([[a, b] for _, a, b, _ in primitives], dtype=np.int64),
+        "con_vecs": np.array([vec for _, _, _, vec in primitives], dtype=np.float64),
+        "con_row": np.concatenate([[0], np.cumsum(np.where(kinds == SPHERICAL, 3, 1))[:-1]]).astype(np.int64),
+    }
 
 
 def sagittal_to_spatial(coords: np.ndarray, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -102,15 +107,9 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
     inertia = tree.spatial_inertia
     if bad := [name for name, j in zip(tree.names, inertia, strict=True) if np.linalg.eigvalsh(j).min() <= 0.0]:
         raise ConfigError(f"walker.description.bodies.{bad[0]}.spatial_inertia", "must be positive definite")
-    kinds, bodies, vecs, rows = constraint_arrays(primitives)
     system = SpatialSystem(
         body_mass=ps.body_mass.copy(),
-        body_inertia=inertia,
-        body_inertia_inv=np.linalg.inv(inertia),
-        con_type=kinds,
-        con_bodies=bodies,
-        con_vecs=vecs,
-        con_row=rows,
+        **jointed_bodies(inertia, primitives),
         foot_body=ps.foot_body.copy(),
         foot_center=np.column_stack([ps.foot_center, tree.foot_lateral]),
         foot_axis=np.array([DISC_AXIS] * len(tree.foot_names)),
