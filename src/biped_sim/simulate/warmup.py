@@ -8,11 +8,11 @@ none of their code).
 Every contact law is part of each group's kernels (the laws are dispatched at run time). Every rigid run
 shares one group, the compiled step map (its walker is data), warmed by one step.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
-``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
-ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
-the package has, each group in a process of its own, one per core at a time (:func:`warm_up_in_processes`);
-a sweep's workers warm each group before its first timed run, and a Dask worker can warm itself at start
-(:mod:`biped_sim.sweep.preload`).
+``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps, of a run on a
+ground profile and of the default walker's fit and uncertainty runs (tests keep the list true), ``--all``
+every formulation, integrator family and ground the package has, each group in a process of its own, one per
+core at a time (:func:`warm_up_in_processes`); a sweep's workers warm each group before its first timed run,
+and a Dask worker can warm itself at start (:mod:`biped_sim.sweep.preload`).
 """
 
 from __future__ import annotations
@@ -40,12 +40,13 @@ JOINT_STOPS = " with joint stops"  # a group's ground ends with it when its walk
 JOINT_ELEMENTS = " with joint elements"  # ... with this when they have joint elements (after JOINT_STOPS: both)
 JOINTS = ("", JOINT_STOPS, JOINT_ELEMENTS, JOINT_STOPS + JOINT_ELEMENTS)
 RIGID = ("rigid", "step map")  # the group of every rigid run: one compiled step map for every walker
-# (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
+# (formulation, integrator family, ground) of the bundled configs and sweeps, of a run on a profile and of the
+# studies' runs of the default walker (fit and uncertainty run a planar walker in minimal coordinates)
 # (the costliest first: the parallel warm-up ends sooner)
 BUNDLED_GROUPS = (
     (*RIGID, "flat"), ("spatial", "explicit", "flat"), ("planar", "explicit", "profile"),
-    ("planar", "explicit", "flat" + JOINT_STOPS), ("planar", "explicit", "flat" + JOINT_ELEMENTS),
-    ("planar", "explicit", "flat"),
+    ("planar", "explicit", "flat" + JOINT_STOPS), ("minimal", "explicit", "flat"),
+    ("planar", "explicit", "flat" + JOINT_ELEMENTS), ("planar", "explicit", "flat"),
 )  # fmt: skip
 _WARMED: set[tuple[str, str, str]] = set()
 
