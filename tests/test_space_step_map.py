@@ -4,14 +4,20 @@ follow the Jacobian's powers, their slowest part decaying at the largest multipl
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from biped_sim.config import load_config
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
 from biped_sim.rigid.space_cycle import SpaceMap, space_walker_model
+from biped_sim.rigid.space_integration import FALL_BANK, space_clearance
+from biped_sim.rigid.space_kernels import space_flow
+from biped_sim.rigid.space_step import space_step
+from biped_sim.rigid.step import ATOL, RTOL
 
 TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
 # docs/guide/rigid.md's fixed point (heading, bank, pitch, omega x y z, hinge rate), polished by Newton here
@@ -28,6 +34,29 @@ def tinkertoy() -> tuple[SpaceMap, np.ndarray, np.ndarray]:
     z, converged, _, _ = newton_fixed_point(step_map, np.array(TINKERTOY_POINT), RIGID_TOLERANCE)
     assert converged
     return step_map, z, map_jacobian(step_map, z)
+
+
+def _scipy_phase(
+    params: np.ndarray, x: np.ndarray, t: float, guard: Callable[[np.ndarray], float]
+) -> tuple[float, np.ndarray]:
+    """scipy's DOP853 over the compiled flow from (t, x) to the guard's downward zero (the step map before it was
+    compiled)."""
+    event = lambda _t, y: guard(y)  # noqa: E731
+    event.terminal, event.direction = True, -1.0  # type: ignore[attr-defined]
+    sol = solve_ivp(lambda _t, y: space_flow(params, y), (t, t + 20.0), x, "DOP853", rtol=RTOL, atol=ATOL, events=event)
+    return float(sol.t_events[0][0]), sol.y_events[0][0]
+
+
+def test_the_compiled_step_is_scipys_integration_of_the_same_flow() -> None:
+    """Both phases of a step of the toy's gait integrated by scipy's solve_ivp to the same guards: the compiled
+    map's touchdown state and time to 1e-12 (the same steps and event location; rounding apart)."""
+    step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
+    _, step = step_map.step(z)
+    x = step_map.section.from_section(z)
+    t, x = _scipy_phase(step_map.params, x, 0.0, lambda y: y[3])
+    t, x = _scipy_phase(step_map.params, x, t, lambda y: space_clearance(step_map.params, y))
+    assert step.period == pytest.approx(t, abs=1e-12)
+    np.testing.assert_allclose(step.x_minus, x, atol=1e-12)
 
 
 @pytest.mark.slow
@@ -62,3 +91,12 @@ def test_random_starts_decay_at_the_largest_multiplier(
         assert np.linalg.norm(z_n - z - predicted) < 0.05 * np.linalg.norm(predicted)
     last = abs(np.linalg.solve(vectors, z_n - z)[leading])
     assert (last / first) ** (1.0 / STEPS) == pytest.approx(TINKERTOY_LARGEST, abs=1e-3)
+
+
+def test_a_roll_rate_too_large_topples_the_toy_sideways() -> None:
+    """Rolling out at 1 rad/s from the gait, the toy banks past FALL_BANK during the step: it ends there, fell."""
+    step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
+    z[3] = 1.0
+    step = space_step(step_map.model, step_map.section.from_section(z))
+    assert step.status == "fell" and step.x_plus is None
+    assert step.x_minus[1] == pytest.approx(FALL_BANK, abs=1e-12)

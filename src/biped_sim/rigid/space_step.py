@@ -3,30 +3,29 @@ and the mirror that makes the landing leg the left leg again.
 
 A step has two phases, as the planar model's: first until the swing leg passes the stance leg (the hinge angle
 beta falls through zero: the swing foot comes from behind), then until the swing foot's lowest point reaches the
-slope going down (:func:`~biped_sim.rigid.space_model.swing_clearance`). The first phase ignores the mid-stance
-scuff, when a straight-legged walker's swing foot dips through the ground beside the stance foot (MODEL.md 3:
-every passive-walking model ignores it). Each phase is scipy's DOP853 at the rigid step map's tolerances over
-the compiled flow, its end located by scipy's event search on the dense output. A fall (the hip below
-``FALL_HIP_FRACTION`` of the leg length, or the bank past ``FALL_BANK``) or a step longer than
-``MAX_STEP_TIME`` natural periods ends the step without a strike.
+slope going down (:func:`~biped_sim.rigid.space_integration.space_clearance`). The first phase ignores the
+mid-stance scuff, when a straight-legged walker's swing foot dips through the ground beside the stance foot
+(MODEL.md 3: every passive-walking model ignores it). Each phase is DOP853 at the rigid step map's tolerances over
+the compiled flow, its end located on the dense output (:mod:`biped_sim.rigid.space_integration`, scipy's
+``solve_ivp`` compiled). A fall (the hip below ``FALL_HIP_FRACTION`` of the leg length, or the bank past
+``FALL_BANK``) or a step longer than ``MAX_STEP_TIME`` natural periods ends the step without a strike.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
+from biped_sim.integrate.stepper import Scratch
+from biped_sim.integrate.tableaus import Tableau
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_dynamics import strike, swing_foot_point
-from biped_sim.rigid.space_kernels import space_flow, space_params
-from biped_sim.rigid.space_model import SpaceModel, pose, swing_clearance
-from biped_sim.rigid.step import ATOL, MAX_STEP_TIME, RTOL, StepStatus
-
-FALL_HIP_FRACTION = 0.05
-FALL_BANK = 1.2  # [rad]
+from biped_sim.rigid.space_integration import GUARD, PHASE_NAMES, space_phase, space_scratch
+from biped_sim.rigid.space_kernels import space_params
+from biped_sim.rigid.space_model import SpaceModel
+from biped_sim.rigid.step import MAX_STEP_TIME, StepStatus
 
 
 @dataclass
@@ -41,40 +40,24 @@ class SpaceStep:
     length: float
 
 
-def _event(function: Callable[[float, np.ndarray], float], direction: float) -> Callable[[float, np.ndarray], float]:
-    function.terminal = True  # type: ignore[attr-defined]
-    function.direction = direction  # type: ignore[attr-defined]
-    return function
-
-
-def _phase(
-    model: SpaceModel, params: np.ndarray, x0: np.ndarray, t0: float, guard: Callable[[float, np.ndarray], float]
-) -> tuple[str, float, np.ndarray]:
-    """Integrate from (t0, x0) until ``guard`` falls through zero: ('guard' | 'fell' | 'stalled', t, x)."""
-    limit = MAX_STEP_TIME * math.sqrt(model.leg_length / model.gravity)
-
-    def fell(t: float, x: np.ndarray) -> float:
-        hip = pose(model, x).origin[2] - FALL_HIP_FRACTION * model.leg_length
-        return min(hip, FALL_BANK - abs(x[1]))
-
-    events = [_event(guard, -1.0), _event(fell, -1.0)]
-    sol = solve_ivp(
-        lambda t, x: space_flow(params, x), (t0, limit), x0, method="DOP853", rtol=RTOL, atol=ATOL, events=events
-    )
-    if sol.status == 1 and len(sol.t_events[0]):
-        return "guard", float(sol.t_events[0][0]), sol.y_events[0][0]
-    return ("fell" if sol.status == 1 else "stalled"), float(sol.t[-1]), sol.y[:, -1]
-
-
-def space_step(model: SpaceModel, x_start: np.ndarray, params: np.ndarray | None = None) -> SpaceStep:
-    """One step of the map from the post-strike state ``x_start`` (its contact point taken as the origin)."""
+def space_step(
+    model: SpaceModel,
+    x_start: np.ndarray,
+    params: np.ndarray | None = None,
+    scratch: tuple[Tableau, Scratch] | None = None,
+) -> SpaceStep:
+    """One step of the map from the post-strike state ``x_start`` (its contact point taken as the origin);
+    ``params`` and ``scratch`` (:func:`~biped_sim.rigid.space_integration.space_scratch`) made here if not given."""
     params = space_params(model) if params is None else params
-    x0 = np.array(x_start, dtype=float)
-    x0[8:] = 0.0
-    how, t, x = _phase(model, params, x0, 0.0, lambda t, x: x[3])
-    if how == "guard":
-        how, t, x = _phase(model, params, x, t, lambda t, x: swing_clearance(model, x))
-    if how != "guard":
-        return SpaceStep(how, x, None, t, math.nan)  # type: ignore[arg-type]
+    tab, sc = space_scratch() if scratch is None else scratch
+    limit = MAX_STEP_TIME * math.sqrt(model.leg_length / model.gravity)
+    fall_height = FALL_HIP_FRACTION * model.leg_length
+    x = np.array(x_start, dtype=float)
+    x[8:] = 0.0
+    how, t = space_phase(params, tab, sc, 0, 0.0, limit, fall_height, x)
+    if how == GUARD:
+        how, t = space_phase(params, tab, sc, 1, t, limit, fall_height, x)
+    if how != GUARD:
+        return SpaceStep(PHASE_NAMES[how], x, None, t, math.nan)  # type: ignore[arg-type]
     length = float(np.linalg.norm(x[8:] + swing_foot_point(model, x)[:2]))
     return SpaceStep("strike", x, strike(model, x), t, length)
