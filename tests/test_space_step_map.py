@@ -4,20 +4,16 @@ follow the Jacobian's powers, their slowest part decaying at the largest multipl
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from biped_sim.config import load_config
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
 from biped_sim.rigid.space_cycle import SpaceMap, space_walker_model
-from biped_sim.rigid.space_integration import FALL_BANK, space_clearance
-from biped_sim.rigid.space_kernels import space_flow
-from biped_sim.rigid.space_step import space_step
-from biped_sim.rigid.step import ATOL, RTOL
+from biped_sim.rigid.space_integration import FALL_BANK
+from biped_sim.rigid.space_step import clearance, passed, phase, space_step
 
 TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
 # docs/guide/rigid.md's fixed point (heading, bank, pitch, omega x y z, hinge rate), polished by Newton here
@@ -36,27 +32,16 @@ def tinkertoy() -> tuple[SpaceMap, np.ndarray, np.ndarray]:
     return step_map, z, map_jacobian(step_map, z)
 
 
-def _scipy_phase(
-    params: np.ndarray, x: np.ndarray, t: float, guard: Callable[[np.ndarray], float]
-) -> tuple[float, np.ndarray]:
-    """scipy's DOP853 over the compiled flow from (t, x) to the guard's downward zero (the step map before it was
-    compiled)."""
-    event = lambda _t, y: guard(y)  # noqa: E731
-    event.terminal, event.direction = True, -1.0  # type: ignore[attr-defined]
-    sol = solve_ivp(lambda _t, y: space_flow(params, y), (t, t + 20.0), x, "DOP853", rtol=RTOL, atol=ATOL, events=event)
-    return float(sol.t_events[0][0]), sol.y_events[0][0]
-
-
 def test_the_compiled_step_is_scipys_integration_of_the_same_flow() -> None:
-    """Both phases of a step of the toy's gait integrated by scipy's solve_ivp to the same guards: the compiled
-    map's touchdown state and time to 1e-12 (the same steps and event location; rounding apart)."""
+    """Both phases of a step of the toy's gait integrated by scipy's solve_ivp to the same guards (a run's phases,
+    :func:`~biped_sim.rigid.space_step.phase`): the compiled map's touchdown state and time to 1e-12 (the same steps
+    and event location; rounding apart)."""
     step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
     _, step = step_map.step(z)
-    x = step_map.section.from_section(z)
-    t, x = _scipy_phase(step_map.params, x, 0.0, lambda y: y[3])
-    t, x = _scipy_phase(step_map.params, x, t, lambda y: space_clearance(step_map.params, y))
-    assert step.period == pytest.approx(t, abs=1e-12)
-    np.testing.assert_allclose(step.x_minus, x, atol=1e-12)
+    passing = phase(step_map.model, step_map.params, step_map.section.from_section(z), 0.0, passed)
+    landing = phase(step_map.model, step_map.params, passing.x, passing.t, clearance(step_map.model))
+    assert landing.how == "guard" and step.period == pytest.approx(landing.t, abs=1e-12)
+    np.testing.assert_allclose(step.x_minus, landing.x, atol=1e-12)
 
 
 @pytest.mark.slow
