@@ -21,7 +21,6 @@ from biped_sim.simulate import prepare_model, simulate
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, KUO, KUO_GAIT, RIGID_PERIOD, TINKERTOY, tinkertoy
 
-KUO_RIGID = KUO.with_name("kuo_compass_3d.yaml")
 LATERAL = [name for name, _ in LATERAL_STEP_COLUMNS]
 
 
@@ -83,7 +82,7 @@ def test_a_lateral_push_gives_the_walker_in_space_its_impulse_sideways() -> None
 
 @pytest.mark.parametrize(
     ("config", "override"),
-    [(None, ""), (KUO_RIGID, "simulation.t_end=1.0")],
+    [(None, ""), (KUO.parents[1] / "round_foot_walker.yaml", "dynamics=rigid")],
 )
 def test_a_lateral_push_on_a_planar_walker_is_a_one_line_error_naming_the_field(
     config: Path | None, override: str

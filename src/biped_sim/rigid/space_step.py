@@ -16,9 +16,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import OdeSolution, solve_ivp
 
 from biped_sim.rigid.space_dynamics import strike, swing_foot_point
 from biped_sim.rigid.space_kernels import space_flow, space_params
@@ -47,11 +48,37 @@ def _event(function: Callable[[float, np.ndarray], float], direction: float) -> 
     return function
 
 
-def _phase(
-    model: SpaceModel, params: np.ndarray, x0: np.ndarray, t0: float, guard: Callable[[float, np.ndarray], float]
-) -> tuple[str, float, np.ndarray]:
-    """Integrate from (t0, x0) until ``guard`` falls through zero: ('guard' | 'fell' | 'stalled', t, x)."""
-    limit = MAX_STEP_TIME * math.sqrt(model.leg_length / model.gravity)
+def step_time_limit(model: SpaceModel) -> float:
+    """The longest step: ``MAX_STEP_TIME`` natural periods sqrt(l / g)."""
+    return MAX_STEP_TIME * math.sqrt(model.leg_length / model.gravity)
+
+
+class Phase(NamedTuple):
+    """How a phase ended ('guard' | 'fell' | 'stalled' | 'until'), its end time and state, the dense output (or None)
+    and the integrator's counters."""
+
+    how: str
+    t: float
+    x: np.ndarray
+    solution: OdeSolution | None
+    rhs_evals: int
+    accepted_steps: int
+
+
+def phase(
+    model: SpaceModel,
+    params: np.ndarray,
+    x0: np.ndarray,
+    t0: float,
+    guard: Callable[[float, np.ndarray], float],
+    until: float | None = None,
+    dense: bool = False,
+) -> Phase:
+    """Integrate from (t0, x0) until ``guard`` falls through zero ('guard'), a fall, the step's time limit
+    ('stalled') or time ``until`` ('until'); the dense output if ``dense`` (DOP853's costs 3 more flow calls a
+    step)."""
+    limit = step_time_limit(model)
+    end = limit if until is None else min(until, limit)
 
     def fell(t: float, x: np.ndarray) -> float:
         hip = pose(model, x).origin[2] - FALL_HIP_FRACTION * model.leg_length
@@ -59,11 +86,30 @@ def _phase(
 
     events = [_event(guard, -1.0), _event(fell, -1.0)]
     sol = solve_ivp(
-        lambda t, x: space_flow(params, x), (t0, limit), x0, method="DOP853", rtol=RTOL, atol=ATOL, events=events
+        lambda t, x: space_flow(params, x),
+        (t0, end),
+        x0,
+        method="DOP853",
+        rtol=RTOL,
+        atol=ATOL,
+        events=events,
+        dense_output=dense,
     )
+    counters = (int(sol.nfev), len(sol.t) - 1)
     if sol.status == 1 and len(sol.t_events[0]):
-        return "guard", float(sol.t_events[0][0]), sol.y_events[0][0]
-    return ("fell" if sol.status == 1 else "stalled"), float(sol.t[-1]), sol.y[:, -1]
+        return Phase("guard", float(sol.t_events[0][0]), sol.y_events[0][0], sol.sol, *counters)
+    how = "fell" if sol.status == 1 else ("stalled" if end == limit else "until")
+    return Phase(how, float(sol.t[-1]), sol.y[:, -1], sol.sol, *counters)
+
+
+def passed(t: float, x: np.ndarray) -> float:
+    """The first phase's guard: the hinge angle (the swing foot passes the stance foot as it falls through 0)."""
+    return float(x[3])
+
+
+def clearance(model: SpaceModel) -> Callable[[float, np.ndarray], float]:
+    """The second phase's guard: the swing foot's clearance."""
+    return lambda t, x: swing_clearance(model, x)
 
 
 def space_step(model: SpaceModel, x_start: np.ndarray, params: np.ndarray | None = None) -> SpaceStep:
@@ -71,10 +117,15 @@ def space_step(model: SpaceModel, x_start: np.ndarray, params: np.ndarray | None
     params = space_params(model) if params is None else params
     x0 = np.array(x_start, dtype=float)
     x0[8:] = 0.0
-    how, t, x = _phase(model, params, x0, 0.0, lambda t, x: x[3])
+    how, t, x, *_ = phase(model, params, x0, 0.0, passed)
     if how == "guard":
-        how, t, x = _phase(model, params, x, t, lambda t, x: swing_clearance(model, x))
+        how, t, x, *_ = phase(model, params, x, t, clearance(model))
     if how != "guard":
         return SpaceStep(how, x, None, t, math.nan)  # type: ignore[arg-type]
-    length = float(np.linalg.norm(x[8:] + swing_foot_point(model, x)[:2]))
-    return SpaceStep("strike", x, strike(model, x), t, length)
+    return struck(model, x, t)
+
+
+def struck(model: SpaceModel, x_minus: np.ndarray, period: float) -> SpaceStep:
+    """The step that ends in a strike from ``x_minus`` at time ``period``: the strike and the step's length."""
+    length = float(np.linalg.norm(x_minus[8:] + swing_foot_point(model, x_minus)[:2]))
+    return SpaceStep("strike", x_minus, strike(model, x_minus), period, length)
