@@ -3,12 +3,14 @@ and the mirror that makes the landing leg the left leg again.
 
 A step has two phases, as the planar model's: first until the swing leg passes the stance leg (the hinge angle
 beta falls through zero: the swing foot comes from behind), then until the swing foot's lowest point reaches the
-slope going down (:func:`~biped_sim.rigid.space_model.swing_clearance`). The first phase ignores the mid-stance
-scuff, when a straight-legged walker's swing foot dips through the ground beside the stance foot (MODEL.md 3:
-every passive-walking model ignores it). Each phase is scipy's DOP853 at the rigid step map's tolerances over
-the compiled flow, its end located by scipy's event search on the dense output. A fall (the hip below
-``FALL_HIP_FRACTION`` of the leg length, or the bank past ``FALL_BANK``) or a step longer than
-``MAX_STEP_TIME`` natural periods ends the step without a strike.
+slope going down (:func:`~biped_sim.rigid.space_integration.space_clearance`). The first phase ignores the
+mid-stance scuff, when a straight-legged walker's swing foot dips through the ground beside the stance foot
+(MODEL.md 3: every passive-walking model ignores it). A fall (the hip below ``FALL_HIP_FRACTION`` of the leg
+length, or the bank past ``FALL_BANK``) or a step longer than ``MAX_STEP_TIME`` natural periods ends the step
+without a strike. The step map (:func:`space_step`) integrates each phase compiled: DOP853 at the rigid step map's
+tolerances over the compiled flow, its end located on the dense output (:mod:`biped_sim.rigid.space_integration`,
+scipy's ``solve_ivp`` with its events, compiled); a run's step (:mod:`biped_sim.rigid.space_walk`: samples, stops at
+pushes) takes scipy's ``solve_ivp`` itself (:func:`phase`), the same steps and event times to rounding.
 """
 
 from __future__ import annotations
@@ -21,13 +23,14 @@ from typing import NamedTuple
 import numpy as np
 from scipy.integrate import OdeSolution, solve_ivp
 
+from biped_sim.integrate.stepper import Scratch
+from biped_sim.integrate.tableaus import Tableau
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_dynamics import strike, swing_foot_point
+from biped_sim.rigid.space_integration import FALL_BANK, GUARD, PHASE_NAMES, space_phase, space_scratch
 from biped_sim.rigid.space_kernels import space_flow, space_params
 from biped_sim.rigid.space_model import SpaceModel, pose, swing_clearance
 from biped_sim.rigid.step import ATOL, MAX_STEP_TIME, RTOL, StepStatus
-
-FALL_HIP_FRACTION = 0.05
-FALL_BANK = 1.2  # [rad]
 
 
 @dataclass
@@ -112,16 +115,24 @@ def clearance(model: SpaceModel) -> Callable[[float, np.ndarray], float]:
     return lambda t, x: swing_clearance(model, x)
 
 
-def space_step(model: SpaceModel, x_start: np.ndarray, params: np.ndarray | None = None) -> SpaceStep:
-    """One step of the map from the post-strike state ``x_start`` (its contact point taken as the origin)."""
+def space_step(
+    model: SpaceModel,
+    x_start: np.ndarray,
+    params: np.ndarray | None = None,
+    scratch: tuple[Tableau, Scratch] | None = None,
+) -> SpaceStep:
+    """One step of the map from the post-strike state ``x_start`` (its contact point taken as the origin), compiled;
+    ``params`` and ``scratch`` (:func:`~biped_sim.rigid.space_integration.space_scratch`) made here if not given."""
     params = space_params(model) if params is None else params
-    x0 = np.array(x_start, dtype=float)
-    x0[8:] = 0.0
-    how, t, x, *_ = phase(model, params, x0, 0.0, passed)
-    if how == "guard":
-        how, t, x, *_ = phase(model, params, x, t, clearance(model))
-    if how != "guard":
-        return SpaceStep(how, x, None, t, math.nan)  # type: ignore[arg-type]
+    tab, sc = space_scratch() if scratch is None else scratch
+    limit, fall_height = step_time_limit(model), FALL_HIP_FRACTION * model.leg_length
+    x = np.array(x_start, dtype=float)
+    x[8:] = 0.0
+    how, t = space_phase(params, tab, sc, 0, 0.0, limit, fall_height, x)
+    if how == GUARD:
+        how, t = space_phase(params, tab, sc, 1, t, limit, fall_height, x)
+    if how != GUARD:
+        return SpaceStep(PHASE_NAMES[how], x, None, t, math.nan)  # type: ignore[arg-type]
     return struck(model, x, t)
 
 
