@@ -8,11 +8,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pandas as pd
+import pytest
 
 from biped_sim.config import load_config
 from biped_sim.io.trajectory import load_run
 from biped_sim.measure.space_pose import space_poses
 from biped_sim.simulate import SpaceRunResult, simulate
+from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, map_basin, parse_axis
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
@@ -88,3 +90,37 @@ def test_a_run_in_space_without_its_start_is_one_line_and_writes_nothing(tmp_pat
     assert result.exit_code == 2
     assert one_line_error(result.stderr).startswith("error: simulation.initial")
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_toys_basin_on_its_section_holds_its_gait_and_loses_the_starts_far_from_it() -> None:
+    """Nine cells around the gait over bank and roll rate (+-0.02, +-0.04), 10 steps: the gait's own cell converges,
+    the others fall within 3 steps (the toy's basin is narrow sideways)."""
+    spec = BasinSpec(
+        load_config(TINKERTOY, [STARTED]), parse_axis("x", "bank=-0.0292:0.0108:3"),
+        parse_axis("y", "omega_x=-0.106:-0.026:3"), steps=10, tolerance=1e-2,
+    )  # fmt: skip
+    basin = map_basin(spec, None)
+    expected = np.full((3, 3), FELL)
+    expected[1, 1] = CONVERGED
+    np.testing.assert_array_equal(basin.outcome, expected)
+    assert basin.steps[1, 1] == 10 and basin.steps[basin.outcome == FELL].max() <= 3
+
+
+@pytest.mark.parametrize(
+    ("config", "axis", "message"),
+    [
+        (
+            "tinkertoy.yaml",
+            "swing_angle=0.2:0.3:3",
+            "error: --x: swing_angle is not a key of simulation.initial (heading,",
+        ),
+        ("tinkertoy_compliant.yaml", "bank=-0.02:0.02:3", "error: dynamics: a basin of a walker in space walks its"),
+    ],
+)
+def test_a_basin_in_space_off_its_section_or_compliant_is_one_line(config: str, axis: str, message: str) -> None:
+    """The hinge angle is no section coordinate (the trailing foot on the ground fixes it); a compliant walker in
+    space has no step map to walk."""
+    result = invoke("basin", str(TINKERTOY.with_name(config)), "--x", axis, "--y", "omega_x=-0.1:0.1:3")
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr).startswith(message)
