@@ -3,6 +3,7 @@ and written as a planar rigid run is, pushed sideways, and its falls and bad sta
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import h5py
@@ -10,11 +11,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from biped_sim.config import load_config
+from biped_sim.config import derive, load_config
+from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.io.trajectory import load_run
 from biped_sim.measure.space_pose import space_poses
 from biped_sim.simulate import SpaceRunResult, simulate
 from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, map_basin, parse_axis
+from biped_sim.studies.fit.evaluate import Evaluator
+from biped_sim.studies.fit.optimize import run_fit
+from biped_sim.studies.fit.parameters import parse_parameter
+from biped_sim.studies.fit.problem import FitProblem
+from biped_sim.studies.fit.stats import summarize
+from biped_sim.studies.fit.synthetic import synthetic_reference_data
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
@@ -124,3 +132,17 @@ def test_a_basin_in_space_off_its_section_or_compliant_is_one_line(config: str, 
     result = invoke("basin", str(TINKERTOY.with_name(config)), "--x", axis, "--y", "omega_x=-0.1:0.1:3")
     assert result.exit_code == 2
     assert one_line_error(result.stderr).startswith(message)
+
+
+@pytest.mark.slow
+def test_a_fit_recovers_the_toys_hidden_hip_width_from_its_step_periods() -> None:
+    """The toy's first five step periods from its gait's start at hip width 0.34 (the config's 0.3624), rounded to
+    1e-6 with the rounding's std: the fit finds 0.34 within three standard errors, converged (about 70 runs)."""
+    start = load_config(TINKERTOY, [STARTED, "simulation.t_end=8"])
+    data = synthetic_reference_data(derive(start, {"walker.space.hip_width": 0.34}), 5, 0.0, 0, decimals=6)
+    data["std"] = [1e-6 / math.sqrt(12.0)] * 5
+    reference = Reference(Path("synthetic"), ReferenceSpec.model_validate(data))
+    problem = FitProblem(start, reference, (parse_parameter("walker.space.hip_width=0.30:0.42", start),))
+    evaluator = Evaluator(problem, None)
+    (estimate,) = summarize(run_fit(evaluator), evaluator).estimates
+    assert estimate.standard_error is not None and abs(estimate.value - 0.34) < 3.0 * estimate.standard_error < 1e-5
