@@ -102,7 +102,8 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
         "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
-        "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5)",
+        "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5, with joint stops)",
+        "minimal explicit (dopri5)", "minimal explicit (dopri5, with joint elements)",
         "planar explicit (dopri5, with joint elements)", "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
@@ -123,13 +124,14 @@ def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
     assert ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS) in groups  # the torso walker's springs
 
 
-def test_the_default_walkers_studies_run_in_a_warmed_group() -> None:
-    """A fit evaluation or an uncertainty sample of the default walker runs in minimal coordinates: a group the
-    warm-up warms (the fast tier's studies, and a user's first, would each compile it otherwise)."""
-    config = load_config(CONFIGS / "round_foot_walker.yaml")
-    study_run = derive(config, {"formulation.kind": run_formulation(config)})
-    assert warmup.group_of(study_run) == ("minimal", "explicit", "flat")
-    assert warmup.group_of(study_run) in warmup.BUNDLED_GROUPS
+def test_the_bundled_configs_studies_run_in_the_warmed_groups() -> None:
+    """A fit evaluation or an uncertainty sample runs a planar walker in minimal coordinates: groups the warm-up
+    warms too (the tests' studies, and a user's first, would compile them otherwise, each worker its own copy)."""
+    configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
+    groups = {warmup.group_of(derive(config, {"formulation.kind": run_formulation(config)})) for config in configs}
+    assert groups <= set(warmup.BUNDLED_GROUPS)
+    assert ("minimal", "explicit", "flat") in groups  # the default walker's
+    assert ("minimal", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's
 
 
 def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
