@@ -129,14 +129,6 @@ def test_uncertainty_runs_on_a_walker_in_space_over_a_walker_parameter(tmp_path:
     assert (np.diff(samples["steady_period"]) > 0).all() and samples["steady_period"].min() > RIGID_PERIOD
 
 
-def test_a_basin_of_a_walker_in_space_is_refused_in_one_line_naming_the_walker() -> None:
-    """Basins walk the planar rigid step map; the rigid walker in space has its own (its limit cycle only, today)."""
-    result = invoke("basin", str(TINKERTOY.with_name("tinkertoy.yaml")), "--x", "bank=-0.02:0.02:3", "--y",
-                    "omega_x=-0.1:0.1:3")  # fmt: skip
-    assert result.exit_code == 2
-    assert one_line_error(result.stderr).startswith("error: walker.kind: a basin walks the planar rigid step map")
-
-
 FLAT_ONLY = "the description3d walker walks on flat ground only"
 
 

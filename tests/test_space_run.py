@@ -3,16 +3,26 @@ and written as a planar rigid run is, pushed sideways, and its falls and bad sta
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pandas as pd
+import pytest
 
-from biped_sim.config import load_config
+from biped_sim.config import derive, load_config
+from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.io.trajectory import load_run
 from biped_sim.measure.space_pose import space_poses
-from biped_sim.simulate import SpaceRunResult, simulate
+from biped_sim.simulate import SpaceRunResult, simulate, warmup
+from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, map_basin, parse_axis
+from biped_sim.studies.fit.evaluate import Evaluator
+from biped_sim.studies.fit.optimize import run_fit
+from biped_sim.studies.fit.parameters import parse_parameter
+from biped_sim.studies.fit.problem import FitProblem
+from biped_sim.studies.fit.stats import summarize
+from biped_sim.studies.fit.synthetic import synthetic_reference_data
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
@@ -88,3 +98,58 @@ def test_a_run_in_space_without_its_start_is_one_line_and_writes_nothing(tmp_pat
     assert result.exit_code == 2
     assert one_line_error(result.stderr).startswith("error: simulation.initial")
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_the_toys_basin_on_its_section_holds_its_gait_and_loses_the_starts_far_from_it() -> None:
+    """Nine cells around the gait over bank and roll rate (+-0.02, +-0.04), 10 steps: the gait's own cell converges,
+    the others fall within 3 steps (the toy's basin is narrow sideways)."""
+    spec = BasinSpec(
+        load_config(TINKERTOY, [STARTED]), parse_axis("x", "bank=-0.0292:0.0108:3"),
+        parse_axis("y", "omega_x=-0.106:-0.026:3"), steps=10, tolerance=1e-2,
+    )  # fmt: skip
+    basin = map_basin(spec, None)
+    expected = np.full((3, 3), FELL)
+    expected[1, 1] = CONVERGED
+    np.testing.assert_array_equal(basin.outcome, expected)
+    assert basin.steps[1, 1] == 10 and basin.steps[basin.outcome == FELL].max() <= 3
+
+
+@pytest.mark.parametrize(
+    ("config", "axis", "message"),
+    [
+        (
+            "tinkertoy.yaml",
+            "swing_angle=0.2:0.3:3",
+            "error: --x: swing_angle is not a key of simulation.initial (heading,",
+        ),
+        ("tinkertoy_compliant.yaml", "bank=-0.02:0.02:3", "error: dynamics: a basin of a walker in space walks its"),
+    ],
+)
+def test_a_basin_in_space_off_its_section_or_compliant_is_one_line(config: str, axis: str, message: str) -> None:
+    """The hinge angle is no section coordinate (the trailing foot on the ground fixes it); a compliant walker in
+    space has no step map to walk."""
+    result = invoke("basin", str(TINKERTOY.with_name(config)), "--x", axis, "--y", "omega_x=-0.1:0.1:3")
+    assert result.exit_code == 2
+    assert one_line_error(result.stderr).startswith(message)
+
+
+@pytest.mark.slow
+def test_a_fit_recovers_the_toys_hidden_hip_width_from_its_step_periods() -> None:
+    """The toy's first five step periods from its gait's start at hip width 0.34 (the config's 0.3624), rounded to
+    1e-6 with the rounding's std: the fit finds 0.34 within three standard errors, converged (about 70 runs)."""
+    start = load_config(TINKERTOY, [STARTED, "simulation.t_end=8"])
+    data = synthetic_reference_data(derive(start, {"walker.space.hip_width": 0.34}), 5, 0.0, 0, decimals=6)
+    data["std"] = [1e-6 / math.sqrt(12.0)] * 5
+    reference = Reference(Path("synthetic"), ReferenceSpec.model_validate(data))
+    problem = FitProblem(start, reference, (parse_parameter("walker.space.hip_width=0.30:0.42", start),))
+    evaluator = Evaluator(problem, None)
+    (estimate,) = summarize(run_fit(evaluator), evaluator).estimates
+    assert estimate.standard_error is not None and abs(estimate.value - 0.34) < 3.0 * estimate.standard_error < 1e-5
+
+
+def test_a_rigid_run_in_space_is_a_warm_up_group_of_its_own_in_warmup_all() -> None:
+    """Its flow is not the planar step map's: a planar rigid warm-up does not compile it."""
+    group = warmup.group_of(load_config(TINKERTOY))
+    assert group == (*warmup.RIGID_SPACE, "flat") != warmup.group_of(load_config(CONFIGS / "simplest_walker.yaml"))
+    assert group in {warmup.group_of(config) for config in warmup.warm_up_configs(True)}
