@@ -22,7 +22,7 @@ from biped_sim.integrate.driver import Integration, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
 from biped_sim.measure.steps import step_table
 from biped_sim.rigid.start import RigidStart
-from biped_sim.simulate import prepare_model
+from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel
@@ -60,7 +60,7 @@ def _measure_quietly(config: Config, model: BuiltModel) -> None:
         raise SystemExit(1) from None
 
 
-def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart, BaseProcess | None]:
+def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
     """:func:`~biped_sim.simulate.prepare_model` of ``config``, and the process that compiles its measures (None
     on a warm cache, for a rigid run, or on one core); pass it to :func:`join` before the run is measured.
 
