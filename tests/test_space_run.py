@@ -15,7 +15,7 @@ from biped_sim.config import derive, load_config
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.io.trajectory import load_run
 from biped_sim.measure.space_pose import space_poses
-from biped_sim.simulate import SpaceRunResult, simulate
+from biped_sim.simulate import SpaceRunResult, simulate, warmup
 from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import run_fit
@@ -146,3 +146,10 @@ def test_a_fit_recovers_the_toys_hidden_hip_width_from_its_step_periods() -> Non
     evaluator = Evaluator(problem, None)
     (estimate,) = summarize(run_fit(evaluator), evaluator).estimates
     assert estimate.standard_error is not None and abs(estimate.value - 0.34) < 3.0 * estimate.standard_error < 1e-5
+
+
+def test_a_rigid_run_in_space_is_a_warm_up_group_of_its_own_in_warmup_all() -> None:
+    """Its flow is not the planar step map's: a planar rigid warm-up does not compile it."""
+    group = warmup.group_of(load_config(TINKERTOY))
+    assert group == (*warmup.RIGID_SPACE, "flat") != warmup.group_of(load_config(CONFIGS / "simplest_walker.yaml"))
+    assert group in {warmup.group_of(config) for config in warmup.warm_up_configs(True)}
