@@ -57,17 +57,23 @@ class SpaceStart:
     state: np.ndarray
 
 
+def space_initial(config: Config) -> object:
+    """``simulation.initial`` of a walker in space, ``rigid_limit_cycle`` resolved to the gait's post-strike state
+    (ConfigError naming simulation.initial when Newton does not converge)."""
+    initial = config.simulation.initial
+    if initial != "rigid_limit_cycle":
+        return initial
+    cycle = space_limit_cycle(config)
+    if not cycle.converged:
+        raise ConfigError(
+            "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
+        )
+    return cycle.fixed_point
+
+
 def space_start(config: Config) -> SpaceStart:
     """The model of ``config`` and its start (ConfigError naming simulation.initial when there is none)."""
-    initial = config.simulation.initial
-    if initial == "rigid_limit_cycle":
-        cycle = space_limit_cycle(config)
-        if not cycle.converged:
-            raise ConfigError(
-                "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
-            )
-        initial = cycle.fixed_point
-    keys = check_initial(initial)
+    keys = check_initial(space_initial(config))
     state = np.zeros(N_STATE)
     state[:8] = [keys[name] for name in STATE_NAMES[:8]]
     return SpaceStart(space_walker_model(config), state)
