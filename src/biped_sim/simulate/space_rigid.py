@@ -33,7 +33,7 @@ from biped_sim.integrate.driver import TIMEOUT_REASON
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy
-from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, space_samples, space_step_table
+from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, leg_attitudes, space_samples, space_step_table
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_params
@@ -155,6 +155,9 @@ class SpaceRunResult(RunResult):
     def trajectory(self) -> TrajectoryFile:
         channels = [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in RIGID_ENERGY_TERMS]
         channels.append(Channel("hip", self.hip, "m"))
+        stance = np.concatenate(self.trace.sample_step) % 2  # the left leg stands on even steps
+        for name, values in leg_attitudes(self.state, stance).items():
+            channels.append(Channel(f"attitude/{name}", values, "rad/s" if name == "pitch_rate" else "rad"))
         channels += [
             Channel(f"steps/{name}", getattr(self.steps, name), units, False) for name, units in self.steps.columns
         ]
