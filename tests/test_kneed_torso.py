@@ -6,6 +6,7 @@ steps or samples, the compliant run three steps."""
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -14,9 +15,7 @@ import pytest
 
 from biped_sim.config import derive, load_config
 from biped_sim.simulate import simulate
-from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, GridAxis, map_basin
 from biped_sim.studies.fit import synthetic_reference
-from biped_sim.studies.limit_cycle import limit_cycle
 
 from .conftest import invoke
 from .test_yaml_walker import swept
@@ -28,21 +27,27 @@ RIGID_PERIOD = 0.57784  # measured: the rigid gait's step period [s]
 pytestmark = pytest.mark.slow
 
 
-def test_the_rigid_walker_has_a_stable_gait_and_a_basin_around_it() -> None:
-    """The gait (measured: period 0.57784 s, multipliers 0.391 +- 0.560i (|0.683|), 0.073 +- 0.047i, 0.036; the
-    torso 0.197 rad forward of the slope normal just after the strike), and a basin slice over the stance thigh's
-    and the torso's angles around it (+-0.02 rad, +-0.2 rad): every start walks 15 steps and the fixed point's cell
-    comes back to the gait (measured: three of the nine within 1e-3)."""
-    config = load_config(WALKER)
-    cycle = limit_cycle(config)
-    assert cycle.converged and cycle.stable and cycle.max_multiplier_modulus < 0.7
-    assert cycle.step_period == pytest.approx(RIGID_PERIOD, rel=1e-4)
-    assert 0.15 < cycle.fixed_point["torso_angle"] < 0.25  # leaning forward, held by the springs
-    thigh, torso = cycle.fixed_point["stance_thigh_angle"], cycle.fixed_point["torso_angle"]
-    spec = BasinSpec(config, GridAxis("stance_thigh_angle", thigh - 0.02, thigh + 0.02, 3),
-                     GridAxis("torso_angle", torso - 0.2, torso + 0.2, 3), steps=15, tolerance=1e-3)  # fmt: skip
-    basin = map_basin(spec, None)
-    assert basin.outcome[1, 1] == CONVERGED and FELL not in basin.outcome
+def test_limit_cycle_finds_its_stable_rigid_gait_and_basin_maps_the_starts_around_it(tmp_path: Path) -> None:
+    """``limit-cycle``: the gait (measured: period 0.57784 s, multipliers 0.391 +- 0.560i (|0.683|), 0.073 +-
+    0.047i, 0.036; the torso 0.197 rad forward of the slope normal just after the strike). ``basin`` over the stance
+    thigh's angle (0.2, 0.3, 0.4 rad, the knee bent or overstretched off 0.3) and the torso's (-0.4, 0.2, 0.8 rad):
+    the cell nearest the fixed point comes back to the gait within 15 steps, its column walks with the torso 0.6 rad
+    off, and the other columns fall."""
+    result = invoke("limit-cycle", str(WALKER), "--json")
+    assert result.exit_code == 0, result.stderr
+    cycle = json.loads(result.stdout)
+    assert cycle["stable"] and cycle["max_multiplier_modulus"] < 0.7
+    assert cycle["step_period"] == pytest.approx(RIGID_PERIOD, rel=1e-4)
+    assert 0.15 < cycle["fixed_point"]["torso_angle"] < 0.25  # leaning forward, held by the springs
+    grid = ("--x", "stance_thigh_angle=0.2:0.4:3", "--y", "torso_angle=-0.4:0.8:3", "--steps", "15")
+    out = tmp_path / "basin"
+    result = invoke("basin", str(WALKER), *grid, "--tolerance", "1e-3", "--jobs", "1", "--out", str(out))
+    assert result.exit_code == 0, result.stderr
+    with (out / "basin.csv").open() as f:
+        outcome = {(round(float(r["stance_thigh_angle"]), 2), round(float(r["torso_angle"]), 2)): r["outcome"]
+                   for r in csv.DictReader(f)}  # fmt: skip
+    assert outcome[0.3, 0.2] == "converged" and outcome[0.3, -0.4] == outcome[0.3, 0.8] == "walks"
+    assert {outcome[thigh, torso] for thigh in (0.2, 0.4) for torso in (-0.4, 0.2, 0.8)} == {"fell"}
 
 
 def test_the_compliant_walker_walks_the_rigid_gait() -> None:

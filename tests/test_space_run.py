@@ -71,6 +71,10 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     np.testing.assert_array_equal(run.steps["bank"], frame["bank"].to_numpy())
     drawn = space_poses(run)  # the 3D drawing's legs: the hinge's midpoint where the run put the hip
     np.testing.assert_allclose(drawn.hip, run.hip, atol=1e-12)
+    at_strikes = np.searchsorted(run.time, result.heel_strike_times)  # the legs' attitudes, as a spatial run's
+    landing = run.leg_angles()[at_strikes, frame["foot"].to_numpy()]
+    assert run.body_names == ["left", "right"]
+    np.testing.assert_allclose(landing, frame["stance_angle"], atol=1e-12)
 
 
 def test_a_sideways_push_changes_the_steps_and_the_toy_recovers() -> None:
