@@ -41,7 +41,8 @@ def basin_command(
     """
     from biped_sim.plots import save_figure
     from biped_sim.report.basin import basin_figure
-    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis, write_basin
+    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
+    from biped_sim.studies.basin_files import write_basin
     from biped_sim.sweep import study_executor, workers_for
 
     spec = BasinSpec(load(config_path, set_), parse_axis("x", x), parse_axis("y", y), steps, tolerance)

@@ -125,14 +125,18 @@ def ground_point(x: np.ndarray) -> np.ndarray:
     return np.array([x[8], x[9], 0.0])
 
 
-def energy(model: SpaceModel, x: np.ndarray) -> float:
-    """Kinetic plus potential energy (potential zero at the slope frame's origin)."""
+def energy_terms(model: SpaceModel, x: np.ndarray) -> tuple[float, float]:
+    """(kinetic, potential) energy (potential zero at the slope frame's origin)."""
     base = ground_point(x)
     gravity = model.gravity_vector
-    return float(
-        sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w - m.mass * gravity @ (base + m.r)
-            for m in part_motions(model, x))
-    )  # fmt: skip
+    motions = part_motions(model, x)
+    kinetic = sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w for m in motions)
+    return float(kinetic), float(sum(-m.mass * gravity @ (base + m.r) for m in motions))
+
+
+def energy(model: SpaceModel, x: np.ndarray) -> float:
+    """Kinetic plus potential energy (potential zero at the slope frame's origin)."""
+    return sum(energy_terms(model, x))
 
 
 def angular_momentum(motions: list[PartMotion], about: np.ndarray) -> np.ndarray:
@@ -169,3 +173,18 @@ def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
         momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
     x_plus[4:8] = np.linalg.solve(mass_matrix(after), momentum)
     return x_plus
+
+
+def hip_push(model: SpaceModel, x: np.ndarray, impulse: np.ndarray) -> tuple[np.ndarray, float]:
+    """(the state just after an impulse on the hinge's midpoint, the ground's normal impulse). The stance foot and
+    the hinge hold: Kane's impulsive balance M du = A_hip^T p, A_hip the midpoint's partial velocities (it is on
+    the hinge axis: the hinge rate does not move it); the ground's impulse is the walker's momentum change minus p
+    (its normal part negative: the push would lift the stance foot)."""
+    motions = part_motions(model, x)
+    a_hip = np.zeros((3, 4))
+    a_hip[:, :3] = -_skew(pose(model, x).origin)
+    du = np.linalg.solve(mass_matrix(motions), a_hip.T @ impulse)
+    after = np.array(x, dtype=float)
+    after[4:8] += du
+    momentum = sum(m.mass * m.a_matrix @ du for m in motions)
+    return after, float(momentum[2] - impulse[2])
