@@ -6,15 +6,17 @@ from __future__ import annotations
 import gc
 import os
 import signal
+from collections.abc import Callable
 
 import numba
 import pytest
 from numba.core.dispatcher import Dispatcher
 
-from biped_sim.config import Config, derive
+from biped_sim.config import Config, derive, load_config
 from biped_sim.measure.steps import step_table
 from biped_sim.simulate import aside, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult, integrate_config
+from tests.conftest import CONFIGS
 
 
 def _compiled_signatures() -> set[tuple[str, str]]:
@@ -27,8 +29,16 @@ def _compiled_signatures() -> set[tuple[str, str]]:
     }
 
 
-def test_the_stand_in_compiles_every_measure_of_a_run() -> None:
-    config = derive(Config(), {"simulation.t_end": 0.05})
+def _with_knee_stops() -> Config:
+    """The compliant kneed walker (its stops add mode rows), for a short run."""
+    return load_config(CONFIGS / "kneed_walker_compliant.yaml")
+
+
+@pytest.mark.parametrize(
+    "walker", [Config, pytest.param(_with_knee_stops, marks=pytest.mark.slow)], ids=["default", "knee stops"]
+)
+def test_the_stand_in_compiles_every_measure_of_a_run(walker: Callable[[], Config]) -> None:
+    config = derive(walker(), {"simulation.t_end": 0.05})
     model = prepare_model(config)
     aside.measure_stand_in(config, model)
     run = integrate_config(config, model)

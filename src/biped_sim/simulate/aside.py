@@ -34,7 +34,7 @@ def stand_in(model: BuiltModel) -> Integration:
     """An integration of ``model`` that stays in its start state: the array types of a real run's (which its
     measures compile for), without integrating."""
     n = STAND_IN_SAMPLES
-    rec = make_recorder(len(model.y0), model.n_feet, n, n, 0)
+    rec = make_recorder(len(model.y0), len(model.modes0), n, n, 0)  # a mode row per foot and joint stop
     rec.sample_t[:] = rec.strike_t[:] = range(n)
     rec.sample_y[:] = rec.strike_y[:] = model.y0
     rec.sample_modes[:] = rec.strike_modes[:] = model.modes0
