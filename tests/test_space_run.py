@@ -77,6 +77,16 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     np.testing.assert_allclose(landing, frame["stance_angle"], atol=1e-12)
 
 
+@pytest.mark.slow
+def test_the_toys_run_from_its_rigid_limit_cycle_repeats_its_period_and_length_to_the_newton_tolerance() -> None:
+    """``simulation.initial: rigid_limit_cycle`` (the search without a guess, about 20 CPU s): every step the same
+    to 1e-10, the gait's documented period and length to their 8 digits."""
+    result = simulate(load_config(TINKERTOY, ["simulation.max_steps=4", "output.sample_rate=10"]))
+    assert np.ptp(result.step_periods) < 1e-10 and np.ptp(result.step_lengths) < 1e-10
+    np.testing.assert_allclose(result.step_periods, RIGID_PERIOD, atol=5e-9)
+    np.testing.assert_allclose(result.step_lengths, RIGID_LENGTH, atol=5e-9)
+
+
 def test_a_sideways_push_changes_the_steps_and_the_toy_recovers() -> None:
     """A lateral push (pz, to the walker's right) of 0.005 at t = 1.5 changes the periods by up to 2 % and they
     come back to the gait's (the multipliers' moduli 0.84: 1e-4 after 45 steps); pushes alike to either side do
