@@ -71,6 +71,20 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     np.testing.assert_array_equal(run.steps["bank"], frame["bank"].to_numpy())
     drawn = space_poses(run)  # the 3D drawing's legs: the hinge's midpoint where the run put the hip
     np.testing.assert_allclose(drawn.hip, run.hip, atol=1e-12)
+    at_strikes = np.searchsorted(run.time, result.heel_strike_times)  # the legs' attitudes, as a spatial run's
+    landing = run.leg_angles()[at_strikes, frame["foot"].to_numpy()]
+    assert run.body_names == ["left", "right"]
+    np.testing.assert_allclose(landing, frame["stance_angle"], atol=1e-12)
+
+
+@pytest.mark.slow
+def test_the_toys_run_from_its_rigid_limit_cycle_repeats_its_period_and_length_to_the_newton_tolerance() -> None:
+    """``simulation.initial: rigid_limit_cycle`` (the search without a guess, about 20 CPU s): every step the same
+    to 1e-10, the gait's documented period and length to their 8 digits."""
+    result = simulate(load_config(TINKERTOY, ["simulation.max_steps=4", "output.sample_rate=10"]))
+    assert np.ptp(result.step_periods) < 1e-10 and np.ptp(result.step_lengths) < 1e-10
+    np.testing.assert_allclose(result.step_periods, RIGID_PERIOD, atol=5e-9)
+    np.testing.assert_allclose(result.step_lengths, RIGID_LENGTH, atol=5e-9)
 
 
 def test_a_sideways_push_changes_the_steps_and_the_toy_recovers() -> None:

@@ -28,7 +28,7 @@ def basin_command(
     steps: Annotated[int, typer.Option("--steps", help="Steps each cell walks.")] = 30,
     tolerance: Annotated[
         float,
-        typer.Option("--tolerance", help="Converged: last state this close to the gait (max over the four keys)."),
+        typer.Option("--tolerance", help="Converged: last state this close to the gait (max over its keys)."),
     ] = 1e-4,
     jobs: Annotated[int | None, typer.Option("--jobs", "-j", help="Parallel workers (default: all cores).")] = None,
     executor: Annotated[str, typer.Option("--executor", help="local (processes) or dask.")] = "local",

@@ -20,7 +20,8 @@ from biped_sim.io.output import check_writable_dir
 from biped_sim.io.run_files import previous_run
 from biped_sim.measure.steps import LATERAL_STEP_COLUMNS
 from biped_sim.rigid.start import NONDIMENSIONAL
-from biped_sim.simulate import RunResult, prepare_model, simulate
+from biped_sim.simulate import RunResult, simulate
+from biped_sim.simulate.aside import join, prepare_compiling_aside
 from biped_sim.simulate.warmup import warm_up_configs, warm_up_in_processes
 
 LATERAL_NAMES = {name for name, _ in LATERAL_STEP_COLUMNS}
@@ -113,7 +114,9 @@ def run_command(
     check_writable_dir(out_dir)  # before any computation
     replaced = previous_run(out_dir)
     had_figures = (out_dir / "figures").is_dir()
-    model = prepare_model(config)  # validates geometry and the initial state before anything is written
+    # validates geometry and the initial state before anything is written; on a cold compile cache, a second
+    # process compiles the run's measures meanwhile
+    model, aside = prepare_compiling_aside(config)
     console = Console(stderr=False)
     show_progress = not quiet and sys.stdout.isatty()
     if show_progress:
@@ -130,6 +133,7 @@ def run_command(
             result = simulate(config, model=model, progress=lambda t: bar.update(task, completed=t))
     else:
         result = simulate(config, model=model)
+    join(aside)  # its measures compiled: write loads them from the cache
     result.write(out_dir)
     if not quiet:
         console.print(step_table_rich(result))

@@ -102,3 +102,20 @@ def space_samples(
     residual = terms.sum(axis=1) - sum(frame_energy(model, frames[0], start)) + dissipated - push_work
     energy = RigidEnergy(terms[:, 0], terms[:, 1], dissipated, np.zeros(len(times)), push_work, residual)
     return SpaceSamples(world, hip @ TO_SPATIAL.T, energy)
+
+
+def leg_attitudes(state: np.ndarray, stance: np.ndarray) -> dict[str, np.ndarray]:
+    """Each leg's (left, right) pitch, roll, yaw and pitch rate at the samples, as the spatial formulation measures
+    a body's (:func:`~biped_sim.multibody.euler_parameters.attitude`: the leg's angle from the slope normal, positive
+    with its foot downhill; the elevation of its axis to the right above the slope; that axis's heading; the rate
+    about the lateral axis), from the run's state (its frame) and the stance leg of each sample (0 left, 1 right)."""
+    out = {name: np.empty((len(state), 2)) for name in ("pitch", "roll", "yaw", "pitch_rate")}
+    for i, (x, leg) in enumerate(zip(state, stance, strict=True)):
+        rotation = attitude(x[0], x[1], x[2])
+        turns = {leg: (rotation, x[4:7]), 1 - leg: (rotation @ rot_y(x[3]), x[4:7] + x[7] * rotation[:, 1])}
+        for k, (r, omega) in turns.items():
+            out["pitch"][i, k] = math.atan2(-r[0, 2], r[2, 2])
+            out["roll"][i, k] = math.asin(max(-1.0, min(1.0, -r[2, 1])))
+            out["yaw"][i, k] = math.atan2(r[0, 1], r[1, 1])
+            out["pitch_rate"][i, k] = -omega[1]
+    return out

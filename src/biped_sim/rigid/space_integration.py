@@ -59,7 +59,7 @@ def space_scratch() -> tuple[Tableau, Scratch]:
 @kernel
 def space_clearance(p: np.ndarray, x: np.ndarray) -> float:
     """The swing foot's lowest point above the slope (the stance foot's is on it)."""
-    stance, swing, _ = rotations(x)
+    stance, swing = rotations(x)
     stance_bottom, _ = bottom(p, 0, stance)
     swing_bottom, _ = bottom(p, 1, swing)
     return swing_bottom[2] - stance_bottom[2]
@@ -74,7 +74,7 @@ def space_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
 @kernel
 def space_fall(p: np.ndarray, fall_height: float, x: np.ndarray) -> float:
     """Negative once the walker fell: the hinge's height above ``fall_height`` or the bank past ``FALL_BANK``."""
-    stance, _, _ = rotations(x)
+    stance, _ = rotations(x)
     stance_bottom, _ = bottom(p, 0, stance)
     return min(-stance_bottom[2] - fall_height, FALL_BANK - abs(x[1]))
 

@@ -21,13 +21,18 @@ from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.space_cycle import space_limit_cycle
 from biped_sim.rigid.start import RigidStart, rigid_start
 from biped_sim.simulate.budget import check_run_size
 from biped_sim.simulate.compliant import CompliantRunResult, simulate_compliant
 from biped_sim.simulate.result import RunResult
 from biped_sim.simulate.rigid import RigidRunResult, simulate_rigid
-from biped_sim.simulate.space_rigid import SpaceRunResult, SpaceStart, simulate_space_rigid, space_start
+from biped_sim.simulate.space_rigid import (
+    SpaceRunResult,
+    SpaceStart,
+    simulate_space_rigid,
+    space_initial,
+    space_start,
+)
 from biped_sim.walkers import BuiltModel, build_model
 
 __all__ = [
@@ -48,13 +53,8 @@ def initial_state(config: Config) -> InitialState | dict[str, float]:
     """The compliant run's initial leg state: as configured, or the rigid model's limit cycle (a walker in space:
     its own rigid model's post-strike fixed point)."""
     initial = config.simulation.initial
-    if initial == "rigid_limit_cycle" and capabilities(config.walker.kind).space:
-        cycle = space_limit_cycle(config)
-        if not cycle.converged:
-            raise ConfigError(
-                "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
-            )
-        return cycle.fixed_point
+    if capabilities(config.walker.kind).space:
+        return space_initial(config)  # type: ignore[return-value]
     if initial == "rigid_limit_cycle":
         return InitialState(**rigid_limit_cycle_initial(config))
     return initial

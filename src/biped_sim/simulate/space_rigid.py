@@ -33,7 +33,7 @@ from biped_sim.integrate.driver import TIMEOUT_REASON
 from biped_sim.io.atomic import json_safe
 from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy
-from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, space_samples, space_step_table
+from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, leg_attitudes, space_samples, space_step_table
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_params
@@ -57,17 +57,23 @@ class SpaceStart:
     state: np.ndarray
 
 
+def space_initial(config: Config) -> object:
+    """``simulation.initial`` of a walker in space, ``rigid_limit_cycle`` resolved to the gait's post-strike state
+    (ConfigError naming simulation.initial when Newton does not converge)."""
+    initial = config.simulation.initial
+    if initial != "rigid_limit_cycle":
+        return initial
+    cycle = space_limit_cycle(config)
+    if not cycle.converged:
+        raise ConfigError(
+            "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
+        )
+    return cycle.fixed_point
+
+
 def space_start(config: Config) -> SpaceStart:
     """The model of ``config`` and its start (ConfigError naming simulation.initial when there is none)."""
-    initial = config.simulation.initial
-    if initial == "rigid_limit_cycle":
-        cycle = space_limit_cycle(config)
-        if not cycle.converged:
-            raise ConfigError(
-                "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
-            )
-        initial = cycle.fixed_point
-    keys = check_initial(initial)
+    keys = check_initial(space_initial(config))
     state = np.zeros(N_STATE)
     state[:8] = [keys[name] for name in STATE_NAMES[:8]]
     return SpaceStart(space_walker_model(config), state)
@@ -149,6 +155,9 @@ class SpaceRunResult(RunResult):
     def trajectory(self) -> TrajectoryFile:
         channels = [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in RIGID_ENERGY_TERMS]
         channels.append(Channel("hip", self.hip, "m"))
+        stance = np.concatenate(self.trace.sample_step) % 2  # the left leg stands on even steps
+        for name, values in leg_attitudes(self.state, stance).items():
+            channels.append(Channel(f"attitude/{name}", values, "rad/s" if name == "pitch_rate" else "rad"))
         channels += [
             Channel(f"steps/{name}", getattr(self.steps, name), units, False) for name, units in self.steps.columns
         ]
