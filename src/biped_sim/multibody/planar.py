@@ -21,8 +21,10 @@ element's (:mod:`biped_sim.contact.joint_element`) act on the angles of their tw
 Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. Those of the right-hand side
 count no references (``kernel(reference_counts=False)``, as the rigid step map's): numba would otherwise count each
 of the system's two dozen arrays, a call at entry and one at exit, in every kernel that takes the system at every
-evaluation, a cost that grew with each field the system gained (the joint elements', the body falls'). The module
-ends with the Python-side measurements and the formulation record :data:`FORMULATION`.
+evaluation, a cost that grew with each field the system gained (the joint elements', the body falls'). For the same
+reason :func:`constrained_accelerations` is inlined in :func:`rhs`: a call passes the whole system, some two hundred
+machine words copied on the stack, and that copy made the compliant runs slower than its instruction count says
+(``make bench``). The module ends with the Python-side measurements and the formulation record :data:`FORMULATION`.
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ from biped_sim.contact.response import (
     body_fall,
 )
 from biped_sim.contact.stop import NO_STOPS, Stops
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
@@ -226,6 +228,10 @@ def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspa
         qdd[c] = v * _inverse_mass(system, c)
 
 
+# inlined in rhs (the module docstring says why); its Cholesky solve stays a call
+_constrained_accelerations = inlined(constrained_accelerations, calls=frozenset({"cholesky_solve"}))
+
+
 @kernel(reference_counts=False)
 def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
@@ -253,7 +259,7 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
     joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + nf + 2)
-    constrained_accelerations(y, system, work, ydot[n : 2 * n])
+    _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
 @kernel
