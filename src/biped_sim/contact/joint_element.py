@@ -166,7 +166,7 @@ def make_elements(index: np.ndarray, law: np.ndarray, params: np.ndarray) -> Joi
 NO_ELEMENTS = make_elements(np.zeros((0, 4)), np.zeros(0), np.zeros((0, N_ELEMENT_PARAMS)))
 
 
-@kernel
+@kernel(reference_counts=False)
 def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
     """(theta, thetadot) of element e: the child's angle and rate relative to the other body's (or to the slope
     normal: the other body -1, the ground, as a stop's)."""
@@ -175,7 +175,7 @@ def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[floa
     return theta, y[index[e, CHILD_RATE]] - joint_entry(y, index[e, PARENT_RATE])
 
 
-@kernel
+@kernel(reference_counts=False)
 def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
     power = 0.0
     for e in range(elements.law.shape[0]):
@@ -188,7 +188,7 @@ def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) 
     return power
 
 
-@kernel
+@kernel(reference_counts=False)
 def _no_element_torques(y: np.ndarray, elements: NoElements, force: np.ndarray) -> float:
     return 0.0
 
@@ -219,7 +219,7 @@ elements_energy = by_type(
 elements_energy.__doc__ = """Energy stored in every element of ``elements`` (none in a :class:`NoElements`)."""
 
 
-@kernel
+@kernel(reference_counts=False)
 def joint_torques(
     y: np.ndarray, stops: Stops, elements: JointElements, modes: np.ndarray, first_row: int, force: np.ndarray,
     ydot: np.ndarray, work: int,

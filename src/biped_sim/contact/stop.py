@@ -119,7 +119,7 @@ def joint_entry(y: np.ndarray, k: int) -> float:
     return y[k] if k >= 0 else 0.0
 
 
-@kernel
+@kernel(reference_counts=False)
 def stop_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, float]:
     """(delta, deltadot) of stop s: the relative angle past its limit [rad] and its approach rate [rad/s]."""
     index, side = stops.index, stops.limit[s, SIDE]
@@ -144,13 +144,13 @@ stop_rate.__doc__ = (
 )
 
 
-@kernel
+@kernel(reference_counts=False)
 def is_latched(stops: Stops, modes: np.ndarray, row: int, s: int) -> bool:
     """Whether stop s (mode row ``row``) is a latching stop whose latch holds."""
     return stops.latch[s, FOOT] != NOT_LATCHING and modes[row, LATCHED] != FREE
 
 
-@kernel
+@kernel(reference_counts=False)
 def stop_torque(y: np.ndarray, stops: Stops, modes: np.ndarray, row: int, s: int) -> tuple[float, float]:
     """(tau, P) of stop s, whose contact mode is ``modes[row]``: the torque on its child (-tau on its parent)
     and the power its damping dissipates; zero while the joint is inside its limit, unless it is latched."""
@@ -166,7 +166,7 @@ def stop_torque(y: np.ndarray, stops: Stops, modes: np.ndarray, row: int, s: int
     return -stops.limit[s, SIDE] * pressed * f, power
 
 
-@kernel
+@kernel(reference_counts=False)
 def _stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int, force: np.ndarray) -> float:
     power = 0.0
     for s in range(stops.law.shape[0]):
@@ -179,7 +179,7 @@ def _stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int
     return power
 
 
-@kernel
+@kernel(reference_counts=False)
 def _no_stop_torques(y: np.ndarray, stops: NoStops, modes: np.ndarray, first_row: int, force: np.ndarray) -> float:
     return 0.0
 

@@ -123,7 +123,7 @@ def make_workspace(system: SpatialSystem) -> Workspace:
 # ---------------------------------------------------------------- constraints
 
 
-@kernel
+@kernel(reference_counts=False)
 def constraint_terms(
     y: np.ndarray, system: SpatialSystem, c: int, phi_q: np.ndarray, fill: bool
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
@@ -218,7 +218,7 @@ def normalisation(y: np.ndarray, nb: int, b: int) -> tuple[float, float, float]:
     return pp - 1.0, 2.0 * ppd, -2.0 * pdpd
 
 
-@kernel
+@kernel(reference_counts=False)
 def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
     """minv[b] = (G^T J'^-1 G + p p^T / j) / (4 |p|^4): inverse of 4 G^T J' G + 4 j p p^T."""
     jinv = system.body_inertia_inv
@@ -235,7 +235,7 @@ def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
                 minv[b, k, i] = v
 
 
-@kernel
+@kernel(reference_counts=False)
 def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Workspace, qdd: np.ndarray) -> None:
     """Accelerations from the augmented system with Baumgarte stabilisation (forces in work.force)."""
     nb = system.body_mass.shape[0]

@@ -37,7 +37,7 @@ from biped_sim.contact.response import (
     normal_response,
     stored_energy,
 )
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.euler_parameters import (
     attitude,
     b_mul,
@@ -64,7 +64,7 @@ from biped_sim.multibody.spatial import (
 )
 
 
-@kernel
+@kernel(reference_counts=False)
 def foot_kinematics(
     y: np.ndarray, system: SpatialSystem, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
@@ -110,7 +110,7 @@ def foot_contact(y: np.ndarray, system: SpatialSystem, foot: int) -> tuple[float
     return kin[0], kin[1], kin[4]
 
 
-@kernel
+@kernel(reference_counts=False)
 def foot_forces(
     y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float, float, float, float, float]:
@@ -144,7 +144,14 @@ def foot_forces(
     return f_n, f_x, f_z, zdx, zdz, p_normal, p_friction, delta, delta_dot, vx, vz, s0, s1, s2
 
 
-@kernel
+# the right-hand side's kernels count no references and its constraint solve is inlined, as the planar
+# formulation's (its module docstring says why: a call passes the whole system and numba counts its arrays)
+_constrained_accelerations = inlined(
+    constrained_accelerations, calls=frozenset({"constraint_terms", "normalisation", "mass_blocks", "cholesky_solve"})
+)
+
+
+@kernel(reference_counts=False)
 def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
     nb = system.body_mass.shape[0]
@@ -182,7 +189,7 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
         w_friction += p_f
     ydot[2 * n + 2 * nf] = w_normal
     ydot[2 * n + 2 * nf + 1] = w_friction
-    constrained_accelerations(y, system, work, ydot[n : 2 * n])
+    _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
 # ---------------------------------------------------------------- energy and falls

@@ -12,7 +12,7 @@ from biped_sim.kernel import kernel
 from biped_sim.rigid.tree_layout import ELEMENT_FIELDS, ELEMENT_HEAD, T_NELEM, coords, element_offset
 
 
-@kernel
+@kernel(reference_counts=False)
 def joint_element(p: np.ndarray, e: int, q: np.ndarray, qd: np.ndarray) -> tuple[int, int, float, float]:
     """(child, other, torque on the child, dissipated power) of joint element e: its law's one source
     (:mod:`biped_sim.contact.joint_element`) at the relative angle and rate of the child to the other body."""
@@ -23,7 +23,7 @@ def joint_element(p: np.ndarray, e: int, q: np.ndarray, qd: np.ndarray) -> tuple
     return child, other, tau, power
 
 
-@kernel
+@kernel(reference_counts=False)
 def element_forces(p: np.ndarray, q: np.ndarray, qd: np.ndarray, r: int) -> None:
     """Add the joint elements' torques to the generalized forces at p[r:]: with absolute angles as coordinates a
     couple tau on (child, other) is tau on the child's coordinate and -tau on the other's (none on the ground)."""

@@ -122,7 +122,7 @@ def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool,
     return used
 
 
-@kernel
+@kernel(reference_counts=False)
 def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix at p[w:] (row stride m) for the vector at p[r:], in
     place: Cramer's rule up to 2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the
