@@ -21,6 +21,7 @@ from biped_sim.integrate.dense import (
     dop853_extra_stage_input,
     illinois_point,
     illinois_update,
+    sample_dense,
 )
 from biped_sim.integrate.stepper import (
     Scratch,
@@ -178,28 +179,13 @@ def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float,
 
 
 @kernel
-def _first_sample(rate: float, t: float) -> int:
+def first_sample(rate: float, t: float) -> int:
     """The first grid index k with k / rate >= t (0 when not sampling)."""
     if rate == 0.0:
         return 0
     k = math.ceil(t * rate)
     while k / rate < t:
         k += 1
-    return k
-
-
-@kernel(reference_counts=False)
-def _sample(cw: CompiledWalker, k: int, t: float, h: float, t_end: float, y: np.ndarray) -> int:
-    """Record the grid points k / rate in [t, t_end) of the last accepted step (from (t, y), length h) on its dense
-    output, prepared by the caller; returns the next grid index. The buffer is sized for a step's whole grid."""
-    rate, rec = cw.plan.sample_rate, cw.record
-    n = rec.counts[SAMPLED]
-    while k / rate < t_end and n < rec.samples_t.shape[0]:
-        rec.samples_t[n] = k / rate
-        dense_eval(cw.tab, (k / rate - t) / h, h, y, cw.sc, rec.samples_x[n])
-        n += 1
-        k += 1
-    rec.counts[SAMPLED] = n
     return k
 
 
@@ -212,7 +198,7 @@ def stretch(
     after a push: the starting step, the events' values at the start."""
     p, tab, sc = cw.params, cw.tab, cw.sc
     rate = cw.plan.sample_rate
-    k_next = _first_sample(rate, t)
+    k_next = first_sample(rate, t)
     rigid_rhs(p, y, sc.k[0])
     h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
@@ -252,7 +238,10 @@ def stretch(
             if first < 0:
                 _prepare_dense(p, tab, h, y, sc)
                 counters[0] += 3
-            k_next = _sample(cw, k_next, t, h, t_end, y)
+            rec = cw.record
+            n = sample_dense(tab, sc, rate, k_next, t, h, t_end, y, rec.samples_t, rec.samples_x, rec.counts[SAMPLED])
+            k_next += n - rec.counts[SAMPLED]
+            rec.counts[SAMPLED] = n
         if first >= 0:
             dense_eval(tab, best, h, y, sc, sc.y_dense)
             copy_into(sc.y_dense, y)
