@@ -90,10 +90,9 @@ def _likelihood_interval(k: int, total: float, threshold: float) -> tuple[float,
     return low, high
 
 
-def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
-    """One walk on random heights of ``roughness`` leg lengths: (strikes, fell)."""
-    from biped_sim.simulate import simulate  # the engine: imported by the workers that walk
-
+def height_walk_config(config: Config, roughness: float, seed: int, cap: int) -> Config:
+    """``config`` on random heights of ``roughness`` leg lengths, stopped after ``cap`` heel strikes (a compliant
+    planar walker in minimal coordinates, as every study runs it)."""
     leg = config.walker.leg_length
     t_end = TIME_PER_STEP * cap * math.sqrt(leg / config.gravity)
     profile = {"kind": "random", "spacing": SPACING * leg, "roughness": roughness * leg, "seed": seed,
@@ -101,7 +100,14 @@ def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[
     values: dict[str, Any] = {"ground.profile": profile, "simulation.max_steps": cap, "simulation.t_end": t_end}
     if config.dynamics == "compliant":
         values |= {"formulation.kind": study_formulation(config), "output.sample_rate": 100.0}
-    result = simulate(derive(config, values))
+    return derive(config, values)
+
+
+def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
+    """One walk on random heights of ``roughness`` leg lengths: (strikes, fell)."""
+    from biped_sim.simulate import simulate  # the engine: imported by the workers that walk
+
+    result = simulate(height_walk_config(config, roughness, seed, cap))
     strikes = len(result.steps.strike_time)
     return min(strikes, cap), not (result.status == "walking" and strikes >= cap)
 
