@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
@@ -182,6 +183,7 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
         w_friction += p_f
     ydot[2 * n + 2 * nf] = w_normal
     ydot[2 * n + 2 * nf + 1] = w_friction
+    joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + 2 * nf + 2)
     constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
@@ -203,9 +205,10 @@ def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -
         kinetic += 0.5 * m * dot3(v, v) + 0.5 * dot3(w, inertia_mul(system.body_inertia, b, w))
         potential -= m * dot3(g, position(y, b))
     elastic = 0.0
-    for i in range(system.foot_body.shape[0]):
+    nf = system.foot_body.shape[0]
+    for i in range(nf):
         elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
-    return kinetic, potential, elastic
+    return kinetic, potential, elastic + joints_energy(y, system.stops, system.elements, modes, nf)
 
 
 @kernel

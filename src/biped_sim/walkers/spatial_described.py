@@ -27,6 +27,7 @@ import numpy as np
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.multibody.hinge import FRAME, hinge_index, make_hinge_elements, make_hinge_stops
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described, resolve_tree
@@ -97,6 +98,7 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
     planar = build_described(config, initial)
     tree = resolve_tree(describe(config))
     ps = planar.system
+    nb = planar.n_bodies
     primitives = [
         p
         for (a, b), (xa, ya, xb, yb) in zip(ps.joint_bodies, ps.joint_points, strict=True)
@@ -121,8 +123,24 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         friction_params=ps.friction_params,
         switches=ps.switches,
         limits=ps.limits.copy(),
+        stops=make_hinge_stops(
+            ps.stops, _hinge_rows([(p, c) for p, c, *_ in tree.stops], nb), _lifted_frames(tree.stops)
+        ),
+        elements=make_hinge_elements(
+            ps.elements, _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb), _lifted_frames(tree.elements)
+        ),
     )
     return replace(planar, system=system, y0=_spatial_state(planar, system))
+
+
+def _hinge_rows(pairs: list[tuple[int, int]], n_bodies: int) -> np.ndarray:
+    """The spatial ``index`` rows of the joints between (other body, child) pairs (-1: the ground)."""
+    return np.array([hinge_index(c, a, n_bodies) for a, c in pairs], dtype=np.int64).reshape(-1, 4)
+
+
+def _lifted_frames(rows: list[tuple]) -> np.ndarray:
+    """The hinge frames of lifted planar joints: the axis z' and the references x' (theta = phi_c - phi_p)."""
+    return np.array([[*Z, *X, *X]] * len(rows), dtype=np.float64).reshape(-1, FRAME)
 
 
 def _spatial_state(planar: BuiltModel, system: SpatialSystem) -> np.ndarray:
