@@ -13,8 +13,7 @@ from biped_sim import load_config, simulate
 from biped_sim._compiled_cache import profiling_compilations, recording_compilations
 from biped_sim.config import derive
 from biped_sim.multibody.dispatch import FORMULATIONS
-from biped_sim.simulate import RunResult, warmup
-from biped_sim.studies.uncertainty.samples import run_formulation
+from biped_sim.simulate import RunResult, study_formulation, warmup
 from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
@@ -128,7 +127,7 @@ def test_the_bundled_configs_studies_run_in_the_warmed_groups() -> None:
     """A fit evaluation or an uncertainty sample runs a planar walker in minimal coordinates: groups the warm-up
     warms too (the tests' studies, and a user's first, would compile them otherwise, each worker its own copy)."""
     configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
-    groups = {warmup.group_of(derive(config, {"formulation.kind": run_formulation(config)})) for config in configs}
+    groups = {warmup.group_of(derive(config, {"formulation.kind": study_formulation(config)})) for config in configs}
     assert groups <= set(warmup.BUNDLED_GROUPS)
     assert ("minimal", "explicit", "flat") in groups  # the default walker's
     assert ("minimal", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's

@@ -33,10 +33,10 @@ from scipy import optimize, stats
 from biped_sim.config import Config, derive
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ArgumentError, ConfigError
+from biped_sim.simulate import study_formulation
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.tasks import results_as_done
 from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, walks_random_slopes, wheel_walks
-from biped_sim.studies.uncertainty.samples import run_formulation
 
 CONFIDENCE = 0.95
 SPACING = 0.1  # [leg lengths] between the random heights
@@ -98,7 +98,7 @@ def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[
                "start": 0.0, "length": 2.0 * cap * leg}  # fmt: skip
     values: dict[str, Any] = {"ground.profile": profile, "simulation.max_steps": cap, "simulation.t_end": t_end}
     if config.dynamics == "compliant":
-        values |= {"formulation.kind": run_formulation(config), "output.sample_rate": 100.0}
+        values |= {"formulation.kind": study_formulation(config), "output.sample_rate": 100.0}
     result = simulate(derive(config, values))
     strikes = len(result.steps.strike_time)
     return min(strikes, cap), not (result.status == "walking" and strikes >= cap)
