@@ -7,10 +7,14 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 
-from biped_sim import load_config, simulate
+from biped_sim import config_from_dict, load_config, simulate
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.euler_parameters import e_mul, g_mul
 from biped_sim.multibody.hinge import HingeElements, HingeStops, hinge_angle, hinge_couple, hinge_index
+from biped_sim.multibody.spatial import IN_PLANE
+from biped_sim.walkers import build_model
 
 from .conftest import ROOT
 
@@ -105,3 +109,22 @@ def test_the_torso_walker_lifted_into_space_keeps_its_torso_on_its_springs() -> 
     parameters."""
     _, spatial = _lifted(TORSO, 1.6, "elements")
     assert isinstance(spatial.model.system.elements, HingeElements)
+
+
+def test_a_mirrored_leg_with_a_hip_width_stands_beside_the_first_in_space() -> None:
+    """The mirrored leg's ``hip`` lateral (a named parameter) is the hip width: the second leg's bodies beside the
+    first's, its feet the mirror image of the first's, no planar joint to the ground (roll and yaw free)."""
+    data = yaml.safe_load(TORSO.read_text())
+    walker = data["walker"]
+    walker["parameters"].append({"name": "hip_width", "value": 0.12, "unit": "m"})
+    walker["description"]["hip"] = {"lateral": "-hip_width"}
+    walker["description"]["leg"]["feet"][0]["lateral"] = "hip_width / 4"
+    model = build_model(config_from_dict({**data, "formulation": {"kind": "spatial"}}))
+    layout = formulation_of(model.system).layout_of(model.system)
+    lateral = {name: model.y0[layout.position(b)][2] for b, name in enumerate(model.body_names)}
+    assert lateral == pytest.approx({"leg_1": 0.0, "leg_2": -0.12, "torso": 0.0}, abs=1e-15)
+    feet = dict(zip(model.foot_names, model.system.foot_center[:, 2], strict=True))
+    assert feet == pytest.approx({"foot_1": 0.03, "foot_2": -0.03}, abs=1e-15)
+    assert IN_PLANE not in model.system.con_type
+    hip = model.system.con_vecs[0]  # the hip joint's point on leg_1, 0.12 to its left, is leg_2's origin
+    assert hip[2] == pytest.approx(-0.12) and hip[5] == 0.0
