@@ -197,7 +197,7 @@ def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float,
 
 
 @kernel
-def _first_sample(rate: float, t: float) -> int:
+def first_sample(rate: float, t: float) -> int:
     """The first grid index k with k / rate >= t (0 when not sampling)."""
     if rate == 0.0:
         return 0
@@ -246,7 +246,7 @@ def stretch(
     p, tab, sc = cw.params, cw.tab, cw.sc
     rate, work = cw.plan.sample_rate, cw.record.work
     elements = has_elements(p)
-    k_next = _first_sample(rate, t)
+    k_next = first_sample(rate, t)
     rigid_rhs(p, y, sc.k[0])
     h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
