@@ -76,6 +76,8 @@ class SpatialSystem(NamedTuple):
     foot_center: np.ndarray  # (nf, 3) disc or sphere centre, body frame
     foot_axis: np.ndarray  # (nf, 3) unit disc axis, body frame; zero = sphere
     foot_radius: np.ndarray  # (nf,)
+    foot_tube: np.ndarray  # (nf,) a torus's tube radius about its disc's edge; 0 = none
+    foot_quadric: np.ndarray  # (nf, 3, 3) an ellipsoid's Q, body frame (points centre + Q^(1/2) u); zero = none
     foot_partner: np.ndarray  # (nf,) int64: the foot this one must be ahead of to arm (-1: none)
     gravity: np.ndarray  # (3,) in the slope frame
     baumgarte: np.ndarray  # (2,) alpha, beta

@@ -101,7 +101,7 @@ def _empty_plan() -> StepPlan:
 def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
     return StepRecord(
         np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
-        np.zeros((n_stops, 2)),
+        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1),
     )  # fmt: skip
 
 
@@ -183,6 +183,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     copy_into(x_start, x_minus)
     for i in range(cw.record.counts.shape[0]):  # not a slice assignment: its shape check's message compiles
         cw.record.counts[i] = 0
+    cw.record.work[0] = 0.0
     t = 0.0
     begin_step(p)
     last = n_phases(p) - 1
@@ -306,6 +307,8 @@ def rigid_step(
         step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]
     if sampled:
         step.samples_t, step.samples_x = rec.samples_t[:sampled].copy(), rec.samples_x[:sampled].copy()
+        step.samples_work = rec.samples_w[:sampled].copy()
+    step.element_work = float(rec.work[0])
     if stops:
         step.stop_strikes = [tuple(row) for row in rec.stops[:stops].tolist()]
     return step

@@ -8,12 +8,24 @@ import math
 import numpy as np
 
 from biped_sim.kernel import inlined, kernel
+from biped_sim.rigid.tree_elements import tree_element_power
 from biped_sim.rigid.tree_kernels import (
     tree_guard,
     tree_guard_rate,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import P_FALL, P_L, T_NOFF, T_NPHASE, T_NPTS, coords, fall_angle, perm_offset, point
+from biped_sim.rigid.tree_layout import (
+    P_FALL,
+    P_L,
+    T_NELEM,
+    T_NOFF,
+    T_NPHASE,
+    T_NPTS,
+    coords,
+    fall_angle,
+    perm_offset,
+    point,
+)
 
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
 
@@ -75,3 +87,15 @@ def n_fall_checks(p: np.ndarray) -> int:
 @kernel
 def fall_check(p: np.ndarray, i: int, x: np.ndarray) -> float:
     return _fall(p, i, x)
+
+
+@kernel
+def has_elements(p: np.ndarray) -> bool:
+    """The walker has joint elements (springs, dampers): the step integrates their dissipated work."""
+    return p[T_NELEM] > 0
+
+
+@kernel
+def element_power(p: np.ndarray, x: np.ndarray) -> float:
+    """Power the joint elements dissipate at state x (>= 0), the integrand of their work."""
+    return tree_element_power(p, x)

@@ -114,6 +114,8 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         foot_center=np.column_stack([ps.foot_center, tree.foot_lateral]),
         foot_axis=np.array([DISC_AXIS] * len(tree.foot_names)),
         foot_radius=ps.foot_radius.copy(),
+        foot_tube=np.zeros(len(tree.foot_names)),
+        foot_quadric=np.zeros((len(tree.foot_names), 3, 3)),
         foot_partner=ps.foot_partner.copy(),
         gravity=spatial_gravity(config),
         baumgarte=ps.baumgarte.copy(),
