@@ -70,12 +70,12 @@ DOWN = (0.0, -1.0, 0.0)  # against the ground's normal
 def foot_bottom(p: tuple, system: SpatialSystem, i: int) -> tuple[tuple, tuple, tuple]:
     """Foot i's lowest point P against the ground plane y = 0 on a body turned by the parameters p: (c, b, s') with
     c = A c' its centre and b = P - c from there (slope frame, P = r + c + b), and s' its body-frame lever,
-    A s' = c + b (A = rotate(p, .): |p|^2 times the rotation, so that the lever holds off the unit sphere too).
+    A s' = c + b (A = rotate(p, .): p.p times the rotation, so that the lever holds off the unit sphere too).
 
     A disc (axis a): R d, d the unit direction in its plane most against the normal; a sphere (axis 0): R below
     the centre; a torus: its disc's point lowered by the tube radius (the tube's section there is a circle in the
     vertical plane through d, lowest straight below its centre); an ellipsoid (quadric Q, body frame): A Q m /
-    sqrt(m.Q m) / |p|^2, m = A^T (0, -1, 0) the ground's inward normal in the body frame.
+    sqrt(m.Q m) / p.p, m = A^T (0, -1, 0) the ground's inward normal in the body frame.
     """
     sc = vec3(system.foot_center, i, 0)
     centre = rotate(p, sc)
