@@ -150,7 +150,7 @@ def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> 
         ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS),
         ("minimal", "explicit", "profile" + warmup.JOINT_STOPS + warmup.JOINT_ELEMENTS),
     } <= groups
-    assert ("spatial", "explicit", "flat" + warmup.JOINT_STOPS) not in groups  # the spatial one describes no walker
+    assert ("spatial", "stiff", "flat" + warmup.JOINT_STOPS + warmup.JOINT_ELEMENTS) in groups  # multibody.hinge's
     assert (*warmup.RIGID, "flat") in groups
 
 

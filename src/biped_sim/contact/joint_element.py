@@ -34,6 +34,7 @@ from biped_sim.contact.stop import (
     PARENT_ANGLE,
     PARENT_RATE,
     Stops,
+    add_couple,
     joint_entry,
     stop_torques,
     stops_energy,
@@ -166,8 +167,8 @@ def make_elements(index: np.ndarray, law: np.ndarray, params: np.ndarray) -> Joi
 NO_ELEMENTS = make_elements(np.zeros((0, 4)), np.zeros(0), np.zeros((0, N_ELEMENT_PARAMS)))
 
 
-@kernel(reference_counts=False)
-def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
+@kernel
+def _angle_difference(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
     """(theta, thetadot) of element e: the child's angle and rate relative to the other body's (or to the slope
     normal: the other body -1, the ground, as a stop's)."""
     index = elements.index
@@ -175,20 +176,29 @@ def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[floa
     return theta, y[index[e, CHILD_RATE]] - joint_entry(y, index[e, PARENT_RATE])
 
 
-@kernel(reference_counts=False)
+@kernel
+def _apply_angle_torque(y: np.ndarray, elements: JointElements, e: int, tau: float, force: np.ndarray) -> None:
+    """Add the torque tau of element e to its child's angle's generalized force and -tau to the other body's."""
+    add_couple(elements.index, e, tau, force)
+
+
+# as contact.stop's: a formulation whose coordinates are not angles adds its own elements record (multibody.hinge)
+relative_angle = by_type("relative_angle", "elements", {JointElements: _angle_difference})
+apply_element_torque = by_type("apply_element_torque", "elements", {JointElements: _apply_angle_torque})
+
+
+@kernel
 def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
     power = 0.0
     for e in range(elements.law.shape[0]):
         theta, theta_dot = relative_angle(y, elements, e)
         tau, p = element_torque(elements.law[e], theta, theta_dot, elements.params[e])
-        force[elements.index[e, CHILD_ANGLE]] += tau
-        if elements.index[e, PARENT_ANGLE] >= 0:
-            force[elements.index[e, PARENT_ANGLE]] -= tau
+        apply_element_torque(y, elements, e, tau, force)
         power += p
     return power
 
 
-@kernel(reference_counts=False)
+@kernel
 def _no_element_torques(y: np.ndarray, elements: NoElements, force: np.ndarray) -> float:
     return 0.0
 
@@ -219,7 +229,7 @@ elements_energy = by_type(
 elements_energy.__doc__ = """Energy stored in every element of ``elements`` (none in a :class:`NoElements`)."""
 
 
-@kernel(reference_counts=False)
+@kernel
 def joint_torques(
     y: np.ndarray, stops: Stops, elements: JointElements, modes: np.ndarray, first_row: int, force: np.ndarray,
     ydot: np.ndarray, work: int,

@@ -55,6 +55,7 @@ from biped_sim.multibody.euler_parameters import (
     unit4,
     vec3,
 )
+from biped_sim.multibody.hinge import HingeElements, HingeStops
 from biped_sim.multibody.linalg import cholesky_solve
 
 # constraint primitives and their row counts
@@ -85,8 +86,9 @@ class SpatialSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
-    stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
-    elements: JointElements = NO_ELEMENTS  # contact.joint_element: none in 3D yet (the state layout reads it)
+    # the joint stops (multibody.hinge: their modes follow the feet's in the mode table), springs and dampers
+    stops: Stops | HingeStops = NO_STOPS
+    elements: JointElements | HingeElements = NO_ELEMENTS
 
 
 class Workspace(NamedTuple):

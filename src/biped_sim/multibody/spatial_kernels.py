@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
@@ -70,12 +71,12 @@ DOWN = (0.0, -1.0, 0.0)  # against the ground's normal
 def foot_bottom(p: tuple, system: SpatialSystem, i: int) -> tuple[tuple, tuple, tuple]:
     """Foot i's lowest point P against the ground plane y = 0 on a body turned by the parameters p: (c, b, s') with
     c = A c' its centre and b = P - c from there (slope frame, P = r + c + b), and s' its body-frame lever,
-    A s' = c + b (A = rotate(p, .): |p|^2 times the rotation, so that the lever holds off the unit sphere too).
+    A s' = c + b (A = rotate(p, .): p.p times the rotation, so that the lever holds off the unit sphere too).
 
     A disc (axis a): R d, d the unit direction in its plane most against the normal; a sphere (axis 0): R below
     the centre; a torus: its disc's point lowered by the tube radius (the tube's section there is a circle in the
     vertical plane through d, lowest straight below its centre); an ellipsoid (quadric Q, body frame): A Q m /
-    sqrt(m.Q m) / |p|^2, m = A^T (0, -1, 0) the ground's inward normal in the body frame.
+    sqrt(m.Q m) / p.p, m = A^T (0, -1, 0) the ground's inward normal in the body frame.
     """
     sc = vec3(system.foot_center, i, 0)
     centre = rotate(p, sc)
@@ -219,6 +220,7 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
         w_friction += p_f
     ydot[2 * n + 2 * nf] = w_normal
     ydot[2 * n + 2 * nf + 1] = w_friction
+    joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + 2 * nf + 2)
     _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
@@ -240,9 +242,10 @@ def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -
         kinetic += 0.5 * m * dot3(v, v) + 0.5 * dot3(w, inertia_mul(system.body_inertia, b, w))
         potential -= m * dot3(g, position(y, b))
     elastic = 0.0
-    for i in range(system.foot_body.shape[0]):
+    nf = system.foot_body.shape[0]
+    for i in range(nf):
         elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
-    return kinetic, potential, elastic
+    return kinetic, potential, elastic + joints_energy(y, system.stops, system.elements, modes, nf)
 
 
 @kernel

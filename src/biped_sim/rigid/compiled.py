@@ -46,6 +46,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from biped_sim.integrate.stepper import make_scratch
 from biped_sim.integrate.tableaus import tableau
@@ -114,7 +115,7 @@ def compile_walker(walker: RigidWalker) -> CompiledWalker:
     return CompiledWalker(params, tableau("dop853"), scratch, t_limit, _empty_plan(), record)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _push(cw: CompiledWalker, t: float, y: np.ndarray) -> None:
     """The next push's velocity jump on y (in place, through sc.y_new) and its record (t, work, normal impulse)."""
     p, rec, plan = cw.params, cw.record, cw.plan
@@ -127,7 +128,7 @@ def _push(cw: CompiledWalker, t: float, y: np.ndarray) -> None:
     rec.counts[APPLIED] = i + 1
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, counters: np.ndarray):
     """Integrate from (t, y) to the phase's guard, a fall or the time limit, stopping at each pending push (one at or
     before t applies at once) for its jump; y ends at the event (in place)."""
@@ -144,7 +145,7 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
         _push(cw, t, y)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
     """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
     p, rec = cw.params, cw.record
@@ -160,7 +161,7 @@ def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch:
     rec.counts[STOPS] = n + 1
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _tripped(cw: CompiledWalker, x: np.ndarray) -> bool:
     """The swing foot's lowest point at a riser's x, below its top (the profile's strike located there)."""
     plan = cw.plan

@@ -120,7 +120,7 @@ def phase_guard(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray) -> flo
     return clearance(foot_x, foot_y, plan.vertices, plan.ends)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.ndarray) -> float:
     """d(guard)/dt along the flow f: analytic for the walker's guards, a central difference (step FD_STEP along f,
     as the scipy reference) for the profile's (sc.k[3] holds the probe)."""
@@ -154,7 +154,7 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
     return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
@@ -162,7 +162,7 @@ def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span:
     return initial_step_size(tab, sc, h0, d1, span)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _prepare_dense(p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
@@ -175,7 +175,7 @@ def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarra
     return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.params, j - 1, y)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float, y: np.ndarray) -> float:
     """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
     tab, sc = cw.tab, cw.sc
@@ -219,7 +219,7 @@ def _dense_work(cw: CompiledWalker, theta: float, h: float, y: np.ndarray) -> fl
     return theta * h * total
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _sample(cw: CompiledWalker, k: int, t: float, h: float, t_end: float, y: np.ndarray, elements: bool) -> int:
     """Record the grid points k / rate in [t, t_end) of the last accepted step (from (t, y), length h) on its dense
     output, prepared by the caller, with the elements' work (``elements``: the walker has some); returns the next
@@ -305,7 +305,7 @@ def stretch(
     return (STALLED if t_stop >= cw.t_limit else REACHED), t
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
     """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2), the elements' work by the
     same midpoint rule; returns the new t."""
