@@ -96,6 +96,7 @@ def _lifted(path: object, t_end: float, work: str) -> tuple[object, object]:
     return planar, spatial
 
 
+@pytest.mark.slow  # 8 s: a kneed walk at rtol 1e-10 in both formulations
 def test_the_kneed_walker_lifted_into_space_walks_its_planar_gait_with_latching_knees() -> None:
     """Chen's kneed walker (latching knee stops, W_stop) in Euler parameters."""
     _, spatial = _lifted(KNEED, 1.2, "stops")
