@@ -133,6 +133,7 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         elements=make_hinge_elements(
             ps.elements, _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb), _lifted_frames(tree.elements)
         ),
+        ground=ps.ground,
     )
     return replace(planar, system=system, y0=_spatial_state(planar, system, lateral))
 
