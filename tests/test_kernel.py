@@ -91,6 +91,28 @@ def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> Non
     assert _weighted_sum(values, 1.0) == 10.0 and _weighted_sum.python_entry is entry  # compiled once
 
 
+@kernel(literal_arguments=False)
+def _halved(x: float, half: bool) -> float:
+    return 0.5 * x if half else x
+
+
+@kernel
+def _halved_by_value(x: float, half: bool) -> float:
+    return 0.5 * x if half else x
+
+
+@njit
+def _both_ways(x: float) -> tuple[float, float]:
+    return _halved(x, True) + _halved(x, False), _halved_by_value(x, True) + _halved_by_value(x, False)
+
+
+def test_constants_passed_from_compiled_code_specialise_a_kernel_only_with_literal_arguments() -> None:
+    """numba compiles a kernel once per constant a compiled caller passes (``True``, ``False``); with
+    ``literal_arguments=False`` once for the constants' type."""
+    assert _both_ways(2.0) == (3.0, 3.0)
+    assert len(_halved.signatures) == 1 and len(_halved_by_value.signatures) == 2
+
+
 def test_a_kernel_without_reference_counts_refuses_to_allocate() -> None:
     @kernel(reference_counts=False)
     def allocates(n: int) -> float:

@@ -56,6 +56,15 @@ class Kernel(CPUDispatcher):
     """A dispatcher compiled without the CPython wrapper; a call from Python runs its wrapped twin."""
 
     _python_entry: CPUDispatcher | None = None
+    literal_arguments = True  # kernel(literal_arguments=False): constants passed by compiled callers typed by type
+
+    def get_call_template(self, args: tuple, kws: dict) -> Any:
+        """numba's typing of a compiled caller's call; without ``literal_arguments``, a constant argument (``True``,
+        ``0``) counts as its type, not its value: one specialisation for all calls, not one per constant passed."""
+        if not self.literal_arguments:
+            args = tuple(types.unliteral(a) for a in args)
+            kws = {name: types.unliteral(a) for name, a in kws.items()}
+        return super().get_call_template(args, kws)
 
     @property
     def python_entry(self) -> CPUDispatcher | None:
@@ -89,18 +98,24 @@ def kernel_options(reference_counts: bool = True) -> dict[str, Any]:
     return {"nopython": True, "no_cpython_wrapper": True, "no_cfunc_wrapper": True, "_nrt": reference_counts}
 
 
-def kernel(function: Callable[..., Any] | None = None, *, reference_counts: bool = True) -> Any:
+def kernel(
+    function: Callable[..., Any] | None = None, *, reference_counts: bool = True, literal_arguments: bool = True
+) -> Any:
     """Compile ``function`` as an engine kernel (``@kernel`` or ``@kernel(reference_counts=False)``).
 
     nopython, cached on disk, no CPython or C wrapper (:class:`Kernel`). With ``reference_counts=False``
     numba's reference counting is off inside it (numba's ``_nrt`` option): for a function that allocates
-    nothing and returns no array. Under ``NUMBA_DISABLE_JIT`` the function is returned as it is.
+    nothing and returns no array. With ``literal_arguments=False`` a compiled caller's constant arguments do not
+    make specialisations of their own (numba otherwise compiles the kernel, and everything it calls, once per
+    constant value: a kernel called with ``True`` and with ``False`` twice). Under ``NUMBA_DISABLE_JIT`` the
+    function is returned as it is.
     """
 
     def compile_kernel(python_function: Callable[..., Any]) -> Any:
         if config.DISABLE_JIT:
             return python_function
         dispatcher = Kernel(py_func=python_function, locals={}, targetoptions=kernel_options(reference_counts))
+        dispatcher.literal_arguments = literal_arguments
         dispatcher.enable_caching()
         return dispatcher
 

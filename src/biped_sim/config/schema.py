@@ -267,7 +267,7 @@ class Config(Strict):
                 "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
                 "(formulation.kind: spatial, or walker.kind: description3d)"
             )
-        if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
+        if reason := profile_support_error(self.ground, self.dynamics, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
         hertz = self.contact.materials is not None or self.dynamics == "compliant"
         if self.contact.stiffness is None and hertz and self.walker.point_feet:

@@ -153,6 +153,7 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
             _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb),
             _frames(tree, [c for c, *_ in tree.elements]),
         ),
+        ground=ps.ground,
     )
     q, qd = _spatial_state(planar, lateral + tree.com_lateral)
     on_parent = {int(b): np.array(s_a) for (_, b), (s_a, _) in zip(ps.joint_bodies, points, strict=True)}
