@@ -7,7 +7,7 @@ leg as it lies on the hinge axis), joined by a revolute hinge: a SPHERICAL primi
 axis z' of one leg along the other's. Feet: a sphere is the formulation's sphere, a point a sphere of radius 0,
 and a ring its disc whose axis is the ring's plane normal (the lowest point of a circle against the ground
 plane, in closed form), a torus that disc with its tube, an ellipsoid its quadric
-(:func:`~biped_sim.multibody.spatial_kernels.foot_bottom`); a torus's or ellipsoid's Hertz stiffness is that of its
+(:func:`~biped_sim.multibody.spatial_feet.foot_bottom`); a torus's or ellipsoid's Hertz stiffness is that of its
 bottom's equivalent radius (``SpaceFoot.hertz_radius``). Friction acts in the tangent plane on the slip velocity
 vector (LuGre with a bristle vector), as for every spatial walker.
 
