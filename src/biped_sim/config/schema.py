@@ -15,7 +15,7 @@ from pydantic import (
 )
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
-from biped_sim.config.description import LEG_KEYS
+from biped_sim.config.description import IN_SPACE, LEG_KEYS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities, profile_refusal, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
@@ -283,10 +283,13 @@ class Config(Strict):
         return self
 
     def _described_walker_checks(self) -> None:
-        """A described walker's bodies all carry mass."""
+        """A described walker's bodies all carry mass; its features in space only in the spatial formulation."""
         described = self.walker.description
         if described is None:
             return
+        in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        if not in_space and (features := described.features_in_space()):
+            raise ValueError(f"{features[0]}: only in space ({IN_SPACE}); a planar or rigid model has it not")
         massless = described.massless_bodies()
         if self.dynamics == "rigid" and len(massless) < len(described.bodies):  # held by a locked joint, or light
             one_stop = {j.child for j in described.joints if len(j.stops) == 1}
