@@ -50,6 +50,7 @@ warnings.filterwarnings(
 )
 
 PYTHON_ENTRY_SUFFIX = "_python_entry"  # the twin's qualified name, hence its own cache file
+OVERLOAD_SUFFIX = "_overload"  # an overload implementation's qualified name, hence its own cache file
 
 
 class Kernel(CPUDispatcher):
@@ -139,7 +140,9 @@ def implementation_of(kernel: Any) -> FunctionType:
     whose arguments would each cost a reference count at every right-hand-side evaluation.
     """
     code = getattr(kernel, "py_func", kernel)  # a plain Python function (over kernels) is its own code
-    return FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
+    implementation = FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
+    implementation.__qualname__ = code.__qualname__ + OVERLOAD_SUFFIX  # not the kernel's cache index (other options)
+    return implementation
 
 
 def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable[[type], Any], inline: bool) -> None:
@@ -163,7 +166,8 @@ def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, jit_options=kernel_options(), **({"inline": "always"} if inline else {}))(typer)
+    options = {**kernel_options(), "cache": True}  # numba compiles the implementation even where it inlines it
+    overload(generic, jit_options=options, **({"inline": "always"} if inline else {}))(typer)
 
 
 def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatcher:
