@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from numba import njit
 
@@ -13,6 +14,8 @@ from biped_sim import load_config, simulate
 from biped_sim._compiled_cache import profiling_compilations, recording_compilations
 from biped_sim.config import derive
 from biped_sim.multibody.dispatch import FORMULATIONS
+from biped_sim.rigid.build import initial_state, rigid_walker
+from biped_sim.rigid.compiled import walk_starts
 from biped_sim.simulate import RunResult, study_formulation, warmup
 from biped_sim.studies.uncertainty.mfpt import height_walk_config
 from biped_sim.sweep import load_sweep
@@ -94,8 +97,8 @@ def test_profiling_compilations_charges_each_function_its_own_compile() -> None:
 def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles_nothing(
     short_run: RunResult, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile, or of a rigid walker,
-    loads its code."""
+    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile, or of a rigid walker, or
+    a rigid walker's walks from many starts (a basin's), loads its code."""
     monkeypatch.setattr(warmup, "_WARMED", set())
     result = invoke("warmup")
     assert result.exit_code == 0, result.output
@@ -110,7 +113,10 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
         simulate(default_walker("ground.profile={kind: random, seed: 3, roughness: 0.002}", t_end=0.05))
-        simulate(load_config(CONFIGS / "simplest_walker.yaml", ["simulation.max_steps=1"]))  # another rigid walker
+        simplest = load_config(CONFIGS / "simplest_walker.yaml", ["simulation.max_steps=1"])
+        simulate(simplest)  # another rigid walker
+        walker = rigid_walker(simplest)
+        walk_starts(walker, np.array([initial_state(simplest, walker)] * 2), 1)  # a basin's walks of its starts
     assert compiled == []
 
 

@@ -6,7 +6,8 @@ scipy driver's compiled right-hand side), specialised for its ground (the flat g
 whether its walker has joint stops and whether it has joint elements (a described walker's; one without compiles
 none of their code).
 Every contact law is part of each group's kernels (the laws are dispatched at run time). Every rigid run
-shares one group, the compiled step map (its walker is data), warmed by one step; a rigid walker in space has its
+shares one group, the compiled step map (its walker is data), warmed by one step and by a walk of one start (the
+basin's walks); a rigid walker in space has its
 own (its flow, ``rigid.space_kernels``), in ``--all``.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
 ``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps, of a run on a
@@ -27,11 +28,15 @@ from dataclasses import dataclass
 from multiprocessing import get_context
 from typing import get_args
 
+import numpy as np
+
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config, FormulationConfig, derive
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.integrate.driver import STIFF_METHODS
+from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import walk_starts
 from biped_sim.simulate import simulate
 from biped_sim.walkers.describe import describe
 
@@ -136,6 +141,9 @@ def warm_up(config: Config) -> WarmUp | None:
     start = time.perf_counter()
     with recording_compilations() as compiled:
         simulate(short).trajectory()  # the run and every measure of its files (computed when asked)
+        if group[:2] == RIGID:  # and the step map's walks of many starts (basins): compiled, none taken
+            walker = rigid_walker(short)
+            walk_starts(walker, np.zeros((1, 2 * walker.n_q)), 0)
     _WARMED.add(group)
     return WarmUp(*group, config.integrator.method, tuple(compiled), time.perf_counter() - start)
 
