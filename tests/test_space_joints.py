@@ -145,3 +145,17 @@ def test_the_planar_models_refuse_a_foot_of_another_shape_naming_it() -> None:
     with pytest.raises(ConfigError, match=r"^walker\.description\.feet\.foot_1\.shape: only in space") as error:
         config_from_dict(data)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.slow  # 8 s of a walk in Euler parameters (about 50 CPU s)
+def test_the_3d_kneed_walker_walks_ten_steps_with_its_lateral_motion_in_the_step_table() -> None:
+    """Chen's kneed walker with a 0.1 m hip width on lateral torus feet walks 8 s without falling, left and right
+    feet in turn, its step width, sway, heading and bank in the step table (finite, and the sway and the bank
+    alternating with the stance foot)."""
+    result = simulate(config_from_dict(yaml.safe_load(KNEED_3D.read_text())))
+    assert result.status == "walking" and result.summary["n_steps"] >= 10
+    steps = result.steps
+    assert list(steps.foot[:10]) == [1, 0] * 5
+    for column in (steps.width, steps.sway, steps.heading, steps.bank):
+        assert np.all(np.isfinite(column[:-1]))
+    assert np.all(steps.width[:-1] > 0.0) and np.max(np.abs(steps.bank)) < 0.1

@@ -17,7 +17,7 @@ from pydantic import (
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
 from biped_sim.config.description import IN_SPACE, LEG_KEYS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
-from biped_sim.config.walker_registry import capabilities, refusal
+from biped_sim.config.walker_registry import capabilities, profile_refusal, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import quote
@@ -256,8 +256,8 @@ class Config(Strict):
         caps = capabilities(self.walker.kind)
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
-        if self.ground.profile.kind != "flat" and not caps.profiles:
-            raise ValueError(f"ground.profile: the {self.walker.kind} walker walks on flat ground only")
+        if self.ground.profile.kind != "flat" and (reason := profile_refusal(self.walker.kind, self.dynamics)):
+            raise ValueError(f"ground.profile: {reason}")
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")

@@ -24,6 +24,7 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.contact.profile import profile_ground
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.spatial import PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.model import (
@@ -115,6 +116,7 @@ def build_space_walker(config: Config, initial: object) -> BuiltModel:
         friction_params=friction,
         switches=switches,
         limits=contact_limits(config),
+        ground=profile_ground(config.ground.profile, config.ground.slope),
     )
     sinkage = static_contact_penetration(config, total_mass, stiffness)
     q, qd = start_state(legs, start, sinkage)
