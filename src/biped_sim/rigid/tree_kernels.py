@@ -69,7 +69,7 @@ FLOW, IMPACT, AT_REST = 0, 1, 2  # the light rows' right side: gravity and bias;
 RELEASED = 2.0  # a lock's active field: held through the stance, released through the heel strike
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> tuple[float, float]:
     """Write the Jacobian columns of the point whose w vectors start at p[base] to p[jw:] (2 n floats) and return
     its bias acceleration Jdot qd = -sum_k Rot(theta_k) w_k thetadot_k^2 (from the same turned vectors: one pass,
@@ -85,7 +85,7 @@ def _row_jacobian(p: np.ndarray, t: int, base: int, qd: np.ndarray, jw: int) -> 
     return bx, by
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool, release: bool) -> int:
     """Write M of table t and the active lock rows into the (m x m) matrix at p[w:] and, for the ``flow``, the
     generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into p[w + m m:] (each row's terms by
@@ -122,7 +122,7 @@ def _assemble(p: np.ndarray, t: int, w: int, m: int, qd: np.ndarray, flow: bool,
     return used
 
 
-@kernel(reference_counts=False)
+@kernel(reference_counts=False, literal_arguments=False)
 def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix at p[w:] (row stride m) for the vector at p[r:], in
     place: Cramer's rule up to 2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the
@@ -157,7 +157,7 @@ def _solve(p: np.ndarray, w: int, m: int, used: int, r: int) -> None:
         p[r + col] = total / p[w + col * m + col]
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _pin_light(p: np.ndarray, t: int, w: int, m: int, r: int) -> None:
     """Give the light coordinates of table t (zero rows and columns of M) a unit diagonal and a zero right side,
     so that the heavy solve leaves them at 0 for :func:`_light_tier`."""
@@ -168,7 +168,7 @@ def _pin_light(p: np.ndarray, t: int, w: int, m: int, r: int) -> None:
             p[r + k] = 0.0
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _light_tier(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, mode: int, w: int, m: int, r: int) -> None:
     """The light coordinates' equations, the limit of infinitesimal foot masses (Garcia et al. 1998): each light
     row's balance across the light coordinates, sum_i J_iL^T (J_i a - b_i) = 0, with the heavy part of a already
@@ -255,7 +255,7 @@ def tree_energy(p: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     return kinetic, potential + tree_element_energy(p, q)
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _impact_rates(p: np.ndarray, t: int, q: np.ndarray, qd: np.ndarray, release: bool) -> None:
     """The rates after a plastic impact with the active locks (the RELEASED ones free when ``release``) in table t,
     written to the workspace's right side; its own right side is each row's momentum just before, m J'^T v- + I
@@ -292,7 +292,7 @@ def _released_closing(p: np.ndarray, r: int) -> bool:
     return False
 
 
-@kernel
+@kernel(literal_arguments=False)
 def tree_impact(p: np.ndarray, x: np.ndarray, strike: bool, out: np.ndarray) -> None:
     """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
     (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being
