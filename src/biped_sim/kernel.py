@@ -35,7 +35,7 @@ from types import FunctionType
 from typing import Any
 
 import numba
-from numba import njit, types
+from numba import jit, njit, types
 from numba.core import config
 from numba.core.dispatcher import Dispatcher
 from numba.core.errors import NumbaExperimentalFeatureWarning
@@ -99,6 +99,10 @@ def kernel_options(reference_counts: bool = True) -> dict[str, Any]:
     return {"nopython": True, "no_cpython_wrapper": True, "no_cfunc_wrapper": True, "_nrt": reference_counts}
 
 
+# an overload implementation's: cached, as numba compiles it even where it inlines it (once, to check that it compiles)
+OVERLOAD_OPTIONS = {**kernel_options(), "cache": True}
+
+
 def kernel(
     function: Callable[..., Any] | None = None, *, reference_counts: bool = True, literal_arguments: bool = True
 ) -> Any:
@@ -145,6 +149,13 @@ def implementation_of(kernel: Any) -> FunctionType:
     return implementation
 
 
+def overload_implementation(kernel: Any) -> Dispatcher:
+    """``kernel`` as :func:`overload_by_type` has numba compile it (its code, name and options, so its cache entries):
+    compiled for a caller's argument types (:func:`compile_for`), it is in the cache when another process's compile of
+    that caller needs it."""
+    return jit(**OVERLOAD_OPTIONS)(implementation_of(kernel))
+
+
 def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable[[type], Any], inline: bool) -> None:
     """Compile calls of the Python function ``generic`` as calls of ``kernel_for(class of argument key)``.
 
@@ -166,8 +177,7 @@ def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    options = {**kernel_options(), "cache": True}  # numba compiles the implementation even where it inlines it
-    overload(generic, jit_options=options, **({"inline": "always"} if inline else {}))(typer)
+    overload(generic, jit_options=OVERLOAD_OPTIONS, **({"inline": "always"} if inline else {}))(typer)
 
 
 def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatcher:
