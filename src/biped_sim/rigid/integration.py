@@ -36,6 +36,7 @@ from biped_sim.kernel import kernel
 from biped_sim.rigid.ground import clearance, tree_swing_foot
 from biped_sim.rigid.kernels import fall_check, guard, guard_rate, n_fall_checks, rigid_rhs
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
+from biped_sim.rigid.tree_layout import RigidTree
 
 STRIKE, FELL, STALLED, TRIPPED = 0, 1, 2, 3
 STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
@@ -68,12 +69,13 @@ class StepRecord(NamedTuple):
     samples_t: np.ndarray  # (m,)
     samples_x: np.ndarray  # (m, ny)
     stops: np.ndarray  # (s, 2): t, the kinetic energy lost
+    landing: np.ndarray  # (2,): the landing foot's lowest point at the strike, the stance contact at the step's origin
 
 
 class CompiledWalker(NamedTuple):
     """A rigid walker as the kernels read it, with the integration's buffers and a step's plan and record."""
 
-    params: np.ndarray
+    params: RigidTree
     tab: Tableau
     sc: Scratch
     t_limit: float  # a step longer than this stalls
@@ -136,7 +138,7 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
 
 
 @kernel
-def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
+def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
     rigid_rhs(p, sc.y_stage, sc.k[1])
@@ -144,7 +146,7 @@ def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span:
 
 
 @kernel
-def _prepare_dense(p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
         rigid_rhs(p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])

@@ -13,65 +13,66 @@ from biped_sim.rigid.tree_kernels import (
     tree_guard_rate,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import P_FALL, P_L, T_NOFF, T_NPHASE, T_NPTS, coords, fall_angle, perm_offset, point
+from biped_sim.rigid.tree_layout import RigidTree, hip, point
 
 FALL_HIP_FRACTION = 0.05  # the hip below this fraction of the leg length is a fall (every rigid walker's)
 
 
 @kernel
-def tree_fall(p: np.ndarray, i: int, x: np.ndarray) -> float:
+def tree_fall(tree: RigidTree, i: int, x: np.ndarray) -> float:
     """Fall function i (positive while standing): 0, 1: the fall angle minus |each leg's hip body's angle|; 2: the
     hip's height minus 0.05 l; 3 (a walker with bodies off its legs, a torso): the least of their fall angles minus
     their |angles| (each its own)."""
     if i < 2:
-        return p[P_FALL] - abs(x[0 if i == 0 else int(p[perm_offset(p)])])
-    n = coords(p)
+        return tree.fall - abs(x[0 if i == 0 else tree.coords[0].perm])
+    n = tree.n
     if i == 3:
         margin = math.inf
-        for k in range(n - int(p[T_NOFF]), n):
-            margin = min(margin, fall_angle(p, k) - abs(x[k]))
+        for k in range(n - tree.n_off, n):
+            margin = min(margin, tree.coords[k].fall_angle - abs(x[k]))
         return margin
-    _, hip_y = point(p, int(p[T_NPTS]), x[:n])
-    return hip_y - FALL_HIP_FRACTION * p[P_L]
+    _, hip_y = point(tree, hip(tree), x[:n])
+    return hip_y - FALL_HIP_FRACTION * tree.leg_length
 
 
 # the step map's per-evaluation kernels inlined with their callees: a call per offset, angle or column would cost
 # its arguments' words and reference counts at every evaluation; the flow's solve (inlined twice, with the light
 # legs' tier) and the joint elements stay one call each per evaluation: their inlined copies cost more compile time
-# than their calls cost run time (docs/architecture.md, "Compiling less")
+# than their calls cost run time (docs/architecture.md, "Compiling less"); they count no references: each read of
+# one of the tree's arrays would otherwise count one at every evaluation
 _rhs = inlined(tree_rhs, calls=frozenset({"_solve", "element_forces"}))
 _guard, _fall = inlined(tree_guard), inlined(tree_fall)
 
 
-@kernel
-def rigid_rhs(p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+@kernel(reference_counts=False)
+def rigid_rhs(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> None:
     """out = dx/dt."""
-    _rhs(p, x, out)
+    _rhs(tree, x, out)
 
 
-@kernel
-def guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
+@kernel(reference_counts=False)
+def guard(tree: RigidTree, phase: int, x: np.ndarray) -> float:
     """The phase's guard (its downward zero ends the phase)."""
-    return _guard(p, phase, x)
+    return _guard(tree, phase, x)
 
 
-@kernel
-def guard_rate(p: np.ndarray, phase: int, x: np.ndarray, f: np.ndarray) -> float:
+@kernel(reference_counts=False)
+def guard_rate(tree: RigidTree, phase: int, x: np.ndarray, f: np.ndarray) -> float:
     """Time derivative of :func:`guard` along the flow."""
-    return tree_guard_rate(p, phase, x)
+    return tree_guard_rate(tree, phase, x)
 
 
 @kernel
-def n_phases(p: np.ndarray) -> int:
-    return int(p[T_NPHASE])
+def n_phases(tree: RigidTree) -> int:
+    return tree.phases.shape[0]
 
 
 @kernel
-def n_fall_checks(p: np.ndarray) -> int:
+def n_fall_checks(tree: RigidTree) -> int:
     """The legs' two, the hip's, and one for the bodies off the legs (a torso) if any."""
-    return 4 if p[T_NOFF] > 0 else 3
+    return 4 if tree.n_off > 0 else 3
 
 
-@kernel
-def fall_check(p: np.ndarray, i: int, x: np.ndarray) -> float:
-    return _fall(p, i, x)
+@kernel(reference_counts=False)
+def fall_check(tree: RigidTree, i: int, x: np.ndarray) -> float:
+    return _fall(tree, i, x)
