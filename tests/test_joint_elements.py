@@ -129,6 +129,46 @@ def test_a_broken_element_is_one_line_naming_the_field(edit: Any, message: str) 
     assert "\n" not in str(error.value)
 
 
+def held_in_the_world(data: dict[str, Any], stiffness: float, damping: float, rest_angle: float = 0.0) -> None:
+    """Replace the waist's elements of the torso walker ``data`` by a spring and a damper against the ground."""
+    joint = next(j for j in data["walker"]["description"]["joints"] if j["name"] == "waist")
+    spring = {"name": "spring", "law": "linear_spring", "stiffness": stiffness, "rest_angle": rest_angle}
+    damper = {"name": "damper", "law": "linear_damper", "damping": damping}
+    joint["elements"] = [{**spring, "against": "ground"}, {**damper, "against": "ground"}]
+
+
+def test_an_element_against_the_ground_holds_its_child_s_absolute_angle() -> None:
+    """``against: ground``: theta is the torso's angle from the slope normal, the torque acts on the torso alone (its
+    reaction goes to the ground), and the tree formulation agrees with the absolute coordinates'."""
+    data = _torso_dict()
+    held_in_the_world(data, 30.0, 0.5, rest_angle=0.1)
+    config = config_from_dict(data)
+    assert config.walker.description is not None
+    assert [other for *_, other in config.walker.description.joint_elements()] == ["ground", "ground"]
+    model = build_model(config)
+    planar, torso = model.system, model.body_names.index("torso")
+    y = model.y0.copy()
+    nb = len(model.body_names)
+    y[3 * torso + 2], y[3 * nb + 3 * torso + 2] = 0.3, -0.4
+    force = np.zeros(3 * nb)
+    assert element_torques(y, planar.elements, force) == pytest.approx(0.5 * 0.4**2)
+    expected = np.zeros(3 * nb)
+    expected[3 * torso + 2] = -30.0 * (0.3 - 0.1) + 0.5 * 0.4
+    np.testing.assert_allclose(force, expected, rtol=1e-15)
+    assert elements_energy(y, planar.elements) == pytest.approx(0.5 * 30.0 * 0.2**2)
+    assert all(full[-1] > 0.0 for full in formulations_agree(planar, count=10, seed=7))  # W_element's rate
+
+
+def test_a_body_named_ground_is_refused_in_one_line() -> None:
+    data = _torso_dict()
+    described = data["walker"]["description"]
+    described["bodies"][0]["name"] = "ground"
+    next(j for j in described["joints"] if j["name"] == "waist")["child"] = "ground"
+    with pytest.raises(ConfigError, match="bodies: 'ground' names the ground") as error:
+        config_from_dict(data)
+    assert "\n" not in str(error.value)
+
+
 def test_a_walker_without_elements_has_none() -> None:
     described = load_config(CONFIGS / "kneed_walker.yaml").walker.description
     assert described is not None and described.joint_elements() == []

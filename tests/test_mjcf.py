@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from biped_sim.bench.mjcf import POINT_FOOT, RING_HALF_WIDTH, walker_mjcf
-from biped_sim.config import Config, load_config
+from biped_sim.bench.mjcf import POINT_FOOT, RING_HALF_WIDTH, ROOT_HINGE, walker_mjcf
+from biped_sim.config import Config, config_from_dict, load_config
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.describe import describe
 
@@ -69,6 +69,17 @@ def test_the_torsos_springs_and_dampers_are_tendons_over_the_hinges_between_thei
         assert coefs == expected
         assert float(tendon.get("stiffness")) == (element.stiffness or 0.0)
         assert float(tendon.get("damping")) == (element.damping or 0.0)
+
+
+def test_an_element_against_the_ground_is_a_tendon_over_the_root_s_hinge_and_its_body_s_path() -> None:
+    cfg = config("torso_walker.yaml")
+    data = cfg.model_dump(mode="json")
+    data["walker"]["description"]["joints"][0]["elements"] = [
+        {"name": "spring", "law": "linear_spring", "stiffness": 10.0, "against": "ground"}
+    ]
+    root = ET.fromstring(walker_mjcf(config_from_dict(data)))
+    (tendon,) = root.iter("fixed")
+    assert {j.get("joint"): float(j.get("coef")) for j in tendon.iter("joint")} == {"torso": 1.0, ROOT_HINGE: 1.0}
 
 
 def test_point_feet_are_small_spheres_whose_bottom_is_the_point() -> None:

@@ -35,8 +35,8 @@ EXPORTS: dict[str, list[str]] = {
     "biped_sim.report": ["REPORT_OUTPUT", "Report", "build_report", "report_markdown"],
     "biped_sim.rigid": [],
     "biped_sim.simulate": [
-        "CompliantRunResult", "RigidRunResult", "RigidStart", "RunResult", "initial_state", "prepare_model", "run",
-        "simulate",
+        "CompliantRunResult", "RigidRunResult", "RigidStart", "RunResult", "SpaceRunResult", "SpaceStart",
+        "initial_state", "prepare_model", "run", "simulate",
     ],
     "biped_sim.studies": [],
     "biped_sim.studies.fit": [

@@ -19,6 +19,7 @@ from biped_sim.simulate import simulate
 from biped_sim.simulate.rigid import RigidRunResult, fall_reason
 
 from .conftest import ROOT
+from .test_joint_elements import held_in_the_world
 
 # compass legs with a heavy hip and a torso hanging below the hip on a free joint (a pendulum: no spring holds it)
 TORSO_WALKER: dict[str, Any] = {
@@ -143,6 +144,25 @@ def test_hip_springs_hold_an_upright_torso_and_their_energy_closes_the_swing() -
     assert np.ptp(stored) > 1e-3 * np.abs(energy).max()  # the springs really store and release energy
     unheld = rigid_step(rigid_walker(config_from_dict(torso_config(com_y=0.2))), START)
     assert unheld.status == "fell"  # without the springs the same torso falls
+
+
+def test_a_spring_against_the_ground_holds_the_torso_s_absolute_angle_and_its_energy_closes_the_swing() -> None:
+    """``against: ground`` (the bundled torso walker's torso held in the world, from the compass's gait): the
+    spring's energy is k phi_t^2 / 2 of the torso's own angle, in the conserved total."""
+    data = load_config(ROOT / "configs" / "torso_walker.yaml", ["dynamics=rigid"]).model_dump(mode="json")
+    held_in_the_world(data, 40.0, 0.0)
+    walker = rigid_walker(config_from_dict(data))
+    start = np.array([0.2764, -0.2764, 0.0, -1.0898, -0.3776, 0.0])  # the compass's gait, the torso upright, still
+    step = rigid_step(walker, start, sample_rate=1000.0)
+    assert step.status == "strike"
+    energy = np.array([sum(walker.energy(x)) for x in step.samples_x])
+    assert np.ptp(energy) < 1e-10 * np.abs(energy).max()
+    stored = 0.5 * 40.0 * step.samples_x[:, 2] ** 2
+    assert np.ptp(stored) > 1e-6 * np.abs(energy).max()  # the spring stores and releases energy
+    held_in_the_world(data, 0.0, 0.0)
+    free = rigid_walker(config_from_dict(data))
+    x = step.samples_x[-1]
+    assert sum(walker.energy(x)) - sum(free.energy(x)) == pytest.approx(stored[-1], rel=1e-9)
 
 
 def test_a_rigid_run_books_the_dampers_work() -> None:

@@ -21,7 +21,6 @@ from biped_sim.simulate import prepare_model, simulate
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, KUO, KUO_GAIT, RIGID_PERIOD, TINKERTOY, tinkertoy
 
-KUO_RIGID = KUO.with_name("kuo_compass_3d.yaml")
 LATERAL = [name for name, _ in LATERAL_STEP_COLUMNS]
 
 
@@ -83,7 +82,7 @@ def test_a_lateral_push_gives_the_walker_in_space_its_impulse_sideways() -> None
 
 @pytest.mark.parametrize(
     ("config", "override"),
-    [(None, ""), (KUO_RIGID, "simulation.t_end=1.0")],
+    [(None, ""), (KUO.parents[1] / "round_foot_walker.yaml", "dynamics=rigid")],
 )
 def test_a_lateral_push_on_a_planar_walker_is_a_one_line_error_naming_the_field(
     config: Path | None, override: str
@@ -128,14 +127,6 @@ def test_uncertainty_runs_on_a_walker_in_space_over_a_walker_parameter(tmp_path:
     assert statistics["status_counts"] == {"walking": 2} and statistics["outputs"]["steady_period"]["n"] == 2
     samples = pd.read_csv(tmp_path / "u" / "samples.csv").sort_values("walker.space.hip_mass")
     assert (np.diff(samples["steady_period"]) > 0).all() and samples["steady_period"].min() > RIGID_PERIOD
-
-
-def test_a_basin_of_a_walker_in_space_is_refused_in_one_line_naming_the_walker() -> None:
-    """Basins walk the planar rigid step map; the rigid walker in space has its own (its limit cycle only, today)."""
-    result = invoke("basin", str(TINKERTOY.with_name("tinkertoy.yaml")), "--x", "bank=-0.02:0.02:3", "--y",
-                    "omega_x=-0.1:0.1:3")  # fmt: skip
-    assert result.exit_code == 2
-    assert one_line_error(result.stderr).startswith("error: walker.kind: a basin walks the planar rigid step map")
 
 
 FLAT_ONLY = "the description3d walker walks on flat ground only"

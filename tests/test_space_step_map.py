@@ -12,6 +12,8 @@ import pytest
 from biped_sim.config import load_config
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
 from biped_sim.rigid.space_cycle import SpaceMap, space_walker_model
+from biped_sim.rigid.space_integration import FALL_BANK
+from biped_sim.rigid.space_step import clearance, passed, phase, space_step
 
 TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
 # docs/guide/rigid.md's fixed point (heading, bank, pitch, omega x y z, hinge rate), polished by Newton here
@@ -28,6 +30,18 @@ def tinkertoy() -> tuple[SpaceMap, np.ndarray, np.ndarray]:
     z, converged, _, _ = newton_fixed_point(step_map, np.array(TINKERTOY_POINT), RIGID_TOLERANCE)
     assert converged
     return step_map, z, map_jacobian(step_map, z)
+
+
+def test_the_compiled_step_is_scipys_integration_of_the_same_flow() -> None:
+    """Both phases of a step of the toy's gait integrated by scipy's solve_ivp to the same guards (a run's phases,
+    :func:`~biped_sim.rigid.space_step.phase`): the compiled map's touchdown state and time to 1e-12 (the same steps
+    and event location; rounding apart)."""
+    step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
+    _, step = step_map.step(z)
+    passing = phase(step_map.model, step_map.params, step_map.section.from_section(z), 0.0, passed)
+    landing = phase(step_map.model, step_map.params, passing.x, passing.t, clearance(step_map.model))
+    assert landing.how == "guard" and step.period == pytest.approx(landing.t, abs=1e-12)
+    np.testing.assert_allclose(step.x_minus, landing.x, atol=1e-12)
 
 
 @pytest.mark.slow
@@ -62,3 +76,12 @@ def test_random_starts_decay_at_the_largest_multiplier(
         assert np.linalg.norm(z_n - z - predicted) < 0.05 * np.linalg.norm(predicted)
     last = abs(np.linalg.solve(vectors, z_n - z)[leading])
     assert (last / first) ** (1.0 / STEPS) == pytest.approx(TINKERTOY_LARGEST, abs=1e-3)
+
+
+def test_a_roll_rate_too_large_topples_the_toy_sideways() -> None:
+    """Rolling out at 1 rad/s from the gait, the toy banks past FALL_BANK during the step: it ends there, fell."""
+    step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
+    z[3] = 1.0
+    step = space_step(step_map.model, step_map.section.from_section(z))
+    assert step.status == "fell" and step.x_plus is None
+    assert step.x_minus[1] == pytest.approx(FALL_BANK, abs=1e-12)

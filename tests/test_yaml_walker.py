@@ -33,16 +33,21 @@ def test_the_yaml_walker_finds_a_stable_gait_that_its_foot_radius_moves() -> Non
     assert larger.step_period != cycle.step_period and larger.fixed_point != cycle.fixed_point
 
 
-def test_a_sweep_runs_the_yaml_walker_over_its_named_parameter(tmp_path: Path) -> None:
-    sweep = tmp_path / "radius.yaml"
+def swept(tmp_path: Path, walker: Path, key: str, values: list[float]) -> list[dict[str, str]]:
+    """The rows of ``biped-sim sweep`` over ``key`` at ``values`` on ``walker``, 3 s each, run in this process."""
+    sweep = tmp_path / "sweep.yaml"
     sweep.write_text(
-        f"name: radius\nbase: {WALKER}\nset:\n  simulation.t_end: 3.0\ngrid:\n  {RADIUS}: [0.08, 0.12]\n"
+        f"name: sweep\nbase: {walker}\nset:\n  simulation.t_end: 3.0\ngrid:\n  {key}: {values}\n"
         f"output: {tmp_path / 'out'}\n"
     )
     result = invoke("sweep", str(sweep), "--jobs", "1")
     assert result.exit_code == 0, result.stderr
     with (tmp_path / "out" / "sweep.csv").open() as f:
-        rows = list(csv.DictReader(f))
+        return list(csv.DictReader(f))
+
+
+def test_a_sweep_runs_the_yaml_walker_over_its_named_parameter(tmp_path: Path) -> None:
+    rows = swept(tmp_path, WALKER, RADIUS, [0.08, 0.12])
     assert [float(r[RADIUS]) for r in rows] == [0.08, 0.12] and {r["status"] for r in rows} == {"walking"}
     assert rows[0]["mean_period_s"] != rows[1]["mean_period_s"]
 

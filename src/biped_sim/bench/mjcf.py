@@ -38,6 +38,7 @@ import numpy as np
 
 from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config, WalkerDescription
+from biped_sim.config.description import GROUND
 from biped_sim.config.space_description import SpaceDescription
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
@@ -52,6 +53,7 @@ POINT_FOOT = 1e-3  # a point foot's sphere radius [leg lengths]
 INERTIA_FLOOR = 1e-6  # a planar body's least moment of inertia [m l^2]
 RING_HALF_WIDTH = 1e-3  # a ring foot's cylinder half-thickness [ring radii]
 FAR_LIMIT = 1000.0  # [rad] the free side of a one-sided stop
+ROOT_HINGE = "theta"  # the root body's hinge: its angle from the slope normal, every body's absolute angle's first term
 
 
 def numbers(*values: float) -> str:
@@ -105,7 +107,7 @@ def planar_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "R
     mu = config.friction.mu_kinetic
     root = "\n".join(
         f'        <joint name="{n}" type="{t}" axis="{a}"/>'
-        for n, t, a in (("x", "slide", "1 0 0"), ("z", "slide", "0 0 1"), ("theta", "hinge", "0 -1 0"))
+        for n, t, a in (("x", "slide", "1 0 0"), ("z", "slide", "0 0 1"), (ROOT_HINGE, "hinge", "0 -1 0"))
     )
     world = (
         f'    <body name="slope" euler="0 {config.ground.slope!r} 0">\n'
@@ -169,13 +171,15 @@ def _tendons(description: WalkerDescription, tree: Tree) -> str:
     index = {name: k for k, name in enumerate(tree.names)}
     rows = []
     for joint, element, other in description.joint_elements():
-        coef = dict.fromkeys(_path(tree, index[joint.child]), 1.0)
-        for b in _path(tree, index[other]):
-            coef[b] = coef.get(b, 0.0) - 1.0
+        coef = {tree.names[b]: 1.0 for b in _path(tree, index[joint.child])}
+        if other == GROUND:  # the child's absolute angle: the root's hinge too
+            coef[ROOT_HINGE] = 1.0
+        for b in _path(tree, index[other]) if other != GROUND else []:
+            coef[tree.names[b]] = coef.get(tree.names[b], 0.0) - 1.0
         rest = element.rest_angle or 0.0
         sign = -1.0 if rest < 0.0 else 1.0  # MuJoCo reads a spring length of -1 as "the length at qpos0"
         rest *= sign
-        refs = "".join(f'<joint joint="{tree.names[b]}" coef="{sign * c!r}"/>' for b, c in coef.items() if c != 0.0)
+        refs = "".join(f'<joint joint="{b}" coef="{sign * c!r}"/>' for b, c in coef.items() if c != 0.0)
         rows.append(
             f'    <fixed name="{joint.name}.{element.name}" stiffness="{element.stiffness or 0.0!r}" '
             f'damping="{element.damping or 0.0!r}" springlength="{numbers(rest, rest)}">{refs}</fixed>'

@@ -28,7 +28,7 @@ def basin_command(
     steps: Annotated[int, typer.Option("--steps", help="Steps each cell walks.")] = 30,
     tolerance: Annotated[
         float,
-        typer.Option("--tolerance", help="Converged: last state this close to the gait (max over the four keys)."),
+        typer.Option("--tolerance", help="Converged: last state this close to the gait (max over its keys)."),
     ] = 1e-4,
     jobs: Annotated[int | None, typer.Option("--jobs", "-j", help="Parallel workers (default: all cores).")] = None,
     executor: Annotated[str, typer.Option("--executor", help="local (processes) or dask.")] = "local",
@@ -41,7 +41,8 @@ def basin_command(
     """
     from biped_sim.plots import save_figure
     from biped_sim.report.basin import basin_figure
-    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis, write_basin
+    from biped_sim.studies.basin import BasinSpec, map_basin, parse_axis
+    from biped_sim.studies.basin_files import write_basin
     from biped_sim.sweep import study_executor, workers_for
 
     spec = BasinSpec(load(config_path, set_), parse_axis("x", x), parse_axis("y", y), steps, tolerance)

@@ -18,9 +18,13 @@ from biped_sim.config import default_output_dir
 from biped_sim.errors import ConfigError
 from biped_sim.io.output import check_writable_dir
 from biped_sim.io.run_files import previous_run
+from biped_sim.measure.steps import LATERAL_STEP_COLUMNS
 from biped_sim.rigid.start import NONDIMENSIONAL
-from biped_sim.simulate import RunResult, prepare_model, simulate
+from biped_sim.simulate import RunResult, simulate
+from biped_sim.simulate.aside import join, prepare_compiling_aside
 from biped_sim.simulate.warmup import warm_up_configs, warm_up_in_processes
+
+LATERAL_NAMES = {name for name, _ in LATERAL_STEP_COLUMNS}
 
 
 def _fmt(value: float, digits: int = 5) -> str:
@@ -38,10 +42,13 @@ def _quantity(value: float, digits: int, unit: str) -> str:
 
 
 def step_table_rich(result: RunResult) -> Table:
-    """The per-step table printed after a run (a rigid run's angles are the touchdown ones, as compliant runs')."""
+    """The per-step table printed after a run (a rigid run's angles are the touchdown ones, as compliant runs'),
+    with a run in space's lateral columns (width, heading, sway, bank)."""
     seconds, metres = result.unit("s"), result.unit("m")
     title = "Steps" if seconds != NONDIMENSIONAL else "Steps (nondimensional: g = l = 1)"
     table = Table(title=title, show_lines=False)
+    s = result.steps
+    lateral = [(name, unit) for name, unit in s.columns if name in LATERAL_NAMES]
     for column in (
         "step",
         _header("t", seconds),
@@ -51,9 +58,9 @@ def step_table_rich(result: RunResult) -> Table:
         _header("slip", metres),
         "stance [rad]",
         "swing [rad]",
+        *(_header(name, result.unit(unit)) for name, unit in lateral),
     ):
         table.add_column(column, justify="right")
-    s = result.steps
     for k in range(len(s.strike_time)):
         table.add_row(
             str(k + 1),
@@ -64,6 +71,7 @@ def step_table_rich(result: RunResult) -> Table:
             f"{s.slip[k]:.2e}" if math.isfinite(s.slip[k]) else "",
             _fmt(s.stance_angle[k], 4),
             _fmt(s.swing_angle[k], 4),
+            *(_fmt(getattr(s, name)[k], 4) for name, _ in lateral),
         )
     return table
 
@@ -106,7 +114,9 @@ def run_command(
     check_writable_dir(out_dir)  # before any computation
     replaced = previous_run(out_dir)
     had_figures = (out_dir / "figures").is_dir()
-    model = prepare_model(config)  # validates geometry and the initial state before anything is written
+    # validates geometry and the initial state before anything is written; on a cold compile cache, a second
+    # process compiles the run's measures meanwhile
+    model, aside = prepare_compiling_aside(config)
     console = Console(stderr=False)
     show_progress = not quiet and sys.stdout.isatty()
     if show_progress:
@@ -123,6 +133,7 @@ def run_command(
             result = simulate(config, model=model, progress=lambda t: bar.update(task, completed=t))
     else:
         result = simulate(config, model=model)
+    join(aside)  # its measures compiled: write loads them from the cache
     result.write(out_dir)
     if not quiet:
         console.print(step_table_rich(result))

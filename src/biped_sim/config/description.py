@@ -4,6 +4,7 @@ one-sided stops), its feet and its legs (``walker.kind: description``; the bundl
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Literal
 
 from pydantic import Field, model_validator
@@ -14,6 +15,7 @@ from biped_sim.contact.joint_element import ELEMENT_PARAMETERS, JOINT_ELEMENT_LA
 Vector2 = tuple[float, float]
 SIDES = ("stance", "swing")
 JointElementName = Literal[tuple(JOINT_ELEMENT_LAWS)]  # type: ignore[valid-type]
+GROUND = "ground"  # an element's ``against`` for the slope normal (body -1 to the kernels): it holds an absolute angle
 MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
 
 
@@ -123,7 +125,9 @@ class ElementSpec(Strict):
     against: str | None = Field(
         None,
         description="The body the element acts against instead of the joint's parent, usually one hinged at the "
-        "same point (a torso's spring to the other leg); the torque is a couple on the two bodies either way.",
+        "same point (a torso's spring to the other leg); the torque is a couple on the two bodies either way. "
+        "`ground`: the slope normal, theta the child's absolute angle (a torso held in the world, as by a "
+        "controller; the torque's reaction goes to the ground).",
     )
 
     @model_validator(mode="after")
@@ -230,10 +234,12 @@ class WalkerDescription(Strict):
             ("feet", [f.body for f in self.feet]),
             ("joints", [j.parent for j in self.joints] + [j.child for j in self.joints]),
             ("legs", [b for leg in self.legs for b in leg]),
-            ("joints", [e.against for j in self.joints for e in j.elements if e.against is not None]),
+            ("joints", [e.against for j in self.joints for e in j.elements if e.against not in (None, GROUND)]),
         ):
             if unknown := [b for b in bodies if b not in names]:
                 raise ValueError(f"{field_name}: unknown body {unknown[0]!r}")
+        if GROUND in names:
+            raise ValueError(f"bodies: {GROUND!r} names the ground (an element's against); rename the body")
         children = [j.child for j in self.joints]
         if sorted(children) != sorted(names[1:]):
             raise ValueError("joints: every body but the first (the root) must be the child of exactly one joint")
@@ -262,6 +268,11 @@ class WalkerDescription(Strict):
         """Every joint's passive elements with the body each acts against (its ``against``, or the joint's parent),
         in the joints' order."""
         return [(j, e, e.against or j.parent) for j in self.joints for e in j.elements]
+
+    def element_bodies(self, index: Mapping[str, int]) -> list[tuple[int, int, ElementSpec]]:
+        """(child, other, element) of every joint element, the bodies numbered by ``index`` and the ground -1 (as
+        the kernels read it: angle and rate 0, :func:`biped_sim.contact.stop.joint_entry`)."""
+        return [(index[j.child], -1 if other == GROUND else index[other], e) for j, e, other in self.joint_elements()]
 
     def _latches_on_legs(self) -> None:
         """A latching stop holds a joint within one leg (a knee): it is released by that leg's foot."""

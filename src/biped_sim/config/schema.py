@@ -191,7 +191,7 @@ class Push(Strict):
     impulse: tuple[float, float] | tuple[float, float, float] = Field(
         ...,
         description="[px, py] or [px, py, pz] [N s]; slope frame: x downhill (forward), y its normal (vertical), "
-        "z = x cross y (lateral, the walker's right): a nonzero pz needs a compliant walker in space.",
+        "z = x cross y (lateral, the walker's right): a nonzero pz needs a walker in space.",
     )
 
     @property
@@ -265,11 +265,11 @@ class Config(Strict):
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
-        in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        in_space = (self.dynamics == "compliant" and self.formulation.kind == "spatial") or caps.space
         if any(push.lateral for push in self.simulation.pushes) and not in_space:
             raise ValueError(
-                "simulation.pushes: a lateral impulse (pz, the third component) needs a compliant walker in space "
-                "(formulation.kind: spatial)"
+                "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
+                "(formulation.kind: spatial, or walker.kind: description3d)"
             )
         if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")

@@ -56,7 +56,7 @@ WALKERS: dict[str, WalkerCapabilities] = {
     ),
     # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs
     "description3d": WalkerCapabilities(
-        {"rigid": ("planar",), "compliant": ("spatial",)}, False, True, ("limit_cycle",), space=True
+        {"rigid": ("planar",), "compliant": ("spatial",)}, False, True, ("limit_cycle", "basin"), space=True
     ),
 }
 

@@ -39,6 +39,9 @@ contact, constraint or event data (contact is a rolling constraint and heel stri
     /strikes/time              (n,)          s
     /strikes/pre_impact, /strikes/post_impact   (n, ny)   state just before and just after each strike
 
+A rigid run of a walker in space also has ``/attitude/{pitch,roll,yaw,pitch_rate}`` (ns, 2), its left and right
+legs' as a spatial run's bodies', its ``/hip`` is (ns, 3) and its steps have the lateral columns.
+
 Its units are SI except for the simplest walker, nondimensional ("1 (g = l = 1)" for time, lengths, rates
 and energies), and the rimless wheel's energies, in J per kg of hub mass ("J/kg").
 """

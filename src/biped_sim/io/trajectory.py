@@ -19,6 +19,8 @@ import numpy as np
 from biped_sim.config import Config, config_from_dict, parse_yaml
 from biped_sim.errors import ConfigError
 
+SPACE_LEGS = ("left", "right")  # the bodies of a rigid run of a walker in space, its attitudes' columns
+
 
 @dataclass
 class RunData:
@@ -39,7 +41,7 @@ class RunData:
     hip: np.ndarray  # (ns, 2) m; spatial runs (ns, 3) with z lateral
     steps: dict[str, np.ndarray]  # strike_time, foot, period, length, slip, ...
     violation_normalization: np.ndarray | None = None  # (ns,) ||p.p - 1||, spatial runs only
-    attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw [rad], pitch_rate [rad/s] (ns, nb), spatial only
+    attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw [rad], pitch_rate [rad/s] (ns, nb), in space only
     dynamics: str = "compliant"  # or 'rigid'
 
     def column(self, name: str) -> np.ndarray:
@@ -70,6 +72,8 @@ class RunData:
     def body_names(self) -> list[str]:
         """Bodies in state order: from the 'phi_<body>' entries (planar, minimal), else the 'x_<body>' ones (spatial;
         minimal-coordinate states also hold 'x_hip', which is no body); a rigid run's roles ('<role>_angle')."""
+        if self.dynamics == "rigid" and self.attitude is not None:
+            return list(SPACE_LEGS)  # a rigid walker in space: its legs' attitudes
         if self.dynamics == "rigid":
             return [name.removesuffix("_angle") for name in self.state_names if name.endswith("_angle")]
         planar = [name[4:] for name in self.state_names if name.startswith("phi_")]
@@ -174,5 +178,6 @@ def _rigid_run(run_dir: Path, f: h5py.File, config: Config, summary: dict[str, A
         violation_velocity=zeros,
         hip=f["hip"][:],
         steps={name: ds[:] for name, ds in f["steps"].items()},
+        attitude={name: ds[:] for name, ds in f["attitude"].items()} if "attitude" in f else None,
         dynamics="rigid",
     )

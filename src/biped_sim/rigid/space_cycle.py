@@ -34,8 +34,9 @@ from biped_sim.rigid.limit_cycle import (
     newton_fixed_point,
     settle,
 )
+from biped_sim.rigid.space_integration import space_clearance, space_scratch
 from biped_sim.rigid.space_kernels import space_params
-from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, space_model, swing_clearance
+from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, space_model
 from biped_sim.rigid.space_step import SpaceStep, space_step
 from biped_sim.rigid.step import RTOL
 
@@ -50,6 +51,7 @@ class SpaceSection:
 
     def __init__(self, model: SpaceModel) -> None:
         self.model = model
+        self.params = space_params(model)
         self.heading = model.slope != 0.0
         self.indices = ((0,) if self.heading else ()) + (1, 2, *RATES)
 
@@ -79,7 +81,7 @@ class SpaceSection:
 
     def _clearance(self, x: np.ndarray, beta: float) -> float:
         x[3] = beta
-        return swing_clearance(self.model, x)
+        return space_clearance(self.params, x)
 
 
 def space_walker_model(config: Config) -> SpaceModel:
@@ -93,11 +95,12 @@ class SpaceMap:
     def __init__(self, model: SpaceModel) -> None:
         self.model = model
         self.section = SpaceSection(model)
-        self.params = space_params(model)
+        self.params = self.section.params
+        self.scratch = space_scratch()
 
     def step(self, z: np.ndarray) -> tuple[np.ndarray, SpaceStep]:
         """The next section point and the step."""
-        step = space_step(self.model, self.section.from_section(np.asarray(z, dtype=float)), self.params)
+        step = space_step(self.model, self.section.from_section(np.asarray(z, dtype=float)), self.params, self.scratch)
         if step.x_plus is None:
             raise StepFailedError(f"the rigid walker in space {step.status} during the step")
         return self.section.to_section(step.x_plus), step

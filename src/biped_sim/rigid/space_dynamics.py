@@ -36,6 +36,7 @@ from biped_sim.rigid.space_model import (
     pose,
     rate_matrix,
 )
+from biped_sim.walkers.space_geometry import cross
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -66,7 +67,7 @@ def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) ->
     foot = model.feet[0]
     d_dot = bottom_direction_rate(foot, where.rotations[0], omega)
     scale = 1.0 if foot.shape == ELLIPSOID else foot.radius
-    return np.cross(omega, foot.tube * EZ - scale * where.stance_d) + scale * d_dot
+    return cross(omega, foot.tube * EZ - scale * where.stance_d) + scale * d_dot
 
 
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
@@ -82,18 +83,18 @@ def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
         b_matrix = np.zeros((3, 4))
         a_matrix[:, :3] = -_skew(r)
         b_matrix[:, :3] = np.eye(3)
-        v = np.cross(omega, r)
+        v = cross(omega, r)
         e = np.zeros(3)
         swing_terms = np.zeros(3)
         if part.frame == 1:  # the hinge turns it about the axis through the origin
             s = r - where.origin
-            a_matrix[:, 3] = np.cross(axis, s)
+            a_matrix[:, 3] = cross(axis, s)
             b_matrix[:, 3] = axis
             v = v + rate * a_matrix[:, 3]
             w_swing = omega + rate * axis
-            swing_terms = rate * (np.cross(np.cross(omega, axis), s) + np.cross(axis, np.cross(w_swing, s)))
-            e = rate * np.cross(omega, axis)
-        b = np.cross(omega, v - p_dot) + swing_terms
+            swing_terms = rate * (cross(cross(omega, axis), s) + cross(axis, cross(w_swing, s)))
+            e = rate * cross(omega, axis)
+        b = cross(omega, v - p_dot) + swing_terms
         inertia = turn @ part.inertia @ turn.T
         motions.append(PartMotion(part.mass, r, inertia, a_matrix, b_matrix, v, b_matrix @ x[4:8], b, e))
     return motions
@@ -111,7 +112,7 @@ def flow(model: SpaceModel, x: np.ndarray) -> np.ndarray:
     force = np.zeros(4)
     for m in motions:
         force += m.a_matrix.T @ (m.mass * (gravity - m.b))
-        force -= m.b_matrix.T @ (m.inertia @ m.e + np.cross(m.w, m.inertia @ m.w))
+        force -= m.b_matrix.T @ (m.inertia @ m.e + cross(m.w, m.inertia @ m.w))
     x_dot = np.empty(N_STATE)
     x_dot[:3] = np.linalg.solve(rate_matrix(x[0], x[1]), x[4:7])
     x_dot[3] = x[7]
@@ -125,19 +126,23 @@ def ground_point(x: np.ndarray) -> np.ndarray:
     return np.array([x[8], x[9], 0.0])
 
 
-def energy(model: SpaceModel, x: np.ndarray) -> float:
-    """Kinetic plus potential energy (potential zero at the slope frame's origin)."""
+def energy_terms(model: SpaceModel, x: np.ndarray) -> tuple[float, float]:
+    """(kinetic, potential) energy (potential zero at the slope frame's origin)."""
     base = ground_point(x)
     gravity = model.gravity_vector
-    return float(
-        sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w - m.mass * gravity @ (base + m.r)
-            for m in part_motions(model, x))
-    )  # fmt: skip
+    motions = part_motions(model, x)
+    kinetic = sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w for m in motions)
+    return float(kinetic), float(sum(-m.mass * gravity @ (base + m.r) for m in motions))
+
+
+def energy(model: SpaceModel, x: np.ndarray) -> float:
+    """Kinetic plus potential energy (potential zero at the slope frame's origin)."""
+    return sum(energy_terms(model, x))
 
 
 def angular_momentum(motions: list[PartMotion], about: np.ndarray) -> np.ndarray:
     """The walker's angular momentum about ``about`` (a point from the stance contact point)."""
-    return sum(np.cross(m.r - about, m.mass * m.v) + m.inertia @ m.w for m in motions)
+    return sum(cross(m.r - about, m.mass * m.v) + m.inertia @ m.w for m in motions)
 
 
 def swing_foot_point(model: SpaceModel, x: np.ndarray) -> np.ndarray:
@@ -169,3 +174,18 @@ def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
         momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
     x_plus[4:8] = np.linalg.solve(mass_matrix(after), momentum)
     return x_plus
+
+
+def hip_push(model: SpaceModel, x: np.ndarray, impulse: np.ndarray) -> tuple[np.ndarray, float]:
+    """(the state just after an impulse on the hinge's midpoint, the ground's normal impulse). The stance foot and
+    the hinge hold: Kane's impulsive balance M du = A_hip^T p, A_hip the midpoint's partial velocities (it is on
+    the hinge axis: the hinge rate does not move it); the ground's impulse is the walker's momentum change minus p
+    (its normal part negative: the push would lift the stance foot)."""
+    motions = part_motions(model, x)
+    a_hip = np.zeros((3, 4))
+    a_hip[:, :3] = -_skew(pose(model, x).origin)
+    du = np.linalg.solve(mass_matrix(motions), a_hip.T @ impulse)
+    after = np.array(x, dtype=float)
+    after[4:8] += du
+    momentum = sum(m.mass * m.a_matrix @ du for m in motions)
+    return after, float(momentum[2] - impulse[2])

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from biped_sim.kernel import kernel
+from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.rigid.space_model import ELLIPSOID, RING, SPHERE, TORUS, SpaceModel
 
 MAX_PARTS = 3
@@ -47,22 +48,50 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def rotations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The stance leg's rotation Rz(psi) Rx(phi) Ry(theta), the swing leg's (times Ry(beta)) and E of
-    omega = E (psi', phi', theta')."""
+def dot(a: np.ndarray, b: np.ndarray) -> float:
+    """a . b for 3-vectors."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@kernel
+def mat_vec(a: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """a v for a 3 x 3 matrix (a loop: numba's ``@`` calls BLAS, whose call costs more than the product)."""
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = a[i, 0] * v[0] + a[i, 1] * v[1] + a[i, 2] * v[2]
+    return out
+
+
+@kernel
+def mat_mat(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a b for a 3 x 3 matrix a and a 3 x n matrix b (a loop, as :func:`mat_vec`)."""
+    out = np.empty((3, b.shape[1]))
+    for i in range(3):
+        for j in range(b.shape[1]):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+    return out
+
+
+@kernel
+def rotations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The stance leg's rotation Rz(psi) Rx(phi) Ry(theta) and the swing leg's (times Ry(beta))."""
     cz, sz, cx, sx = math.cos(x[0]), math.sin(x[0]), math.cos(x[1]), math.sin(x[1])
     cy, sy, cb, sb = math.cos(x[2]), math.sin(x[2]), math.cos(x[3]), math.sin(x[3])
     rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
     ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
     rb = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    zx = rz @ rx
-    stance = zx @ ry
-    e = np.zeros((3, 3))
-    e[2, 0] = 1.0
-    e[:, 1] = rz[:, 0]
-    e[:, 2] = zx[:, 1]
-    return stance, stance @ rb, e
+    stance = mat_mat(mat_mat(rz, rx), ry)
+    return stance, mat_mat(stance, rb)
+
+
+@kernel
+def attitude_rates(x: np.ndarray) -> np.ndarray:
+    """(psi', phi', theta') from omega = E (psi', phi', theta'), E's columns z, Rz x and Rz Rx y
+    (:func:`~biped_sim.rigid.space_model.rate_matrix`) solved in closed form (|phi| < pi / 2)."""
+    cz, sz, cx, sx = math.cos(x[0]), math.sin(x[0]), math.cos(x[1]), math.sin(x[1])
+    theta_rate = (x[5] * cz - x[4] * sz) / cx
+    return np.array([x[6] - theta_rate * sx, x[4] * cz + x[5] * sz, theta_rate])
 
 
 @kernel
@@ -70,7 +99,7 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
     """A foot's lowest point from its frame's origin and the unit vector d from its centre toward it (slope frame;
     a torus's: its ring's, lowered by the tube radius)."""
     o = FEET + foot * FOOT_SIZE
-    centre = rotation @ p[o + 2 : o + 5]
+    centre = mat_vec(rotation, p[o + 2 : o + 5])
     d = np.zeros(3)
     if p[o] == ELLIPSOID:  # d: the whole offset -Q z / sqrt(z' Q z)
         q = ellipsoid_quadric(p, o, rotation)
@@ -79,10 +108,10 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
     if p[o] == SPHERE:
         d[2] = -1.0
     elif p[o] == RING or p[o] == TORUS:
-        n = rotation @ p[o + 5 : o + 8]
+        n = mat_vec(rotation, p[o + 5 : o + 8])
         w = -n[2] * n
         w[2] += 1.0
-        d = -w / math.sqrt(w @ w)
+        d = -w / math.sqrt(dot(w, w))
     lowest = centre + p[o + 1] * d
     if p[o] == TORUS:
         lowest[2] -= p[o + 8]
@@ -93,7 +122,7 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
 def ellipsoid_quadric(p: np.ndarray, o: int, rotation: np.ndarray) -> np.ndarray:
     """The ellipsoid foot at parameter offset ``o``: its quadric turned into the slope frame, R Q R^T."""
     q = np.ascontiguousarray(p[o + 9 : o + 18]).reshape((3, 3))
-    return rotation @ q @ np.ascontiguousarray(rotation.T)
+    return mat_mat(mat_mat(rotation, q), rotation.T)
 
 
 @kernel
@@ -102,7 +131,7 @@ def ellipsoid_offset_rate(p: np.ndarray, o: int, rotation: np.ndarray, omega: np
     (Q' = [omega]x Q - Q [omega]x)."""
     q = ellipsoid_quadric(p, o, rotation)
     spin = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
-    q_dot = spin @ q - q @ spin
+    q_dot = mat_mat(spin, q) - mat_mat(q, spin)
     s = math.sqrt(q[2, 2])
     return -q_dot[:, 2] / s + q[:, 2] * q_dot[2, 2] / (2.0 * s**3)
 
@@ -119,60 +148,71 @@ def contact_rate(p: np.ndarray, rotation: np.ndarray, d: np.ndarray, omega: np.n
         arm[2] += p[o + 8]
     rate = cross(omega, arm)
     if p[o] == RING or p[o] == TORUS:
-        n = rotation @ p[o + 5 : o + 8]
+        n = mat_vec(rotation, p[o + 5 : o + 8])
         n_dot = cross(omega, n)
         w = -n[2] * n
         w[2] += 1.0
-        norm = math.sqrt(w @ w)
+        norm = math.sqrt(dot(w, w))
         w_dot = -n_dot[2] * n - n[2] * n_dot
         unit = w / norm
-        rate -= radius * (w_dot - unit * (unit @ w_dot)) / norm
+        rate -= radius * (w_dot - unit * dot(unit, w_dot)) / norm
     return rate
 
 
 @kernel
+def _add_part(
+    p: np.ndarray, o: int, x: np.ndarray, turn: np.ndarray, origin: np.ndarray, axis: np.ndarray, p_dot: np.ndarray,
+    mass: np.ndarray, force: np.ndarray,
+) -> None:  # fmt: skip
+    """The part at parameter offset ``o`` (on the leg turned by ``turn``) added to Kane's M (m A^T A + B^T I B) and
+    F (A^T m (g - b) - B^T (I e + w x I w)), in place."""
+    omega, rate, m = x[4:7], x[7], p[o + 1]
+    r = origin + mat_vec(turn, p[o + 2 : o + 5])
+    inertia = mat_mat(mat_mat(turn, np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3))), turn.T)
+    a_matrix = np.zeros((3, 4))
+    b_matrix = np.zeros((3, 4))
+    for i in range(3):  # omega x r = -[r]x omega
+        a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
+        a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
+        b_matrix[i, i] = 1.0
+    v, w = cross(omega, r), omega.copy()
+    e, extra = np.zeros(3), np.zeros(3)
+    if p[o] == 1.0:  # the swing leg: the hinge turns it about the axis through the origin
+        s = r - origin
+        a_matrix[:, 3] = cross(axis, s)
+        b_matrix[:, 3] = axis
+        v += rate * a_matrix[:, 3]
+        w += rate * axis
+        extra = rate * (cross(cross(omega, axis), s) + cross(axis, cross(w, s)))
+        e = rate * cross(omega, axis)
+    linear = m * (p[:3] - cross(omega, v - p_dot) - extra)
+    torque = mat_vec(inertia, e) + cross(w, mat_vec(inertia, w))
+    inertia_b = mat_mat(inertia, b_matrix)
+    for i in range(4):
+        for j in range(4):
+            for k in range(3):
+                mass[i, j] += m * a_matrix[k, i] * a_matrix[k, j] + b_matrix[k, i] * inertia_b[k, j]
+        for k in range(3):
+            force[i] += a_matrix[k, i] * linear[k] - b_matrix[k, i] * torque[k]
+
+
+@kernel
 def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """dx/dt of the stance phase: Kane's M u' = F and the attitude's and contact point's rates."""
-    stance, swing, e_matrix = rotations(x)
+    """dx/dt of the stance phase: Kane's M u' = F (a Cholesky solve: M is symmetric positive definite) and the
+    attitude's and contact point's rates."""
+    stance, swing = rotations(x)
     foot, d = bottom(p, 0, stance)
-    origin = -foot
-    omega = x[4:7].copy()
-    rate = x[7]
     axis = stance[:, 1].copy()
-    p_dot = contact_rate(p, stance, d, omega)
+    p_dot = contact_rate(p, stance, d, x[4:7].copy())
     mass = np.zeros((4, 4))
     force = np.zeros(4)
-    gravity = p[:3]
     for k in range(int(p[3])):
         o = PARTS + k * PART_SIZE
-        turn = swing if p[o] == 1.0 else stance
-        r = origin + turn @ p[o + 2 : o + 5]
-        inertia = turn @ np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3)) @ np.ascontiguousarray(turn.T)
-        a_matrix = np.zeros((3, 4))
-        b_matrix = np.zeros((3, 4))
-        for i in range(3):  # omega x r = -[r]x omega
-            a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
-            a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
-            b_matrix[i, i] = 1.0
-        v = cross(omega, r)
-        e = np.zeros(3)
-        extra = np.zeros(3)
-        if p[o] == 1.0:
-            s = r - origin
-            a_matrix[:, 3] = cross(axis, s)
-            b_matrix[:, 3] = axis
-            v += rate * a_matrix[:, 3]
-            extra = rate * (cross(cross(omega, axis), s) + cross(axis, cross(omega + rate * axis, s)))
-            e = rate * cross(omega, axis)
-        w = b_matrix @ x[4:8]
-        b = cross(omega, v - p_dot) + extra
-        a_t = np.ascontiguousarray(a_matrix.T)
-        b_t = np.ascontiguousarray(b_matrix.T)
-        mass += p[o + 1] * a_t @ a_matrix + b_t @ inertia @ b_matrix
-        force += a_t @ (p[o + 1] * (gravity - b)) - b_t @ (inertia @ e + cross(w, inertia @ w))
+        _add_part(p, o, x, swing if p[o] == 1.0 else stance, -foot, axis, p_dot, mass, force)
+    cholesky_solve(mass, force, 4)
     x_dot = np.empty(10)
-    x_dot[:3] = np.linalg.solve(e_matrix, omega)
-    x_dot[3] = rate
-    x_dot[4:8] = np.linalg.solve(mass, force)
+    x_dot[:3] = attitude_rates(x)
+    x_dot[3] = x[7]
+    x_dot[4:8] = force
     x_dot[8:] = p_dot[:2]
     return x_dot

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from biped_sim.config.space_description import SpaceDescription
-from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, rot_x, rot_y, rot_z
+from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, cross, rot_x, rot_y, rot_z
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
@@ -138,7 +138,7 @@ def bottom_direction_rate(foot: Foot, rotation: np.ndarray, omega: np.ndarray) -
     if foot.shape not in (RING, TORUS):
         return np.zeros(3)
     n = rotation @ foot.normal
-    n_dot = np.cross(omega, n)
+    n_dot = cross(omega, n)
     w = EZ - n[2] * n
     norm = np.linalg.norm(w)
     w_dot = -n_dot[2] * n - n[2] * n_dot

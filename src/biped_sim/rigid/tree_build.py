@@ -173,12 +173,11 @@ def tree_locks(tree: Tree, d: WalkerDescription) -> list[tuple[int, int, float, 
 
 def tree_elements(tree: Tree, d: WalkerDescription) -> list[list[float]]:
     """(law, child, other, the law's parameters) of every joint element: a torque on the child's coordinate and its
-    opposite on the other body's (the joint's parent, or the body it acts against)."""
+    opposite on the other body's (the joint's parent, or the body it acts against; -1, the ground, takes none)."""
     return [
-        [JOINT_ELEMENT_LAWS[e.law].index, tree.index[j.child], tree.index[other],
-         *element_parameters(e.law, **e.values())]
-        for j, e, other in d.joint_elements()
-    ]  # fmt: skip
+        [JOINT_ELEMENT_LAWS[e.law].index, child, other, *element_parameters(e.law, **e.values())]
+        for child, other, e in d.element_bodies(tree.index)
+    ]
 
 
 def _fall_angles(tree: Tree, d: WalkerDescription, config: Config) -> list[float]:

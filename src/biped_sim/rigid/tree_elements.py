@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.contact.joint_element import element_energy, element_torque
+from biped_sim.contact.stop import joint_entry
 from biped_sim.kernel import kernel
 from biped_sim.rigid.tree_layout import RigidTree
 
@@ -20,19 +21,21 @@ def joint_element(
     relative angle and rate of the child to the other body."""
     element = elements[e]
     child, other = element.child, element.other
-    tau, power = element_torque(element.law, q[child] - q[other], qd[child] - qd[other], params[e])
+    theta, theta_dot = q[child] - joint_entry(q, other), qd[child] - joint_entry(qd, other)
+    tau, power = element_torque(element.law, theta, theta_dot, params[e])
     return child, other, tau, power
 
 
 @kernel
 def element_forces(elements: np.ndarray, params: np.ndarray, q: np.ndarray, qd: np.ndarray, forces: np.ndarray) -> None:
     """Add the joint elements' torques to the generalized forces: with absolute angles as coordinates a couple tau
-    on (child, other) is tau on the child's coordinate and -tau on the other's (the tree's records passed alone:
-    the flow calls this once per evaluation, and a call passes every array of its arguments)."""
+    on (child, other) is tau on the child's coordinate and -tau on the other's, none on the ground (the tree's
+    records passed alone: the flow calls this once per evaluation, and a call passes every array of its arguments)."""
     for e in range(elements.shape[0]):
         child, other, tau, _ = joint_element(elements, params, e, q, qd)
         forces[child] += tau
-        forces[other] -= tau
+        if other >= 0:  # not the ground
+            forces[other] -= tau
 
 
 @kernel
@@ -41,7 +44,7 @@ def tree_element_energy(tree: RigidTree, q: np.ndarray) -> float:
     stored = 0.0
     for e in range(tree.elements.shape[0]):
         element = tree.elements[e]
-        theta = q[element.child] - q[element.other]
+        theta = q[element.child] - joint_entry(q, element.other)
         stored += element_energy(element.law, theta, tree.element_params[e])
     return stored
 

@@ -21,12 +21,18 @@ from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
-from biped_sim.rigid.space_cycle import space_limit_cycle
 from biped_sim.rigid.start import RigidStart, rigid_start
 from biped_sim.simulate.budget import check_run_size
 from biped_sim.simulate.compliant import CompliantRunResult, simulate_compliant
 from biped_sim.simulate.result import RunResult
 from biped_sim.simulate.rigid import RigidRunResult, simulate_rigid
+from biped_sim.simulate.space_rigid import (
+    SpaceRunResult,
+    SpaceStart,
+    simulate_space_rigid,
+    space_initial,
+    space_start,
+)
 from biped_sim.walkers import BuiltModel, build_model
 
 __all__ = [
@@ -34,6 +40,8 @@ __all__ = [
     "RigidRunResult",
     "RigidStart",
     "RunResult",
+    "SpaceRunResult",
+    "SpaceStart",
     "initial_state",
     "prepare_model",
     "run",
@@ -45,21 +53,20 @@ def initial_state(config: Config) -> InitialState | dict[str, float]:
     """The compliant run's initial leg state: as configured, or the rigid model's limit cycle (a walker in space:
     its own rigid model's post-strike fixed point)."""
     initial = config.simulation.initial
-    if initial == "rigid_limit_cycle" and capabilities(config.walker.kind).space:
-        cycle = space_limit_cycle(config)
-        if not cycle.converged:
-            raise ConfigError(
-                "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
-            )
-        return cycle.fixed_point
+    if capabilities(config.walker.kind).space:
+        return space_initial(config)  # type: ignore[return-value]
     if initial == "rigid_limit_cycle":
         return InitialState(**rigid_limit_cycle_initial(config))
     return initial
 
 
-def prepare_model(config: Config) -> BuiltModel | RigidStart:
+def prepare_model(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
-    for ``dynamics: rigid`` the rigid walker and its resolved initial state."""
+    for ``dynamics: rigid`` the rigid walker (a walker in space: its model) and its resolved initial state."""
+    if config.dynamics == "rigid" and capabilities(config.walker.kind).space:
+        space = space_start(config)
+        check_run_size(config, 2 * len(space.state) + 8)  # state, world state, hip, energy terms
+        return space
     if config.dynamics == "rigid":
         start = rigid_start(config)
         check_run_size(config, 2 * len(start.state) + 4)  # state, hip, energy terms
@@ -75,7 +82,7 @@ def prepare_model(config: Config) -> BuiltModel | RigidStart:
 def simulate(
     config: Config,
     *,
-    model: BuiltModel | RigidStart | None = None,
+    model: BuiltModel | RigidStart | SpaceStart | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> RunResult:
     """Simulate ``config`` and measure the gait; writes nothing.
@@ -84,8 +91,10 @@ def simulate(
     the simulated time.
     """
     model = model if model is not None else prepare_model(config)
-    if isinstance(model, RigidStart) != (config.dynamics == "rigid"):
+    if isinstance(model, RigidStart | SpaceStart) != (config.dynamics == "rigid"):
         raise TypeError(f"simulate: the model given does not match dynamics: {config.dynamics}")
+    if isinstance(model, SpaceStart):
+        return simulate_space_rigid(config, model, progress)
     if isinstance(model, RigidStart):
         return simulate_rigid(config, model, progress)
     return simulate_compliant(config, model, progress)

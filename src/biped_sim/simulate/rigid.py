@@ -117,6 +117,13 @@ class RigidRunResult(RunResult):
     def units(self) -> dict[str, str]:
         return rigid_units(self.walker)
 
+    @property
+    def energy_scale(self) -> float:
+        """m g l: the reference mass, gravity and the leg length (the energy residual's scale)."""
+        return self.walker.reference_mass * self.walker.gravity * self.walker.leg_length
+
+    integrator = INTEGRATOR
+
     def unit(self, si_unit: str) -> str:
         """This run's unit for an SI unit ('s' is '1 (g = l = 1)' for the simplest walker)."""
         return self.units[si_unit]
@@ -251,9 +258,10 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
     ``energy_dissipated``: ``impact`` is the kinetic energy lost at the strikes; ``normal`` repeats it (the
     plastic impact is the rigid limit of normal damping, so tables of rigid and compliant runs compare) and
     ``friction`` is 0 (no slip): impact = normal + friction. ``constraint_violation_max`` is exactly 0: the
-    reduced coordinates satisfy the constraints by construction. Solver counters are the compiled DOP853's.
+    reduced coordinates satisfy the constraints by construction. Solver counters are the integrator's. A rigid run
+    of a walker in space (:class:`~biped_sim.simulate.space_rigid.SpaceRunResult`) has the same attributes.
     """
-    config, walker = result.config, result.walker
+    config = result.config
     residual_max = float(np.max(np.abs(result.energy.residual))) if len(result.time) else 0.0
     return {
         "status": result.status,
@@ -264,14 +272,14 @@ def summarize_rigid(result: RigidRunResult) -> dict[str, Any]:
         "energy_dissipated": result.energy_dissipated(),
         **push_summary(config, [{"work": work, "ground_normal_impulse": ground} for _, work, ground in result.pushes]),
         "energy_residual_max": residual_max,
-        "energy_residual_max_relative": residual_max / (walker.reference_mass * walker.gravity * walker.leg_length),
+        "energy_residual_max_relative": residual_max / result.energy_scale,
         "constraint_violation_max": {"position": 0.0, "velocity": 0.0},
         "max_penetration": None,
         "peak_normal_force": result.peak_normal_force(),
         "rhs_evals": result.rhs_evals,
         "accepted_steps": result.accepted_steps,
         "wall_time_s": result.wall_time_s,
-        "integrator": INTEGRATOR,
+        "integrator": result.integrator,
         "config_hash": config.hash(),
         "version": package_version(),
         "dynamics": "rigid",

@@ -6,7 +6,8 @@ scipy driver's compiled right-hand side), specialised for its ground (the flat g
 whether its walker has joint stops and whether it has joint elements (a described walker's; one without compiles
 none of their code).
 Every contact law is part of each group's kernels (the laws are dispatched at run time). Every rigid run
-shares one group, the compiled step map (its walker is data), warmed by one step.
+shares one group, the compiled step map (its walker is data), warmed by one step; a rigid walker in space has its
+own (its flow, ``rigid.space_kernels``), in ``--all``.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
 ``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
 ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
@@ -27,6 +28,8 @@ from typing import get_args
 
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config, FormulationConfig, derive
+from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.simulate import simulate
@@ -40,6 +43,17 @@ JOINT_STOPS = " with joint stops"  # a group's ground ends with it when its walk
 JOINT_ELEMENTS = " with joint elements"  # ... with this when they have joint elements (after JOINT_STOPS: both)
 JOINTS = ("", JOINT_STOPS, JOINT_ELEMENTS, JOINT_STOPS + JOINT_ELEMENTS)
 RIGID = ("rigid", "step map")  # the group of every rigid run: one compiled step map for every walker
+RIGID_SPACE = ("rigid", "step map in space")  # ... but a walker in space's: its own flow (rigid.space_kernels)
+# a walker in space for its group's warm-up: a compass with hip width and point feet, started leaning forward
+SPACE_WALKER = {
+    "kind": "description3d",
+    "space": {
+        "hip_width": 0.1,
+        "leg": {"mass": 1.0, "com": [0.0, 0.0, -0.5], "inertia": {"xx": 0.08, "yy": 0.08, "zz": 0.001},
+                "foot": {"shape": "point", "centre": [0.0, 0.0, -1.0]}},
+    },
+}  # fmt: skip
+SPACE_START = dict.fromkeys(SPACE_STATE_KEYS, 0.0) | {"pitch": -0.2, "swing_angle": 0.4, "omega_y": 1.0}
 # (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
 # (the costliest first: the parallel warm-up ends sooner)
 BUNDLED_GROUPS = (
@@ -66,7 +80,7 @@ class WarmUp:
         how = f"compiled {len(self.compiled)} functions" if self.compiled else "loaded from the cache"
         plain, *joints = self.ground.split(" with ")
         ground = ("" if plain == "flat" else f", on a {plain}") + "".join(f", with {joint}" for joint in joints)
-        method = "" if (self.formulation, self.family) == RIGID else f" ({self.method}{ground})"
+        method = "" if (self.formulation, self.family) in (RIGID, RIGID_SPACE) else f" ({self.method}{ground})"
         return f"{self.formulation} {self.family}{method}: {how} in {self.seconds:.1f} s"
 
 
@@ -97,7 +111,7 @@ def group_of(config: Config) -> tuple[str, str, str]:
     has them);
     a rigid run's is ('rigid', 'step map', ground): the step map is one for every walker."""
     if config.dynamics == "rigid":
-        return (*RIGID, ground_of(config))
+        return (*(RIGID_SPACE if capabilities(config.walker.kind).space else RIGID), ground_of(config))
     joints = (JOINT_STOPS if has_joint_stops(config) else "") + (JOINT_ELEMENTS if has_joint_elements(config) else "")
     ground = ground_of(config) + joints
     return config.formulation.kind, integrator_family(config.integrator.method), ground
@@ -155,6 +169,8 @@ def group_config(formulation: str, family: str, ground: str) -> Config:
     under a formulation that does not model it)."""
     if (formulation, family) == RIGID:
         values: dict[str, object] = {"dynamics": "rigid"}
+    elif (formulation, family) == RIGID_SPACE:
+        values = {"dynamics": "rigid", "walker": SPACE_WALKER, "simulation.initial": SPACE_START}
     else:
         method = Config().integrator.method if family == "explicit" else STIFF_METHODS[0]
         values = {"formulation.kind": formulation, "integrator.method": method}
@@ -180,7 +196,7 @@ def warm_up_configs(every_group: bool = False) -> list[Config]:
     family x ground (with and without joint stops and elements) there is, and rigid."""
     if not every_group:
         return [group_config(*group) for group in BUNDLED_GROUPS]
-    configs = [group_config(*RIGID, "flat")]
+    configs = [group_config(*RIGID, "flat"), group_config(*RIGID_SPACE, "flat")]
     for kind in get_args(FormulationConfig.model_fields["kind"].annotation):
         for family in ("explicit", "stiff"):
             for ground in (ground + joints for ground in GROUNDS for joints in JOINTS):

@@ -21,7 +21,8 @@ The slice: for the simplest walker over stance_angle and stance_rate, the swing 
 leaves it (Garcia's relations phi = 2 theta, phidot = thetadot (1 - cos 2 theta), i.e. swing_angle = -theta,
 swing_rate = thetadot cos 2 theta), so the map is Schwab and Wisse's post-impact section. For every other
 walker or pair of keys, the two keys vary and the other two stay as configured (a slice of the full
-state space through the config's start, not a section).
+state space through the config's start, not a section). A walker in space walks its rigid step map on its
+Poincare section, two section coordinates the axes (:mod:`biped_sim.studies.space_basin`).
 
 Cells run in chunks of one grid row on an executor (the sweep's local pool or Dask); each finished row is
 recorded atomically in ``DIR/cells/`` under a key of the resolved config, the grid and K, so a rerun of the
@@ -47,13 +48,13 @@ from biped_sim.config.schema import MAX_STEPS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.walker_registry import capabilities, require_study
 from biped_sim.errors import ArgumentError, ConfigError, quote
-from biped_sim.io.atomic import write_json_atomic, write_text_atomic, write_with
-from biped_sim.io.provenance import provenance
+from biped_sim.io.atomic import write_json_atomic
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, walk_starts
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
+from biped_sim.studies.space_basin import basin_keys, space_cells
 from biped_sim.studies.tasks import results_as_done
 
 KEY_PREFIX = "simulation.initial."
@@ -63,6 +64,8 @@ CONVERGED_TOLERANCE = 1e-4  # rad and rad/s (the simplest walker: nondimensional
 FELL, WALKS, CONVERGED = 0, 1, 2
 OUTCOMES = ("fell", "walks", "converged")
 CELLS_DIR = "cells"
+SPACE_NOTE = "eight post-strike keys, on level ground heading 0"
+SPACE_SLICE = " (or the gait's), on the walker in space's Poincare section: the hinge angle from the trailing foot"
 STEP_TIME_ALLOWANCE = 10.0  # a compliant cell's t_end: this many sqrt(l / g) per step (it stops at K strikes)
 
 
@@ -129,15 +132,16 @@ class BasinSpec:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
         if self.x.is_parameter and self.y.is_parameter:
             raise ArgumentError("y", "two parameters make a sweep (biped-sim sweep): one axis is an initial-state key")
-        if isinstance(self.config.simulation.initial, str):
+        space = capabilities(self.config.walker.kind).space
+        if space and self.config.dynamics != "rigid":
+            raise ConfigError("dynamics", "a basin of a walker in space walks its rigid step map (dynamics: rigid)")
+        if isinstance(self.config.simulation.initial, str) and not space:
             raise ConfigError("simulation.initial", "a basin varies the configured initial state: give its keys")
         for axis, grid in (("x", self.x), ("y", self.y)):
             if grid.is_parameter:
                 self._check_parameter(axis, grid)
-            elif grid.key not in self.config.initial_keys():
-                raise ArgumentError(
-                    axis, f"{grid.key} is not a key of simulation.initial ({', '.join(self.config.initial_keys())})"
-                )
+            elif grid.key not in (keys := basin_keys(self.config)):
+                raise ArgumentError(axis, f"{grid.key} is not a key of simulation.initial ({', '.join(keys)})")
         check_run_count(self.x.n * self.y.n, "y", "cells (x times y values)")
         if not 1 <= self.steps <= MAX_STEPS:
             raise ArgumentError("steps", f"must be from 1 to {MAX_STEPS:.0e}")
@@ -181,7 +185,7 @@ class BasinSpec:
     def cell_legs(self, x_value: float, y_value: float) -> dict[str, float]:
         """The initial-state keys of the cell at (x_value, y_value)."""
         initial = self.config.simulation.initial
-        legs = dict(initial) if isinstance(initial, dict) else initial.model_dump()  # type: ignore[union-attr]
+        legs = {} if isinstance(initial, str) else dict(initial) if isinstance(initial, dict) else initial.model_dump()
         for grid, value in ((self.x, x_value), (self.y, y_value)):
             if not grid.is_parameter:
                 legs[grid.key] = float(value)
@@ -218,6 +222,16 @@ def _rigid_row(task: RowTask, cells: list[tuple[Config, dict[str, float]]]) -> t
                 outcome.append(CONVERGED if _close(walker.legs_state(last), target, task.spec.tolerance) else WALKS)
         taken += [int(s) for s in walked.steps]
     return outcome, taken
+
+
+def _space_row(task: RowTask, cells: list[tuple[Config, dict[str, float]]]) -> tuple[list[int], list[int]]:
+    """Each cell walked by the step map in space on its section (:mod:`biped_sim.studies.space_basin`)."""
+    spec, target = task.spec, task.targets[0]  # a walker in space has no parameter axis: one gait
+    walked = space_cells(spec.config, [legs for _, legs in cells], target, spec.steps)
+    outcome = [
+        FELL if last is None else CONVERGED if _close(last, target, spec.tolerance) else WALKS for _, last in walked
+    ]
+    return outcome, [taken for taken, _ in walked]
 
 
 def _batches(cells: list[tuple[Config, dict[str, float]]]) -> list[tuple[Config, list[dict[str, float]]]]:
@@ -263,6 +277,7 @@ def basin_row(task: RowTask) -> dict[str, Any]:
     row_config = spec.cell_config(spec.x.lo, y_value) if not spec.x.is_parameter else None
     cells = [(row_config or spec.cell_config(x, y_value), spec.cell_legs(x, y_value)) for x in spec.x.values]
     row = _rigid_row if spec.config.dynamics == "rigid" else _compliant_row
+    row = _space_row if capabilities(spec.config.walker.kind).space else row  # rigid (BasinSpec)
     outcome, steps = row(task, cells)
     return {"row": task.row, "outcome": outcome, "steps": steps}
 
@@ -399,52 +414,16 @@ def map_basin(
             progress(len(done), spec.y.n)
     outcome = np.array([done[row]["outcome"] for row in range(spec.y.n)], dtype=np.int64)
     steps = np.array([done[row]["steps"] for row in range(spec.y.n)], dtype=np.int64)
+    space = capabilities(spec.config.walker.kind).space
     notes = [
         f"each cell walked up to {spec.steps} steps; converged: walked them all and ended within "
-        f"{spec.tolerance:g} of the gait (max over the four leg angles and rates)",
+        f"{spec.tolerance:g} of the gait (max over the {SPACE_NOTE if space else 'four leg angles and rates'})",
         "slice: swing leg as a heel strike leaves it (Garcia's relations): Schwab and Wisse's post-impact section"
         if spec.garcia_section
-        else "slice: the two keys vary, the other initial keys as configured",
+        else "slice: the two keys vary, the other initial keys as configured" + (SPACE_SLICE if space else ""),
     ]
     if (grid := spec.parameter_axis) is not None:
         notes.append(f"each value of {grid.key} converges to its own gait, found from the config's start")
     if target is None and grid is None:
         notes.append("no period-1 gait found from the config's start: no cell counts as converged")
     return Basin(spec, outcome, steps, cycle, time.perf_counter() - clock, reused, notes, gaits)
-
-
-def write_basin(basin: Basin, out_dir: Path) -> list[Path]:
-    """basin.h5 (grid, outcome, steps, gait, resolved config and provenance) and basin.csv, atomically."""
-    import h5py
-
-    spec = basin.spec
-    doc = basin.to_json()
-    h5_path, csv_path = out_dir / "basin.h5", out_dir / "basin.csv"
-
-    def write_h5(tmp: Path) -> None:
-        with h5py.File(tmp, "w") as f:
-            f.create_dataset("x", data=spec.x.values)
-            f.create_dataset("y", data=spec.y.values)
-            f.create_dataset("outcome", data=basin.outcome)
-            f.create_dataset("steps", data=basin.steps)
-            f["x"].attrs["key"] = spec.x.config_key
-            f["y"].attrs["key"] = spec.y.config_key
-            f["outcome"].attrs["codes"] = json.dumps(dict(enumerate(OUTCOMES)))
-            for name, value in (doc["fixed_point"] or {}).items():
-                f.attrs[f"fixed_point_{name}"] = value
-            for name in ("n_cells", "fraction_walking", "fraction_converged", "converged_tolerance", "steps"):
-                f.attrs[name] = doc[name]
-            f.attrs["notes"] = json.dumps(basin.notes)
-            f.attrs["parameter_gaits"] = json.dumps(basin.parameter_gaits)
-            f.attrs["config"] = json.dumps(spec.config.model_dump(mode="json"), sort_keys=True)
-            f.attrs["config_hash"] = spec.config.hash()
-            for name, value in provenance().items():
-                f.attrs[name] = value
-
-    write_with(h5_path, write_h5)
-    lines = [f"{spec.x.key},{spec.y.key},outcome,steps"]
-    for j, y_value in enumerate(spec.y.values):
-        for i, x_value in enumerate(spec.x.values):
-            lines.append(f"{float(x_value)!r},{float(y_value)!r},{OUTCOMES[basin.outcome[j, i]]},{basin.steps[j, i]}")
-    write_text_atomic(csv_path, "\n".join(lines) + "\n")
-    return [h5_path, csv_path]

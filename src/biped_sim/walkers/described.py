@@ -53,7 +53,7 @@ class Tree:
     inertia: np.ndarray  # (nb,) about the centre of mass
     spatial_inertia: np.ndarray  # (nb, 3, 3) about the centre of mass in the body frame (z' the joints' axis)
     stops: list[tuple[int, int, str, float, str, float, float, bool]]  # parent, child, side, angle, law, K, e, latch
-    elements: list[tuple[int, int, str, np.ndarray]]  # child, the body it acts against, law, parameter vector
+    elements: list[tuple[int, int, str, np.ndarray]]  # child, the body it acts against (-1: ground), law, parameters
     fall_angle: list[float | None]  # per body: its own fall angle (a body off the legs), else None
     foot_body: np.ndarray  # (nf,) int
     foot_centre: np.ndarray  # (nf, 2) in the body frame
@@ -127,8 +127,8 @@ def resolve_tree(description: WalkerDescription) -> Tree:
         ),
         stops=sorted(stops, key=lambda s: s[1]),
         elements=[
-            (index[joint.child], index[other], e.law, element_parameters(e.law, **e.values()))
-            for joint, e, other in description.joint_elements()
+            (child, other, e.law, element_parameters(e.law, **e.values()))
+            for child, other, e in description.element_bodies(index)
         ],
         foot_body=np.array([index[f.body] for f in feet], dtype=np.int64),
         foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
@@ -194,9 +194,11 @@ def planar_stops(tree: Tree, config: Config, length: float) -> Stops:
 
 
 def planar_elements(tree: Tree) -> JointElements:
-    """The joint elements: indices of their two bodies' angles and rates in the planar state, laws, parameters."""
+    """The joint elements: indices of their two bodies' angles and rates in the planar state (-1: the ground),
+    laws, parameters."""
     nb = len(tree.names)
-    rows = [[3 * c + 2, 3 * a + 2, 3 * nb + 3 * c + 2, 3 * nb + 3 * a + 2] for c, a, _, _ in tree.elements]
+    rows = [[3 * c + 2, 3 * a + 2, 3 * nb + 3 * c + 2, 3 * nb + 3 * a + 2] if a >= 0 else
+            [3 * c + 2, -1, 3 * nb + 3 * c + 2, -1] for c, a, _, _ in tree.elements]  # fmt: skip
     laws = [JOINT_ELEMENT_LAWS[law].index for _, _, law, _ in tree.elements]
     return make_elements(np.array(rows), np.array(laws), np.array([p for *_, p in tree.elements]))
 

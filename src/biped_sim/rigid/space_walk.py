@@ -1,0 +1,130 @@
+"""A rigid walker in space walked step after step: each step's samples on its own clock, pushes at their times,
+and where each step's model frame sits in the run's frame.
+
+The step map (:mod:`biped_sim.rigid.space_step`) mirrors the walker after every strike so that the left leg always
+stands; a run undoes that: step k's frame has its contact point at ``Frame.contact`` of the run's slope frame (the
+rigid model's: x downhill, y left, z the slope's normal) and is that frame mirrored (y -> -y) when the right leg
+stands (``Frame.sign`` -1). A state of the model in a mirrored frame is the run's with heading, bank and the
+angular velocity's x and z negated (a mirror turns an angular velocity into minus its image), the lateral position
+mirrored (:meth:`Frame.world`). Gravity has no lateral part, so the energy of a state is the model's
+(:func:`~biped_sim.rigid.space_dynamics.energy`, potential zero at the frame's origin) less the whole weight's
+downhill part times the frame's downhill offset.
+
+A push (``simulation.pushes``: an impulse on the hinge's midpoint) stops the step's flow at its time and changes the
+walker's velocities there (:func:`~biped_sim.rigid.space_dynamics.hip_push`); the flow then goes on in the same
+phase. A sample at a push's time holds the state after it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import OdeSolution
+
+from biped_sim.rigid.space_dynamics import energy, energy_terms, hip_push
+from biped_sim.rigid.space_model import MIRROR, SpaceModel
+from biped_sim.rigid.space_step import SpaceStep, clearance, passed, phase, struck
+
+MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0])  # a state's signs under the mirror
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Where a step's model frame sits in the run's: its origin (the stance contact point at the step's start) and
+    +1 (the left leg stands) or -1 (the right leg stands: the model is mirrored)."""
+
+    contact: np.ndarray  # (3,) in the run's slope frame
+    sign: float
+
+    @property
+    def turn(self) -> np.ndarray:
+        """The frame's axes in the run's: the identity or the mirror."""
+        return np.eye(3) if self.sign > 0 else MIRROR
+
+    def world(self, x: np.ndarray) -> np.ndarray:
+        """A model state (or states, rows) in the run's frame: attitude, rates, the contact point (module docstring)."""
+        out = np.array(x, dtype=float) * (MIRRORED if self.sign < 0 else 1.0)
+        out[..., 8:] += self.contact[:2]
+        return out
+
+    def point(self, local: np.ndarray) -> np.ndarray:
+        """A point of the model's frame (from its origin) in the run's."""
+        return self.contact + self.turn @ local
+
+    def after(self, x_plus: np.ndarray) -> Frame:
+        """The next step's frame, from the post-strike state (its contact point in this frame, mirrored)."""
+        turn = MIRROR @ self.turn
+        return Frame(self.contact + turn @ np.array([x_plus[8], x_plus[9], 0.0]), -self.sign)
+
+    def impulse(self, p: np.ndarray) -> np.ndarray:
+        """A push given as [px, py, pz] in the spatial slope frame (x downhill, y the normal, z right), in the
+        model's frame."""
+        return self.turn @ np.array([p[0], -p[2], p[1]], dtype=float)
+
+
+def frame_energy(model: SpaceModel, frame: Frame, x: np.ndarray) -> tuple[float, float]:
+    """(kinetic, potential) energy of model state ``x`` in the run's frame (module docstring)."""
+    weight = sum(part.mass for part in model.parts) * model.gravity_vector[0]
+    kinetic, potential = energy_terms(model, x)
+    return kinetic, potential - weight * frame.contact[0]
+
+
+@dataclass
+class WalkStep:
+    """A step of a run: the step map's result, the samples on the step's clock (post-strike state first, the strike
+    or fall state not among them), the pushes applied (time on the step's clock, work, ground normal impulse) and
+    the integrator's counters."""
+
+    step: SpaceStep
+    samples_t: np.ndarray
+    samples_x: np.ndarray
+    pushes: list[tuple[float, float, float]] = field(default_factory=list)
+    rhs_evals: int = 0
+    accepted_steps: int = 0
+
+
+def _samples(segments: list[tuple[float, float, OdeSolution]], end: float, rate: float) -> tuple[np.ndarray, ...]:
+    """The states every 1 / ``rate`` from 0 up to (not at) ``end`` on the segments' dense outputs (a segment
+    begins at a push: a sample at its time is the next segment's first)."""
+    times = np.arange(0.0, end, 1.0 / rate)
+    states = np.empty((len(times), 10))
+    for t0, t1, solution in segments:
+        inside = (times >= t0) & (times < t1)
+        if inside.any():
+            states[inside] = solution(times[inside]).T
+    return times, states
+
+
+def walk_step(
+    model: SpaceModel,
+    params: np.ndarray,
+    x_start: np.ndarray,
+    sample_rate: float,
+    pushes: Sequence[tuple[float, np.ndarray]] = (),
+) -> WalkStep:
+    """One step from post-strike state ``x_start`` (its contact point the origin) with the samples and the pushes
+    pending (time on the step's clock, impulse in the model's frame, in time order; those after the step's end
+    stay pending)."""
+    x = np.array(x_start, dtype=float)
+    x[8:] = 0.0
+    t, how, segments, applied, counters = 0.0, "guard", [], [], np.zeros(2, dtype=int)
+    for guard in (passed, clearance(model)):
+        how = "until"
+        while how == "until":
+            until = pushes[len(applied)][0] if len(applied) < len(pushes) else None
+            if until is None or until > t:
+                ended = phase(model, params, x, t, guard, until, dense=True)
+                segments.append((t, ended.t, ended.solution))
+                how, t, x = ended.how, ended.t, ended.x
+                counters += (ended.rhs_evals, ended.accepted_steps)
+            if how == "until":
+                before = energy(model, x)
+                x, normal = hip_push(model, x, pushes[len(applied)][1])
+                applied.append((t, energy(model, x) - before, normal))
+        if how != "guard":
+            break
+    step = struck(model, x, t) if how == "guard" else SpaceStep(how, x, None, t, math.nan)  # type: ignore[arg-type]
+    return WalkStep(step, *_samples(segments, t, sample_rate), applied, int(counters[0]), int(counters[1]))

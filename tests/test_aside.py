@@ -1,0 +1,80 @@
+"""A first run's measures compiled in a second process (simulate/aside.py): the stand-in compiles what a run
+measures, and the process starts only on a cold compile cache."""
+
+from __future__ import annotations
+
+import gc
+import os
+import signal
+from collections.abc import Callable
+
+import numba
+import pytest
+from numba.core.dispatcher import Dispatcher
+
+from biped_sim.config import Config, derive, load_config
+from biped_sim.measure.steps import step_table
+from biped_sim.simulate import aside, prepare_model
+from biped_sim.simulate.compliant import CompliantRunResult, integrate_config
+from tests.conftest import CONFIGS
+
+
+def _compiled_signatures() -> set[tuple[str, str]]:
+    """Every (function, signature) this process has compiled or loaded from the cache, twins included."""
+    return {
+        (f"{d.py_func.__module__}.{d.py_func.__qualname__}", str(signature))
+        for d in gc.get_objects()
+        if isinstance(d, Dispatcher)
+        for signature in d.signatures
+    }
+
+
+def _with_knee_stops() -> Config:
+    """The compliant kneed walker (its stops add mode rows), for a short run."""
+    return load_config(CONFIGS / "kneed_walker_compliant.yaml")
+
+
+@pytest.mark.parametrize(
+    "walker", [Config, pytest.param(_with_knee_stops, marks=pytest.mark.slow)], ids=["default", "knee stops"]
+)
+def test_the_stand_in_compiles_every_measure_of_a_run(walker: Callable[[], Config]) -> None:
+    config = derive(walker(), {"simulation.t_end": 0.05})
+    model = prepare_model(config)
+    aside.measure_stand_in(config, model)
+    run = integrate_config(config, model)
+    before = _compiled_signatures()
+    result = CompliantRunResult(config=config, model=model, run=run, steps=step_table(model, run), wall_time_s=0.0)
+    result.trajectory()
+    _ = result.summary
+    assert _compiled_signatures() - before == set()
+
+
+def test_the_stand_in_has_the_run_s_types_and_its_start_state() -> None:
+    model = prepare_model(Config())
+    run = aside.stand_in(model)
+    assert run.status == "walking"
+    assert run.y.shape == run.strike_y.shape == (aside.STAND_IN_SAMPLES, len(model.y0))
+    assert (run.y == model.y0).all() and (run.modes == model.modes0).all()
+
+
+def test_a_warm_cache_starts_no_process() -> None:
+    config = Config()
+    prepare_model(config)  # whatever its build compiles is now in this process
+    model, process = aside.prepare_compiling_aside(config)
+    assert process is None
+    assert (model.y0 == prepare_model(config).y0).all()
+
+
+@pytest.mark.slow
+def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
+    def build_compiling(config: Config) -> object:  # a build that compiles something: a cold cache
+        numba.njit(lambda x: x + 1)(1)
+        return prepare_model(config)
+
+    monkeypatch.setattr(aside, "prepare_model", build_compiling)
+    monkeypatch.setattr(aside, "available_cores", lambda: 2)
+    _, process = aside.prepare_compiling_aside(Config())
+    assert process is not None and process.daemon
+    os.kill(process.pid, signal.SIGINT)
+    aside.join(process)
+    assert process.exitcode == 0
