@@ -98,6 +98,7 @@ LONGEST_FIRST = (
     "tests/test_described.py",
     "tests/test_uncertainty.py",
     "tests/test_validation.py",
+    "tests/test_bench.py",
     "tiny_sweep",
 )
 

@@ -24,7 +24,7 @@ def _compiled_signatures() -> set[tuple[str, str]]:
     return {
         (f"{d.py_func.__module__}.{d.py_func.__qualname__}", str(signature))
         for d in gc.get_objects()
-        if isinstance(d, Dispatcher)
+        if issubclass(type(d), Dispatcher)  # not isinstance: a dead weak proxy among the objects raises on it
         for signature in d.signatures
     }
 

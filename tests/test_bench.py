@@ -46,7 +46,6 @@ def short_bench() -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.serial
 def test_baseline_step_periods_match_dopri5_at_the_same_tolerance(short_bench: dict) -> None:
     rows = {row["label"]: row for row in short_bench["rows"]}
     baseline = next(row for row in short_bench["rows"] if row["method"] == "baseline")
@@ -57,7 +56,6 @@ def test_baseline_step_periods_match_dopri5_at_the_same_tolerance(short_bench: d
 
 
 @pytest.mark.slow
-@pytest.mark.serial
 def test_bench_table_has_every_case_and_ends_with_the_summary_line(short_bench: dict) -> None:
     text = markdown(short_bench)
     lines = text.rstrip("\n").splitlines()
@@ -254,7 +252,6 @@ def test_bench_markdown_reports_the_run_cost_rows_against_their_target() -> None
 
 
 @pytest.mark.slow
-@pytest.mark.serial
 def test_bench_times_a_run_and_a_study_evaluation_against_their_integration(short_bench: dict) -> None:
     rows = {row["label"]: row for row in short_bench["run_cost"]["rows"]}
     assert set(rows) == {

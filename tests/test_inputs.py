@@ -247,7 +247,7 @@ def test_an_output_location_under_a_file_is_refused_before_computing(tmp_path: P
     blocker = tmp_path / "a_file"
     blocker.write_text("not a directory")
     module, name = {
-        "run": ("biped_sim.cli.run_commands", "prepare_model"),
+        "run": ("biped_sim.cli.run_commands", "prepare_compiling_aside"),
         "validate": ("biped_sim.studies.validation", "run_validation"),
         "bifurcation": ("biped_sim.studies.bifurcation", "bifurcation_diagram"),
     }[command]

@@ -11,8 +11,10 @@ from numba import njit
 
 from biped_sim import load_config, simulate
 from biped_sim._compiled_cache import profiling_compilations, recording_compilations
+from biped_sim.config import derive
 from biped_sim.multibody.dispatch import FORMULATIONS
 from biped_sim.simulate import RunResult, warmup
+from biped_sim.studies.uncertainty.samples import run_formulation
 from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
@@ -39,11 +41,11 @@ def compiled(value):
     entry = getattr(value, "python_entry", None)  # a kernel called from Python runs its wrapped twin
     return isinstance(value, CPUDispatcher) and bool(value.signatures or (entry is not None and entry.signatures))
 
-def loaded():
+def loaded():  # each function under the module that defines it, not under every module that imports it
     return sorted(
         f"{name}.{attribute}"
         for name, module in list(sys.modules.items()) if name.startswith("biped_sim")
-        for attribute, value in vars(module).items() if compiled(value)
+        for attribute, value in vars(module).items() if compiled(value) and value.py_func.__module__ == name
     )
 
 import biped_sim.cli  # every command's module
@@ -100,8 +102,9 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
         "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
-        "planar explicit (dopri5, with joint stops)", "planar explicit (dopri5, with joint elements)",
-        "planar explicit (dopri5)",
+        "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5, with joint stops)",
+        "minimal explicit (dopri5)", "minimal explicit (dopri5, with joint elements)",
+        "planar explicit (dopri5, with joint elements)", "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
@@ -119,6 +122,16 @@ def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
     assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat"), (*warmup.RIGID, "flat")} <= groups
     assert ("planar", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's knees
     assert ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS) in groups  # the torso walker's springs
+
+
+def test_the_bundled_configs_studies_run_in_the_warmed_groups() -> None:
+    """A fit evaluation or an uncertainty sample runs a planar walker in minimal coordinates: groups the warm-up
+    warms too (the tests' studies, and a user's first, would compile them otherwise, each worker its own copy)."""
+    configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
+    groups = {warmup.group_of(derive(config, {"formulation.kind": run_formulation(config)})) for config in configs}
+    assert groups <= set(warmup.BUNDLED_GROUPS)
+    assert ("minimal", "explicit", "flat") in groups  # the default walker's
+    assert ("minimal", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's
 
 
 def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
@@ -154,7 +167,11 @@ def test_a_worker_warms_up_on_any_valid_run(overrides: list[str], monkeypatch: p
 
 def test_a_planar_explicit_run_compiles_only_its_own_group(short_run: RunResult) -> None:
     """Nothing is compiled at import; a planar dopri5 run neither compiles nor loads the spatial formulation's
-    kernels or the stiff driver's (numba dispatchers list the signatures they compiled or loaded)."""
+    kernels or the stiff driver's (numba dispatchers list the signatures they compiled or loaded).
+
+    Whether the child loads its group from the cache or compiles it (an entry another process's concurrent
+    write lost, an empty cache) must not matter: a compile also gives signatures to the callees it types, among
+    them the contact laws and solver the spatial modules import, so each function counts under its own module."""
     out = subprocess.run(
         [sys.executable, "-c", _LOADED_BY_A_PLANAR_RUN], env=child_env(), capture_output=True, text=True, check=True
     )

@@ -8,9 +8,10 @@ The public API::
 
 from __future__ import annotations
 
-from biped_sim._compiled_cache import configure_cache_dir
+from biped_sim._compiled_cache import configure_cache_dir, lock_cache_writes
 
 configure_cache_dir()
+lock_cache_writes()
 
 from biped_sim.config import Config, config_from_dict, load_config  # noqa: E402
 from biped_sim.errors import ConfigError  # noqa: E402

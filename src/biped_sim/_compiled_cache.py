@@ -1,5 +1,6 @@
 """Where numba caches the compiled kernels (a directory keyed by a hash of the compiled code's sources),
-and which functions a piece of code compiles rather than loads from that cache.
+which functions a piece of code compiles rather than loads from that cache, and the lock that keeps the cache
+whole when several processes write it at once.
 
 Numba invalidates a cached function only when its own file changes, not when a function it calls (and
 inlined) in another file does: an edited force law would otherwise keep running its old compiled code
@@ -12,7 +13,9 @@ compiled function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
+import itertools
 import os
 import re
 import time
@@ -24,12 +27,14 @@ from typing import Any
 
 import numba
 from numba.core import event
+from numba.core.caching import IndexDataCacheFile
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_PACKAGES = ("contact", "multibody", "integrate")
 LOWERING_PASS = "native_lowering"  # numba's lowering to LLVM IR, with LLVM's optimisation and machine code
 OUTSIDE = "(typed outside any function's compile)"  # a pass no compile event encloses
 _COMPILES = re.compile(r"^\s*(from numba\b|import numba\b|from biped_sim\.kernel import)", re.M)
+LOCK_NAME = ".biped-sim.lock"  # in each of numba's cache directories
 
 
 def compiled_sources() -> list[Path]:
@@ -59,6 +64,42 @@ def configure_cache_dir() -> Path | None:
     cache_dir = base / f"numba-{source_hash()}"
     numba.config.CACHE_DIR = str(cache_dir)
     return cache_dir
+
+
+@contextmanager
+def _locked(directory: str) -> Iterator[None]:
+    """An exclusive lock of ``directory``'s cache files against the other processes (held until the block ends)."""
+    descriptor = os.open(os.path.join(directory, LOCK_NAME), os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(descriptor)  # releases the lock
+
+
+def _save_locked(cache_file: IndexDataCacheFile, key: Any, data: Any) -> None:
+    """numba's ``IndexDataCacheFile.save`` under a lock of the cache directory, the data written before the index.
+
+    numba reads a function's index, picks the first data file name the index does not list, writes the index,
+    then the data, with no lock: two processes saving two signatures of one function at once (the parallel
+    warm-up, pytest-xdist workers) both pick the same name, the last index written loses the other's entry and
+    may point at the other signature's code (numba issues 4807, 10128). Under the lock the read-modify-write is
+    whole, and a reader never finds an index entry whose data file is not written yet.
+    """
+    with _locked(cache_file._cache_path):
+        overloads = cache_file._load_index()
+        name = overloads.get(key)
+        if name is None:
+            existing = set(overloads.values())
+            name = next(n for n in map(cache_file._data_name, itertools.count(1)) if n not in existing)
+        cache_file._save_data(name, data)
+        overloads[key] = name
+        cache_file._save_index(overloads)
+
+
+def lock_cache_writes() -> None:
+    """Make numba's cache writes go through :func:`_save_locked` (idempotent); must run before any compile."""
+    IndexDataCacheFile.save = _save_locked
 
 
 @contextmanager

@@ -166,6 +166,7 @@ def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatch
 def missing_numba_internals() -> list[str]:
     """What this module relies on in numba that the installed numba lacks (empty: everything is there)."""
     from numba.core import event
+    from numba.core.caching import IndexDataCacheFile
     from numba.core.typing import templates
 
     options = CPUDispatcher.targetdescr.options
@@ -179,5 +180,8 @@ def missing_numba_internals() -> list[str]:
         ),
         "numba.core.event.install_listener (compile events)": hasattr(event, "install_listener"),
         "numba.config.CACHE_DIR (the cache keyed by source hash)": hasattr(numba.config, "CACHE_DIR"),
+        "IndexDataCacheFile's index and data methods (the cache's write lock)": all(
+            hasattr(IndexDataCacheFile, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name")
+        ),
     }
     return [what for what, present in needs.items() if not present]

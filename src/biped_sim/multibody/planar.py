@@ -18,8 +18,13 @@ integration. The feet are arcs against the system's ``ground`` (the slope line, 
 guard) is :mod:`biped_sim.contact.response`; a joint stop's torque (:mod:`biped_sim.contact.stop`) and a joint
 element's (:mod:`biped_sim.contact.joint_element`) act on the angles of their two bodies.
 
-Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. The module ends
-with the Python-side measurements and the formulation record :data:`FORMULATION`.
+Every compiled kernel here is allocation-free: buffers live in :class:`Workspace`. Those of the right-hand side
+count no references (``kernel(reference_counts=False)``, as the rigid step map's): numba would otherwise count each
+of the system's two dozen arrays, a call at entry and one at exit, in every kernel that takes the system at every
+evaluation, a cost that grew with each field the system gained (the joint elements', the body falls'). For the same
+reason :func:`constrained_accelerations` is inlined in :func:`rhs`: a call passes the whole system, some two hundred
+machine words copied on the stack, and that copy made the compliant runs slower than its instruction count says
+(``make bench``). The module ends with the Python-side measurements and the formulation record :data:`FORMULATION`.
 """
 
 from __future__ import annotations
@@ -43,7 +48,7 @@ from biped_sim.contact.response import (
     body_fall,
 )
 from biped_sim.contact.stop import NO_STOPS, Stops
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.bodies import body_energy
 from biped_sim.multibody.formulation import COMPLIANT_LIMIT_CYCLE, Formulation, Measures, impulsive_velocity_change
 from biped_sim.multibody.linalg import cholesky_solve
@@ -89,7 +94,7 @@ def make_workspace(system: PlanarSystem) -> Workspace:
     return Workspace(np.zeros((m, n)), np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(n))
 
 
-@kernel
+@kernel(reference_counts=False)
 def _foot_arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float, float]:
     """(x, y, vx, vy, omega) of foot i's body (centre of mass) and its arc's centre (C_x, C_y)."""
     nb = system.body_mass.shape[0]
@@ -101,7 +106,7 @@ def _foot_arc(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float
     return x, yb, vx, vy, om, x + c * sx - s * sy, yb + s * sx + c * sy
 
 
-@kernel
+@kernel(reference_counts=False)
 def foot_kinematics(y: np.ndarray, system: PlanarSystem, i: int) -> tuple[float, float, float, float, float, float]:
     """Foot i's arc against the ground (:func:`~biped_sim.contact.response.arc_contact`, about its body's centre
     of mass): (delta, delta_dot, slip, x_contact, dx, dy), (dx, dy) = P - r_body."""
@@ -116,7 +121,7 @@ def foot_contact(y: np.ndarray, system: PlanarSystem, foot: int) -> tuple[float,
     return delta, delta_dot, x_contact
 
 
-@kernel
+@kernel(reference_counts=False)
 def foot_forces(
     y: np.ndarray, system: PlanarSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float, float]:
@@ -143,7 +148,7 @@ def _body_point(y: np.ndarray, b: int, sx: float, sy: float) -> tuple[float, flo
     return ax, ay, y[3 * b] + ax, y[3 * b + 1] + ay
 
 
-@kernel
+@kernel(reference_counts=False)
 def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[float, float, float, float]:
     """Phi and Phidot of revolute joint j: (Phi_x, Phi_y, Phidot_x, Phidot_y)."""
     nb = system.body_mass.shape[0]
@@ -163,13 +168,13 @@ def constraint_residuals(y: np.ndarray, system: PlanarSystem, j: int) -> tuple[f
     return pax - pbx, pay - pby, vax - vbx, vay - vby
 
 
-@kernel
+@kernel(reference_counts=False)
 def _inverse_mass(system: PlanarSystem, c: int) -> float:
     body = c // 3
     return 1.0 / system.body_inertia[body] if c % 3 == 2 else 1.0 / system.body_mass[body]
 
 
-@kernel
+@kernel(reference_counts=False)
 def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspace, qdd: np.ndarray) -> None:
     """Accelerations from the augmented system with Baumgarte stabilisation (forces in work.force)."""
     nb = system.body_mass.shape[0]
@@ -223,7 +228,11 @@ def constrained_accelerations(y: np.ndarray, system: PlanarSystem, work: Workspa
         qdd[c] = v * _inverse_mass(system, c)
 
 
-@kernel
+# inlined in rhs (the module docstring says why); its Cholesky solve stays a call
+_constrained_accelerations = inlined(constrained_accelerations, calls=frozenset({"cholesky_solve"}))
+
+
+@kernel(reference_counts=False)
 def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
     nb = system.body_mass.shape[0]
@@ -250,7 +259,7 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
     joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + nf + 2)
-    constrained_accelerations(y, system, work, ydot[n : 2 * n])
+    _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
 @kernel

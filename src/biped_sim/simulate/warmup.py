@@ -9,11 +9,11 @@ Every contact law is part of each group's kernels (the laws are dispatched at ru
 shares one group, the compiled step map (its walker is data), warmed by one step; a rigid walker in space has its
 own (its flow, ``rigid.space_kernels``), in ``--all``.
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
-``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps and of a run on a
-ground profile (a test keeps the list true), ``--all`` every formulation, integrator family and ground
-the package has, each group in a process of its own, one per core at a time (:func:`warm_up_in_processes`);
-a sweep's workers warm each group before its first timed run, and a Dask worker can warm itself at start
-(:mod:`biped_sim.sweep.preload`).
+``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs and sweeps, of a run on a
+ground profile and of the bundled configs' fits and uncertainty samples (tests keep the list true), ``--all``
+every formulation, integrator family and ground the package has, each group in a process of its own, one per
+core at a time (:func:`warm_up_in_processes`); a sweep's workers warm each group before its first timed run,
+and a Dask worker can warm itself at start (:mod:`biped_sim.sweep.preload`).
 """
 
 from __future__ import annotations
@@ -54,12 +54,14 @@ SPACE_WALKER = {
     },
 }  # fmt: skip
 SPACE_START = dict.fromkeys(SPACE_STATE_KEYS, 0.0) | {"pitch": -0.2, "swing_angle": 0.4, "omega_y": 1.0}
-# (formulation, integrator family, ground) of the bundled configs and sweeps, and of a run on a profile
+# (formulation, integrator family, ground) of the bundled configs and sweeps, of a run on a profile and of the
+# bundled configs' studies (fit and uncertainty run a planar walker in minimal coordinates)
 # (the costliest first: the parallel warm-up ends sooner)
 BUNDLED_GROUPS = (
     (*RIGID, "flat"), ("spatial", "explicit", "flat"), ("planar", "explicit", "profile"),
-    ("planar", "explicit", "flat" + JOINT_STOPS), ("planar", "explicit", "flat" + JOINT_ELEMENTS),
-    ("planar", "explicit", "flat"),
+    ("planar", "explicit", "flat" + JOINT_STOPS), ("minimal", "explicit", "flat" + JOINT_STOPS),
+    ("minimal", "explicit", "flat"), ("minimal", "explicit", "flat" + JOINT_ELEMENTS),
+    ("planar", "explicit", "flat" + JOINT_ELEMENTS), ("planar", "explicit", "flat"),
 )  # fmt: skip
 _WARMED: set[tuple[str, str, str]] = set()
 

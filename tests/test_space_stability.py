@@ -1,0 +1,61 @@
+"""What keeps a compass in space laterally stable: Coleman et al.'s toy morphed into the Kuo-type compass along one
+branch of gaits loses its stability early, and feet rounded sideways give it back there (docs/guide/rigid.md's
+tables)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from biped_sim.config import Config, load_config
+from biped_sim.rigid.space_cycle import space_branch
+
+TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
+# the toy's parameters (share 0) and the Kuo-type compass's made dimensionless (share 1: leg length 1, g = 1, the
+# walker's mass 2: legs of 0.5 and 1 at the hip; a ring of 1 mm for its 1 mm spheres)
+TOY = {"slope": 0.0702, "hip_width": 0.3624, "hip_mass": 0.0, "mass": 1.0, "com_y": 0.6969, "com_z": -0.6863,
+       "xx": 0.1982, "yy": 0.0186, "zz": 0.1802, "xy": 0.0071, "xz": -0.0023, "yz": 0.0573,
+       "radius": 0.1236}  # fmt: skip
+KUO = {"slope": 0.0523598775598, "hip_width": 0.1, "hip_mass": 1.0, "mass": 0.5, "com_y": 0.0, "com_z": -0.5,
+       "xx": 0.01, "yy": 0.0, "zz": 0.01, "xy": 0.0, "xz": 0.0, "yz": 0.0, "radius": 0.001}  # fmt: skip
+SHARES = (0.0, 0.05, 0.1, 0.15, 0.2)
+SHARE_LARGEST = (0.839156, 0.928384, 0.920254, 0.904529, 1.061926)  # the largest multiplier's modulus, one branch
+LATERAL, LATERAL_LARGEST = 0.05, 1.075138  # at share 0.2: a torus of lateral radius 0.05, its sagittal radius kept
+RINGS = (0.12, 0.15, 0.2)  # at share 0.2: the rings' radius (their sagittal radius; 0.09908 on the way)
+RING_LARGEST = (0.935947, 0.931237, 1.106819)
+
+
+def toy_to_kuo(share: float, lateral: float = 0.0, ring: float | None = None) -> Config:
+    """The walker at ``share`` of the way from the toy to the Kuo-type compass, every parameter interpolated linearly
+    (ring feet whose radius goes from 0.1236 to 1 mm, their bottom 1 below the hip); ``ring``: another ring radius;
+    ``lateral`` > 0: the ring made a torus of that tube (lateral radius), its sagittal radius (radius + tube) kept."""
+    q = {key: (1.0 - share) * TOY[key] + share * KUO[key] for key in TOY}
+    q["radius"] = q["radius"] if ring is None else ring
+    inertia = ", ".join(f"{key}: {q[key]}" for key in ("xx", "yy", "zz", "xy", "xz", "yz"))
+    overrides = [f"ground.slope={q['slope']}", f"walker.space.hip_width={q['hip_width']}",
+                 f"walker.space.hip_mass={q['hip_mass']}", f"walker.space.leg.mass={q['mass']}",
+                 f"walker.space.leg.com=[0, {q['com_y']}, {q['com_z']}]", f"walker.space.leg.inertia={{{inertia}}}",
+                 f"walker.space.leg.foot.radius={q['radius'] - lateral}",
+                 f"walker.space.leg.foot.centre=[0, 0, {q['radius'] - 1.0}]"]  # fmt: skip
+    if lateral:
+        overrides += ["walker.space.leg.foot.shape=torus", f"walker.space.leg.foot.tube={lateral}"]
+    return load_config(TINKERTOY, overrides)
+
+
+@pytest.mark.slow
+def test_the_toy_loses_its_stability_on_the_way_to_the_kuo_compass_and_larger_feet_give_it_back() -> None:
+    """Along one branch from the toy: the largest multiplier leaves the unit circle between share 0.15 and 0.2 (a
+    complex pair: hinge rate, yaw rate and pitch). There, rounding the feet sideways only (a torus) does not bring it
+    back; a larger ring (the sagittal radius) does, in a window: stable at 0.12 and 0.15, a flip past -1 at 0.2."""
+    share = SHARES[-1]
+    walkers = [toy_to_kuo(s) for s in SHARES] + [toy_to_kuo(share, LATERAL), toy_to_kuo(share)]
+    walkers += [toy_to_kuo(share, ring=r) for r in RINGS]
+    cycles = space_branch(walkers)
+    assert [c.converged for c in cycles] == [True] * len(walkers)
+    largest = [c.max_multiplier_modulus for c in cycles]
+    assert largest[: len(SHARES)] == pytest.approx(SHARE_LARGEST, abs=1e-5)
+    assert largest[len(SHARES)] == pytest.approx(LATERAL_LARGEST, abs=1e-5)
+    assert largest[-len(RINGS) :] == pytest.approx(RING_LARGEST, abs=1e-5)
+    assert largest[len(SHARES) - 2] < 1.0 < largest[len(SHARES) - 1] < largest[len(SHARES)]
+    assert max(largest[-len(RINGS) : -1]) < 1.0 < largest[-1]
