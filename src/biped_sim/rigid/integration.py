@@ -27,14 +27,12 @@ from biped_sim.integrate.stepper import (
     error_norm,
     initial_step_size,
     initial_step_trial,
-    propagate,
-    stage_input,
     step_factor,
 )
 from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.ground import clearance, tree_swing_foot
-from biped_sim.rigid.kernels import fall_check, guard, guard_rate, n_fall_checks, rigid_rhs
+from biped_sim.rigid.kernels import fall_checks, fall_inlined, guard, guard_inlined, guard_rate, rigid_rhs, step_stages
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
 from biped_sim.rigid.tree_layout import RigidTree
 
@@ -124,10 +122,7 @@ def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.
 def _events(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray, out: np.ndarray) -> int:
     """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
     out[0] = phase_guard(cw, phase, mode, y)
-    n = n_fall_checks(cw.params)
-    for i in range(n):
-        out[1 + i] = fall_check(cw.params, i, y)
-    return n + 1
+    return fall_checks(cw.params, y, out) + 1
 
 
 @kernel
@@ -155,7 +150,10 @@ def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scra
 
 @njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
 def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarray) -> float:
-    return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.params, j - 1, y)
+    """Event j's value at y (the walker's guard and fall functions inlined: the search evaluates them often)."""
+    if j > 0:
+        return fall_inlined(cw.params, j - 1, y)
+    return guard_inlined(cw.params, phase, y) if mode == OWN else phase_guard(cw, phase, mode, y)
 
 
 @kernel(reference_counts=False)
@@ -225,11 +223,7 @@ def stretch(
         h = min(h, t_stop - t)
         if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
             return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
-        for s in range(1, tab.stages):
-            stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
-            rigid_rhs(p, sc.y_stage, sc.k[s])
-        finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
-        rigid_rhs(p, sc.y_new, sc.k[tab.stages])
+        finite = step_stages(p, tab, sc, h, y)
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
         accepted, factor = step_factor(err, tab.error_order, rejected)

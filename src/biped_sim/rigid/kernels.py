@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from biped_sim.integrate.stepper import Scratch, propagate, stage_input
+from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import inlined, kernel
 from biped_sim.rigid.tree_kernels import (
     tree_guard,
@@ -41,7 +43,7 @@ def tree_fall(tree: RigidTree, i: int, x: np.ndarray) -> float:
 # than their calls cost run time (docs/architecture.md, "Compiling less"); they count no references: each read of
 # one of the tree's arrays would otherwise count one at every evaluation
 _rhs = inlined(tree_rhs, calls=frozenset({"_solve", "element_forces"}))
-_guard, _fall = inlined(tree_guard), inlined(tree_fall)
+guard_inlined, fall_inlined = inlined(tree_guard), inlined(tree_fall)  # also the event search's
 
 
 @kernel(reference_counts=False)
@@ -51,9 +53,26 @@ def rigid_rhs(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> None:
 
 
 @kernel(reference_counts=False)
+def step_stages(tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndarray) -> bool:
+    """The stages of an explicit Runge-Kutta step of length h from y (their flows in ``sc.k[1:]``, ``k[0]`` = f(y)
+    given), its end state in ``sc.y_new`` and the flow there in ``k[stages]``; returns whether the end state is
+    finite. The flow inlined once, in the loop: the tree's arrays are passed once per step, not once per stage."""
+    finite = True
+    for s in range(1, tab.stages + 1):
+        at = sc.y_stage
+        if s < tab.stages:
+            stage_input(tab.a, s, h, y, sc.k, at)
+        else:
+            at = sc.y_new
+            finite = propagate(tab.b, tab.stages, h, y, sc.k, at)
+        _rhs(tree, at, sc.k[s])
+    return finite
+
+
+@kernel(reference_counts=False)
 def guard(tree: RigidTree, phase: int, x: np.ndarray) -> float:
     """The phase's guard (its downward zero ends the phase)."""
-    return _guard(tree, phase, x)
+    return guard_inlined(tree, phase, x)
 
 
 @kernel(reference_counts=False)
@@ -74,5 +93,9 @@ def n_fall_checks(tree: RigidTree) -> int:
 
 
 @kernel(reference_counts=False)
-def fall_check(tree: RigidTree, i: int, x: np.ndarray) -> float:
-    return _fall(tree, i, x)
+def fall_checks(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> int:
+    """out[1:] = every fall function at x (one call per evaluation of them all); returns how many."""
+    n = n_fall_checks(tree)
+    for i in range(n):
+        out[1 + i] = fall_inlined(tree, i, x)
+    return n
