@@ -12,12 +12,14 @@ and stderr of the real entry point, worker processes, a kill -9.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
 import time
 import tracemalloc
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -29,6 +31,8 @@ from typer.testing import CliRunner
 import biped_sim
 from biped_sim import load_config, simulate
 from biped_sim.cli import app
+from biped_sim.multibody.dispatch import FORMULATIONS
+from biped_sim.multibody.formulation import KERNEL_SIGNATURES
 from biped_sim.simulate import RunResult
 from biped_sim.testing import default_walker, write_tiny_sweep
 
@@ -37,6 +41,7 @@ CONFIGS = ROOT / "configs"
 DEFAULT_CONFIG = CONFIGS / "round_foot_walker.yaml"
 CLI = [sys.executable, "-m", "biped_sim.cli"]
 T = TypeVar("T")
+ENGINE = ("biped_sim.contact", "biped_sim.multibody", "biped_sim.integrate")  # the compliant engine's packages
 # what refusing a huge input may allocate (:func:`allocation_peak`): building it would take gigabytes
 MEMORY_BOUND = 64 * 2**20
 
@@ -164,6 +169,27 @@ def run_as_plain_python(patch: pytest.MonkeyPatch, packages: tuple[str, ...]) ->
                     patch.setattr(module, attribute, plain_function(value))
                 elif isinstance(value, tuple) and value and all(isinstance(v, CPUDispatcher) for v in value):
                     patch.setattr(module, attribute, tuple(plain_function(v) for v in value))
+
+
+@contextmanager
+def plain_engine() -> Iterator[None]:
+    """Inside the block, the compliant engine (:data:`ENGINE`) runs as plain Python (:func:`run_as_plain_python`),
+    the formulations' registered kernels and measures too, so that ``system_rhs`` or ``measures`` called from
+    Python run the source rather than compile its Python-called twin (:class:`biped_sim.kernel.Kernel`): for checks
+    of a formulation's equations, which the compiled runs' own tests (golden, the formulations' runs) do not need
+    compiled twice."""
+    with pytest.MonkeyPatch.context() as patch:
+        run_as_plain_python(patch, ENGINE)
+        for system_type, formulation in list(FORMULATIONS.items()):
+            kernels = {kernel: plain_function(getattr(formulation, kernel)) for kernel in KERNEL_SIGNATURES}
+            measured = {
+                name: plain_function(value)
+                for name, value in formulation.measures._asdict().items()
+                if isinstance(value, CPUDispatcher)
+            }
+            measures = formulation.measures._replace(**measured)
+            patch.setitem(FORMULATIONS, system_type, dataclasses.replace(formulation, **kernels, measures=measures))
+        yield
 
 
 @pytest.fixture(scope="session")

@@ -4,9 +4,13 @@ measures, and the process starts only on a cold compile cache."""
 from __future__ import annotations
 
 import gc
+import json
 import os
 import signal
+import subprocess
+import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import numba
 import pytest
@@ -78,3 +82,29 @@ def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(mon
     os.kill(process.pid, signal.SIGINT)
     aside.join(process)
     assert process.exitcode == 0
+
+
+_LOOP_AFTER_ITS_CALLEES = """
+import json
+from biped_sim._compiled_cache import recording_compilations
+from biped_sim.config import Config, derive
+from biped_sim.simulate import aside, prepare_model
+from biped_sim.simulate.compliant import integrate_config
+config = derive(Config(), {"simulation.t_end": 0.01})
+model = prepare_model(config)
+aside.compile_loop_callees(config, model)
+with recording_compilations() as compiled:
+    integrate_config(config, model)
+callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in aside.loop_callees(config, model)]
+print(json.dumps([callees, compiled]))
+"""
+
+
+@pytest.mark.slow
+def test_the_loop_compiled_after_its_callees_finds_them_all_in_the_cache(tmp_path: Path) -> None:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # empty: the loop and its callees compile
+    out = subprocess.run([sys.executable, "-c", _LOOP_AFTER_ITS_CALLEES], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    callees, compiled = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "biped_sim.integrate.explicit.advance_python_entry" in compiled  # the loop was compiled here
+    assert len(callees) == 8 and not set(callees) & set(compiled)  # ... but none of its callees

@@ -34,7 +34,7 @@ from biped_sim.studies.convergence import converge
 from biped_sim.testing import default_walker, pendulum
 from biped_sim.walkers import build_model
 
-from .conftest import ROOT
+from .conftest import ROOT, plain_engine
 
 KNEED = ROOT / "configs" / "kneed_walker_compliant.yaml"
 
@@ -146,25 +146,27 @@ def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
 
 def formulations_agree(planar: PlanarSystem, count: int, seed: int) -> list[np.ndarray]:
     """On ``count`` random states, the tree formulation's angular accelerations, work rates, feet and energies agree
-    with the absolute coordinates'; returns the absolute coordinates' right-hand sides."""
+    with the absolute coordinates'; returns the absolute coordinates' right-hand sides. The equations as plain
+    Python (conftest.plain_engine): the compiled runs of both formulations agree in the walks' tests."""
     minimal = tree_system(planar)
     nb = planar.body_mass.shape[0]
     n = HIP + nb
     rates = []
-    for y_planar, modes in _random_tree_states(planar, count=count, seed=seed):
-        y = tree_state(y_planar, planar)
-        fast, full = np.zeros_like(y), np.zeros_like(y_planar)
-        system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
-        system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
-        alpha = full[3 * nb + 2 : 6 * nb : 3]
-        scale = np.max(np.abs(alpha))
-        np.testing.assert_allclose(fast[n + HIP : 2 * n], alpha, rtol=1e-9, atol=1e-9 * scale)
-        np.testing.assert_allclose(fast[2 * n :], full[6 * nb :], rtol=1e-9, atol=1e-12)
-        e_planar, e_minimal = (
-            sum(measures(s).mechanical_energy(v, s, modes)) for s, v in ((planar, y_planar), (minimal, y))
-        )
-        assert e_minimal == pytest.approx(e_planar, rel=1e-12, abs=1e-12)
-        rates.append(full)
+    with plain_engine():
+        for y_planar, modes in _random_tree_states(planar, count=count, seed=seed):
+            y = tree_state(y_planar, planar)
+            fast, full = np.zeros_like(y), np.zeros_like(y_planar)
+            system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
+            system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
+            alpha = full[3 * nb + 2 : 6 * nb : 3]
+            scale = np.max(np.abs(alpha))
+            np.testing.assert_allclose(fast[n + HIP : 2 * n], alpha, rtol=1e-9, atol=1e-9 * scale)
+            np.testing.assert_allclose(fast[2 * n :], full[6 * nb :], rtol=1e-9, atol=1e-12)
+            e_planar, e_minimal = (
+                sum(measures(s).mechanical_energy(v, s, modes)) for s, v in ((planar, y_planar), (minimal, y))
+            )
+            assert e_minimal == pytest.approx(e_planar, rel=1e-12, abs=1e-12)
+            rates.append(full)
     return rates
 
 

@@ -1,4 +1,8 @@
-"""Friction laws against mechanics: the incline's dry limits and LuGre against Canudas de Wit et al. (1995)."""
+"""Friction laws against mechanics: the incline's dry limits and LuGre against Canudas de Wit et al. (1995).
+
+The pieces and the cheap rows are checked here; every row of both studies (every law, body and regime on the
+incline, the sphere in space, LuGre's presliding, break-away and lag) is a row of ``biped-sim validate``, which
+the slow tier runs and checks once (tests/test_validation.py), not twice."""
 
 from __future__ import annotations
 
@@ -18,14 +22,12 @@ from biped_sim.studies.friction_checks import (
     dry_coefficients,
     dry_limit_parameters,
     frictionless_row,
-    incline_cases,
     incline_row,
     regularised_band,
     rolling_case,
     shrinks,
-    spatial_rows,
 )
-from biped_sim.studies.lugre_checks import breakaway_check, lag_check, presliding_checks, steady_state_check
+from biped_sim.studies.lugre_checks import steady_state_check
 
 STICTION = {"bengisu_akay", "brown_mcphee", "lugre"}  # the laws whose dry limit has mu_s > mu_k
 
@@ -86,23 +88,3 @@ def test_a_case_off_its_tolerance_or_not_shrinking_fails_its_row() -> None:
 def test_without_friction_every_body_slides_at_g_sin_without_spin() -> None:
     row = frictionless_row()
     assert row.passed, row
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("law", CHECKED_LAWS)
-def test_every_body_rolls_sticks_and_slides_as_mechanics_says(law: str) -> None:
-    rows = [incline_row(cases) for cases in incline_cases(law)]
-    assert all(row.passed for row in rows), [row for row in rows if not row.passed]
-
-
-@pytest.mark.slow
-def test_lugre_presliding_hysteresis_breakaway_and_lag_follow_the_model() -> None:
-    checks = [*presliding_checks(), breakaway_check(), lag_check()]
-    assert all(check.passed for check in checks), [check for check in checks if not check.passed]
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("law", CHECKED_LAWS)
-def test_the_sphere_in_space_is_the_planar_sphere_and_rolls_across(law: str) -> None:
-    rows = spatial_rows(law)
-    assert all(row.passed for row in rows), [row for row in rows if not row.passed]

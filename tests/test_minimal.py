@@ -21,7 +21,7 @@ from biped_sim.plots import plot_run
 from biped_sim.testing import default_walker
 from biped_sim.walkers import build_model
 
-from .conftest import CONFIGS, invoke, one_line_error
+from .conftest import CONFIGS, invoke, one_line_error, plain_engine
 
 MINIMAL = ["formulation.kind=minimal"]
 TIGHT = ["integrator.rtol=1e-10", "integrator.atol=1e-13"]
@@ -90,7 +90,8 @@ def _random_states(minimal: MinimalSystem, seed: int, count: int) -> list[tuple[
 @pytest.mark.parametrize("star", ["compass", "off_axis_three_bodies", "two_feet_per_leg"])
 def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str, solve: str) -> None:
     """On random states satisfying the joints, both formulations give the same hip and leg accelerations, by the
-    star's arrow solve and by the tree's (the general mass matrix and Cholesky, run on the same star)."""
+    star's arrow solve and by the tree's (the general mass matrix and Cholesky, run on the same star): their
+    equations, as plain Python (conftest.plain_engine; the compiled runs agree in the tests of walks below)."""
     planar = build_model(default_walker(f"friction.model={friction}")).system
     if star != "compass":
         planar = _off_axis_star(planar) if star == "off_axis_three_bodies" else _two_feet_per_leg(planar)
@@ -101,19 +102,20 @@ def test_rhs_agrees_with_absolute_coordinates(friction: str, star: str, solve: s
     n = HIP + nb
     hip_in_body0 = -minimal.body_com[0]
     loaded = 0
-    for y, modes in _random_states(minimal, seed=11, count=40):
-        y_planar = _planar_state(y, minimal)
-        assert tree_state(y_planar, planar) == pytest.approx(y, abs=1e-14)
-        fast, full = np.zeros_like(y), np.zeros_like(y_planar)
-        system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
-        system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
-        phi0, omega0, alpha0 = y[HIP], y[n + HIP], full[3 * nb + 2]
-        arm = _rotate(phi0, hip_in_body0)
-        hip_acceleration = full[3 * nb : 3 * nb + 2] + alpha0 * np.array([-arm[1], arm[0]]) - omega0**2 * arm
-        expected = np.concatenate([hip_acceleration, full[3 * nb + 2 : 6 * nb : 3], full[6 * nb :]])
-        scale = np.max(np.abs(expected))
-        np.testing.assert_allclose(fast[n:], expected, rtol=1e-12, atol=1e-12 * scale)
-        loaded += int(np.count_nonzero(full[6 * nb + nf :]))
+    with plain_engine():
+        for y, modes in _random_states(minimal, seed=11, count=40):
+            y_planar = _planar_state(y, minimal)
+            assert tree_state(y_planar, planar) == pytest.approx(y, abs=1e-14)
+            fast, full = np.zeros_like(y), np.zeros_like(y_planar)
+            system_rhs(0.0, y, minimal, modes, make_workspace(minimal), fast)
+            system_rhs(0.0, y_planar, planar, modes, make_workspace(planar), full)
+            phi0, omega0, alpha0 = y[HIP], y[n + HIP], full[3 * nb + 2]
+            arm = _rotate(phi0, hip_in_body0)
+            hip_acceleration = full[3 * nb : 3 * nb + 2] + alpha0 * np.array([-arm[1], arm[0]]) - omega0**2 * arm
+            expected = np.concatenate([hip_acceleration, full[3 * nb + 2 : 6 * nb : 3], full[6 * nb :]])
+            scale = np.max(np.abs(expected))
+            np.testing.assert_allclose(fast[n:], expected, rtol=1e-12, atol=1e-12 * scale)
+            loaded += int(np.count_nonzero(full[6 * nb + nf :]))
     assert loaded > 10  # the contact forces took part
 
 

@@ -36,7 +36,7 @@ EXPORTS: dict[str, list[str]] = {
     "biped_sim.rigid": [],
     "biped_sim.simulate": [
         "CompliantRunResult", "RigidRunResult", "RigidStart", "RunResult", "SpaceRunResult", "SpaceStart",
-        "initial_state", "prepare_model", "run", "simulate",
+        "initial_state", "prepare_model", "run", "simulate", "study_formulation",
     ],
     "biped_sim.studies": [],
     "biped_sim.studies.fit": [

@@ -14,6 +14,7 @@ from biped_sim.errors import ConfigError
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import rigid_step
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.step import RTOL
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.simulate import simulate
 from biped_sim.simulate.rigid import RigidRunResult, fall_reason
@@ -170,5 +171,5 @@ def test_a_rigid_run_books_the_dampers_work() -> None:
     assert isinstance(result, RigidRunResult)
     worked = result.energy.dissipated_elements
     assert worked[-1] > 0.01 * abs(result.energy.kinetic).max() and np.all(np.diff(worked) >= 0.0)
-    # the trapezoidal rule over the samples (1 kHz): the balance closes to its error, not to the integration's
-    assert np.abs(result.energy.residual).max() < 1e-4 * np.abs(result.energy.potential).max()
+    # integrated with the flow: the balance closes to the integration's tolerance
+    assert np.abs(result.energy.residual).max() < 10.0 * RTOL * np.abs(result.energy.potential).max()

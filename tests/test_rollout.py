@@ -10,10 +10,6 @@ the loop grow without changing a bit either.
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Iterator
-from contextlib import contextmanager
-
 import numpy as np
 import pytest
 from numba.core.registry import CPUDispatcher
@@ -21,26 +17,12 @@ from numba.core.registry import CPUDispatcher
 from biped_sim import load_config
 from biped_sim.integrate import driver, recorder
 from biped_sim.integrate.driver import Integration, integrate_model
-from biped_sim.multibody.dispatch import FORMULATIONS
-from biped_sim.multibody.formulation import KERNEL_SIGNATURES
 from biped_sim.walkers import BuiltModel, build_model
 
-from .conftest import DEFAULT_CONFIG, run_as_plain_python
+from .conftest import DEFAULT_CONFIG, plain_engine
 
-ENGINE = ("biped_sim.contact", "biped_sim.multibody", "biped_sim.integrate")
 RESULTS = ("t", "y", "modes", "strike_t", "strike_foot", "strike_y", "strike_modes", "contact_log")
 COUNTERS = ("status", "t_final", "rhs_evals", "accepted_steps", "rejected_steps", "events")
-
-
-@contextmanager
-def plain_python(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """Run the engine as plain Python: every compiled function (also in a tuple) is replaced by its ``.py_func``."""
-    with monkeypatch.context() as patch:
-        run_as_plain_python(patch, ENGINE)
-        for system_type, formulation in list(FORMULATIONS.items()):
-            kernels = {kernel: getattr(formulation, kernel).py_func for kernel in KERNEL_SIGNATURES}
-            patch.setitem(FORMULATIONS, system_type, dataclasses.replace(formulation, **kernels))
-        yield
 
 
 def assert_bit_identical(a: Integration, b: Integration) -> None:
@@ -57,14 +39,14 @@ def walker() -> tuple[BuiltModel, object]:
     return build_model(config), config.integrator
 
 
-def test_compiled_loop_is_the_plain_python_loop_bit_for_bit(walker, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_compiled_loop_is_the_plain_python_loop_bit_for_bit(walker) -> None:
     model, integrator = walker
     # start 10 ms before the first heel strike: a few hundred dopri5 steps cross its touchdown
     approach = integrate_model(model.system, model.y0, model.modes0, integrator, 1.0, 1000.0, max_strikes=1)
     start = int(np.searchsorted(approach.t, approach.strike_t[0] - 0.01))
     y0, modes0 = approach.y[start], approach.modes[start]
     compiled = integrate_model(model.system, y0, modes0, integrator, 0.03, 1000.0)
-    with plain_python(monkeypatch):
+    with plain_engine():
         assert driver.advance.__module__ == "biped_sim.integrate.explicit" and not isinstance(
             driver.advance, CPUDispatcher
         )

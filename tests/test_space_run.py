@@ -16,6 +16,7 @@ from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.io.trajectory import load_run
 from biped_sim.measure.space_pose import space_poses
 from biped_sim.simulate import SpaceRunResult, simulate, warmup
+from biped_sim.studies import space_basin
 from biped_sim.studies.basin import CONVERGED, FELL, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.fit.evaluate import Evaluator
 from biped_sim.studies.fit.optimize import run_fit
@@ -23,6 +24,7 @@ from biped_sim.studies.fit.parameters import parse_parameter
 from biped_sim.studies.fit.problem import FitProblem
 from biped_sim.studies.fit.stats import summarize
 from biped_sim.studies.fit.synthetic import synthetic_reference_data
+from biped_sim.walkers.space_walker import BODY_NAMES
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
@@ -64,6 +66,7 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     assert list(csv.columns[-4:]) == ["width [m]", "heading [rad]", "sway [m]", "bank [rad]"]
     with h5py.File(tmp_path / "run" / "trajectory.h5") as f:
         assert f.attrs["dynamics"] == "rigid" and f["hip"].shape == (len(result.time), 3)
+        assert list(f["attitude"].attrs["bodies"]) == BODY_NAMES  # the compliant model's bodies, as RunData reads
         contacts = f["strikes/post_impact"][:, 8:]  # each strike's new contact point, the run's frame
     np.testing.assert_allclose(np.linalg.norm(np.diff(contacts, axis=0), axis=1), result.step_lengths, rtol=1e-12)
     run = load_run(tmp_path / "run")
@@ -73,7 +76,7 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     np.testing.assert_allclose(drawn.hip, run.hip, atol=1e-12)
     at_strikes = np.searchsorted(run.time, result.heel_strike_times)  # the legs' attitudes, as a spatial run's
     landing = run.leg_angles()[at_strikes, frame["foot"].to_numpy()]
-    assert run.body_names == ["left", "right"]
+    assert run.body_names == BODY_NAMES == ["left", "right"]
     np.testing.assert_allclose(landing, frame["stance_angle"], atol=1e-12)
 
 
@@ -127,6 +130,26 @@ def test_the_toys_basin_on_its_section_holds_its_gait_and_loses_the_starts_far_f
     expected[1, 1] = CONVERGED
     np.testing.assert_array_equal(basin.outcome, expected)
     assert basin.steps[1, 1] == 10 and basin.steps[basin.outcome == FELL].max() <= 3
+
+
+def test_a_basin_in_space_from_a_given_start_takes_the_gait_near_it_without_the_search(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The start given (the gait's keys): its gait comes from Newton there (the search, 10-20 CPU s, patched to
+    fail), the gait's own cell converges and the cells 0.1 rad further banked fall."""
+
+    def no_search(*_: object) -> None:
+        raise AssertionError("the search without a guess ran")
+
+    monkeypatch.setattr(space_basin, "space_limit_cycle", no_search)
+    spec = BasinSpec(
+        load_config(TINKERTOY, [STARTED]), parse_axis("x", "bank=-0.00924861:0.09075139:2"),
+        parse_axis("y", "omega_x=-0.06623178:-0.05623178:2"), steps=10, tolerance=1e-2,
+    )  # fmt: skip
+    basin = map_basin(spec, None)
+    assert basin.fixed_point is not None and basin.cycle is not None and basin.cycle.converged
+    assert max(abs(basin.fixed_point[key] - value) for key, value in GAIT.items()) < 1e-7
+    assert basin.outcome[0, 0] == CONVERGED and (basin.outcome[:, 1] == FELL).all()
 
 
 @pytest.mark.parametrize(

@@ -4,16 +4,23 @@ follow the Jacobian's powers, their slowest part decaying at the largest multipl
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from biped_sim.config import load_config
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
 from biped_sim.rigid.space_cycle import SpaceMap, space_walker_model
-from biped_sim.rigid.space_integration import FALL_BANK
-from biped_sim.rigid.space_step import clearance, passed, phase, space_step
+from biped_sim.rigid.space_dynamics import hip_push
+from biped_sim.rigid.space_integration import FALL_BANK, space_clearance, space_scratch
+from biped_sim.rigid.space_kernels import space_flow
+from biped_sim.rigid.space_step import space_step
+from biped_sim.rigid.space_walk import walk_step
+from biped_sim.rigid.step import ATOL, RTOL
 
 TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
 # docs/guide/rigid.md's fixed point (heading, bank, pitch, omega x y z, hinge rate), polished by Newton here
@@ -32,16 +39,46 @@ def tinkertoy() -> tuple[SpaceMap, np.ndarray, np.ndarray]:
     return step_map, z, map_jacobian(step_map, z)
 
 
-def test_the_compiled_step_is_scipys_integration_of_the_same_flow() -> None:
-    """Both phases of a step of the toy's gait integrated by scipy's solve_ivp to the same guards (a run's phases,
-    :func:`~biped_sim.rigid.space_step.phase`): the compiled map's touchdown state and time to 1e-12 (the same steps
-    and event location; rounding apart)."""
+def scipy_phases(step_map: SpaceMap, x: np.ndarray, push: tuple[float, np.ndarray] | None = None) -> list[Any]:
+    """The reference: scipy's solve_ivp (DOP853, the step map's tolerances) over the compiled flow through both
+    phases of a step to each guard's downward zero, stopped at ``push`` (its time and impulse) to apply it."""
+    params = step_map.params
+    guards = [lambda t, x: x[3], lambda t, x: space_clearance(params, x)]
+    solutions, t, phase = [], 0.0, 0
+    while phase < 2:
+        event = guards[phase]
+        event.terminal, event.direction = True, -1.0  # type: ignore[attr-defined]
+        end = 20.0 if push is None or push[0] <= t else push[0]
+        sol = solve_ivp(lambda t, x: space_flow(params, x), (t, end), x, "DOP853", rtol=RTOL, atol=ATOL,
+                        events=event, dense_output=True)  # fmt: skip
+        solutions.append(sol)
+        t, x = (sol.t_events[0][0], sol.y_events[0][0]) if sol.status == 1 else (sol.t[-1], sol.y[:, -1])
+        phase += sol.status
+        if push is not None and sol.status == 0:
+            x = hip_push(step_map.model, x, push[1])[0]
+    return solutions
+
+
+@pytest.mark.parametrize("pushed", [False, True])
+def test_the_compiled_step_and_a_runs_samples_are_scipys_integration_of_the_same_flow(pushed: bool) -> None:
+    """A run's step from the toy's gait (unpushed: the step map's bit for bit; or pushed sideways at 0.7) integrated
+    by scipy's solve_ivp to the same guards: touchdown state and time to 1e-12 (the same steps and event location,
+    rounding apart), the samples (100 a second) on its dense output to 1e-12."""
     step_map, z = SpaceMap(space_walker_model(load_config(TINKERTOY))), np.array(TINKERTOY_POINT)
-    _, step = step_map.step(z)
-    passing = phase(step_map.model, step_map.params, step_map.section.from_section(z), 0.0, passed)
-    landing = phase(step_map.model, step_map.params, passing.x, passing.t, clearance(step_map.model))
-    assert landing.how == "guard" and step.period == pytest.approx(landing.t, abs=1e-12)
-    np.testing.assert_allclose(step.x_minus, landing.x, atol=1e-12)
+    x0, pushes = step_map.section.from_section(z), [(0.7, np.array([0.0, -0.01, 0.0]))] if pushed else []
+    walked = walk_step(step_map.model, step_map.params, space_scratch(2001), x0, 100.0, pushes)
+    assert len(walked.pushes) == len(pushes) and len(walked.samples_t) == math.ceil(walked.step.period * 100.0)
+    if not pushed:
+        assert walked.step.period == step_map.step(z)[1].period
+    solutions = scipy_phases(step_map, x0, pushes[0] if pushed else None)
+    landing = solutions[-1]
+    assert landing.status == 1 and walked.step.period == pytest.approx(landing.t_events[0][0], abs=1e-12)
+    np.testing.assert_allclose(walked.step.x_minus, landing.y_events[0][0], atol=1e-12)
+    assert len(solutions) == 2 + pushed
+    for sol in solutions:
+        inside = (walked.samples_t >= sol.t[0]) & (walked.samples_t < sol.t[-1])
+        assert inside.sum() >= 10
+        np.testing.assert_allclose(walked.samples_x[inside], sol.sol(walked.samples_t[inside]).T, atol=1e-12)
 
 
 @pytest.mark.slow

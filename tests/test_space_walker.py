@@ -87,13 +87,6 @@ def test_a_walker_in_space_refuses_the_planar_paths() -> None:
         rigid_walker(load_config(TINKERTOY))
 
 
-@pytest.mark.parametrize("shape", ["torus", "ellipsoid"])
-def test_a_torus_or_ellipsoid_foot_has_rigid_dynamics_only(shape: str) -> None:
-    with pytest.raises(ConfigError) as error:
-        load_config(TINKERTOY, [*FEET[shape], "dynamics=compliant", "formulation.kind=spatial"])
-    assert str(error.value).startswith(f"walker.space.leg.foot.shape: a {shape} foot has rigid dynamics only")
-
-
 def test_a_torus_foot_rests_on_its_tube() -> None:
     """Upright, the torus's bottom is its tube's radius below its ring's, straight down; the leg 0.5 + 0.2 + 0.3."""
     config = load_config(TINKERTOY, [*TORUS[:3], "walker.space.leg.foot.centre=[0, 0, -0.5]"])

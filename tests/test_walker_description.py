@@ -157,8 +157,10 @@ def test_the_rigid_walkers_describe_their_keys() -> None:
 def test_the_registry_decides_what_a_described_walker_takes() -> None:
     data = _kneed_dict()
     assert describe(config_from_dict(data)) == KNEED.walker.description
-    with pytest.raises(ConfigError, match=r"walker\.kind: 'description' needs formulation\.kind: planar or minimal"):
-        config_from_dict({**data, "dynamics": "compliant", "formulation": {"kind": "spatial"}})
+    with pytest.raises(ConfigError, match=r"^formulation\.kind: 'spatial' is available with dynamics: compliant only"):
+        config_from_dict({**data, "dynamics": "rigid", "formulation": {"kind": "spatial"}})
+    spatial = {**data, "dynamics": "compliant", "formulation": {"kind": "spatial"}, "contact": {"stiffness": 1e6}}
+    assert config_from_dict(spatial).formulation.kind == "spatial"  # its joints: multibody.hinge
     data["simulation"] = {"t_end": 2.0, "pushes": [{"time": 1.0, "impulse": [1.0, 0.0]}]}
     data["ground"]["profile"] = {"kind": "steps", "steps": [{"at": 0.3, "height": -0.01}]}
     assert config_from_dict(data).walker.kind == "description"  # pushes and profiles: declared, accepted

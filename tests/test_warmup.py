@@ -13,8 +13,8 @@ from biped_sim import load_config, simulate
 from biped_sim._compiled_cache import profiling_compilations, recording_compilations
 from biped_sim.config import derive
 from biped_sim.multibody.dispatch import FORMULATIONS
-from biped_sim.simulate import RunResult, warmup
-from biped_sim.studies.uncertainty.samples import run_formulation
+from biped_sim.simulate import RunResult, study_formulation, warmup
+from biped_sim.studies.uncertainty.mfpt import height_walk_config
 from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
@@ -102,6 +102,7 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
         "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
+        "minimal explicit (dopri5, on a profile)",
         "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5, with joint stops)",
         "minimal explicit (dopri5)", "minimal explicit (dopri5, with joint elements)",
         "planar explicit (dopri5, with joint elements)", "planar explicit (dopri5)",
@@ -128,10 +129,12 @@ def test_the_bundled_configs_studies_run_in_the_warmed_groups() -> None:
     """A fit evaluation or an uncertainty sample runs a planar walker in minimal coordinates: groups the warm-up
     warms too (the tests' studies, and a user's first, would compile them otherwise, each worker its own copy)."""
     configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
-    groups = {warmup.group_of(derive(config, {"formulation.kind": run_formulation(config)})) for config in configs}
+    groups = {warmup.group_of(derive(config, {"formulation.kind": study_formulation(config)})) for config in configs}
     assert groups <= set(warmup.BUNDLED_GROUPS)
     assert ("minimal", "explicit", "flat") in groups  # the default walker's
     assert ("minimal", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's
+    mfpt = height_walk_config(load_config(CONFIGS / "round_foot_walker.yaml"), 0.01, 0, 10)
+    assert warmup.group_of(mfpt) == ("minimal", "explicit", "profile") in warmup.BUNDLED_GROUPS  # its MFPT's walks
 
 
 def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> None:
@@ -147,7 +150,7 @@ def test_warm_up_all_covers_every_formulation_integrator_family_and_ground() -> 
         ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS),
         ("minimal", "explicit", "profile" + warmup.JOINT_STOPS + warmup.JOINT_ELEMENTS),
     } <= groups
-    assert ("spatial", "explicit", "flat" + warmup.JOINT_STOPS) not in groups  # the spatial one describes no walker
+    assert ("spatial", "stiff", "flat" + warmup.JOINT_STOPS + warmup.JOINT_ELEMENTS) in groups  # multibody.hinge's
     assert (*warmup.RIGID, "flat") in groups
 
 

@@ -107,6 +107,12 @@ def kernel(function: Callable[..., Any] | None = None, *, reference_counts: bool
     return compile_kernel(function) if function is not None else compile_kernel
 
 
+def compile_for(kernel: Dispatcher, args: tuple[Any, ...]) -> None:
+    """Compile ``kernel`` (or load it from the cache) for the types of ``args``, as a compiled caller passing them
+    would (numba's ``typeof`` of each), without calling it."""
+    kernel.compile(tuple(numba.typeof(arg) for arg in args))
+
+
 def implementation_of(kernel: Any) -> FunctionType:
     """The compiled ``kernel``'s Python function (or a plain function's), without its annotations, as an overload
     implementation.

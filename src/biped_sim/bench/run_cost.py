@@ -28,11 +28,11 @@ from biped_sim.bench.fit import fit_problem
 from biped_sim.bench.uncertainty import CONFIG as UNCERTAINTY_CONFIG
 from biped_sim.bench.uncertainty import T_END as UNCERTAINTY_T_END
 from biped_sim.config import Config, derive, load_config
-from biped_sim.simulate import prepare_model, simulate
+from biped_sim.simulate import prepare_model, simulate, study_formulation
 from biped_sim.simulate.compliant import integrate_config
 from biped_sim.simulate.rigid import walk
 from biped_sim.studies.fit.problem import simulate_outcome
-from biped_sim.studies.uncertainty.samples import run_formulation, run_sample
+from biped_sim.studies.uncertainty.samples import run_sample
 from biped_sim.walkers import BuiltModel
 
 FORMULATIONS = ("planar", "minimal", "spatial")
@@ -102,7 +102,7 @@ def study_rows(repeats: int) -> list[dict[str, Any]]:
     rows = [_row("fit evaluation", _integration_of(fit_config), {"call": lambda: simulate_outcome(data)}, repeats,
                  fit_run.t_final)]  # fmt: skip
     sample = derive(load_config(UNCERTAINTY_CONFIG), {"simulation.t_end": UNCERTAINTY_T_END})
-    run_config = derive(sample, {"formulation.kind": run_formulation(sample)})
+    run_config = derive(sample, {"formulation.kind": study_formulation(sample)})
     calls = {"call": lambda: run_sample(sample, (), np.zeros(0))}
     rows.append(_row("uncertainty sample", _integration_of(run_config), calls, repeats, UNCERTAINTY_T_END))
     for row in rows:

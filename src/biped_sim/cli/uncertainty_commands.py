@@ -132,7 +132,7 @@ def mfpt_command(
         str, typer.Option("--roughness", help="Comma-separated levels: height sd [leg lengths] or slope sd [rad].")
     ] = "0.0005,0.001,0.002",
     ground: Annotated[
-        str | None, typer.Option("--ground", help="height (random profile, any walker) or slope (rimless wheel).")
+        str | None, typer.Option("--ground", help="height (random profile) or slope (rimless wheel, walkers in space).")
     ] = None,
     seeds: Annotated[int, typer.Option("--seeds", help="Walks (seeds) per roughness level.")] = 20,
     cap: Annotated[int, typer.Option("--cap", help="Steps after which a walk stops (censored).")] = 100,

@@ -154,6 +154,12 @@ class JointSpec(Strict):
     parent: str = Field(..., description="Parent body.")
     child: str = Field(..., description="Child body.")
     at: Vector2 = Field((0.0, 0.0), description="The child's origin in the parent frame [m].")
+    lateral: float = Field(
+        0.0,
+        description="The spatial formulation's offset of the child's origin along the joint's axis z' (the walker's "
+        "right) from ``at`` [m]: a hip width, the second leg's hip point beside the first's (the mirrored leg's "
+        "``hip``); a planar model hinges every body in the sagittal plane.",
+    )
     stops: list[StopSpec] = Field(default_factory=list, description="One-sided limits of the relative angle.")
     elements: list[ElementSpec] = Field(
         default_factory=list, description="Passive elements (springs, dampers) acting across the joint."

@@ -164,8 +164,9 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
     """A description whose ``leg`` (its bodies, point masses, joints and feet, hip first) is written once, as two
     legs: each name suffixed ``_1`` and ``_2``, the two legs' parts in pairs (thigh_1, thigh_2, shank_1, ...), the
     second leg's hip body hinged to the first's at the hip (the joint ``hip``, or the mapping ``hip`` for its other
-    fields); the description's own bodies, point masses, joints and feet (a torso, the hip's mass) follow. A
-    description without ``leg`` is returned as it is."""
+    fields; a ``lateral`` there is the hip width), the second leg the first's mirror image (its joints' and feet's
+    ``lateral`` negated); the description's own bodies, point masses, joints and feet (a torso, the hip's mass)
+    follow. A description without ``leg`` is returned as it is."""
     if not isinstance(description, dict) or "leg" not in description:
         return description
     leg, out = description["leg"], copy.deepcopy({k: v for k, v in description.items() if k not in ("leg", "hip")})
@@ -183,6 +184,7 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
             )
     own = {str(item.get("name")) for part in LEG_PARTS for item in leg.get(part, []) if isinstance(item, dict)}
     copies = [_leg_copy(leg, own, f"_{k}") for k in (1, 2)]
+    _mirror_lateral(copies[1])
     hip_body = f"{leg['bodies'][0].get('name')}"
     hip = {"name": "hip", **(description.get("hip") or {}), "parent": f"{hip_body}_1", "child": f"{hip_body}_2"}
     for part in LEG_PARTS:
@@ -191,6 +193,15 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
     out["joints"] = [hip, *out["joints"]]
     out["legs"] = [[b["name"] for b in c["bodies"]] for c in copies]
     return out
+
+
+def _mirror_lateral(leg: dict[str, Any]) -> None:
+    """The second leg is the first's mirror image across its sagittal plane: its joints' and feet's ``lateral``
+    places negated (numbers by now: the parameters are evaluated before the mirror)."""
+    for part in ("joints", "feet"):
+        for item in leg.get(part, []):
+            if isinstance(item, dict) and isinstance(item.get("lateral"), int | float):
+                item["lateral"] = -item["lateral"]
 
 
 def _leg_copy(leg: dict[str, Any], own: set[str], suffix: str) -> dict[str, Any]:

@@ -254,10 +254,6 @@ class Config(Strict):
         if refused := refusal(self.walker.kind, self.dynamics, self.formulation.kind):
             raise ValueError(": ".join(refused))
         caps = capabilities(self.walker.kind)
-        shape = self.walker.space.leg.foot.shape if caps.space else None  # type: ignore[union-attr]
-        if self.dynamics == "compliant" and shape in ("torus", "ellipsoid"):
-            raise ValueError(f"walker.space.leg.foot.shape: a {shape} foot has rigid dynamics only (compliant: "
-                             "point, sphere or ring)")  # fmt: skip
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
         if self.ground.profile.kind != "flat" and not caps.profiles:

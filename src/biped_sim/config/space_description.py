@@ -105,6 +105,19 @@ class SpaceFoot(Strict):
         upright), an ellipsoid's z semi-axis."""
         return self.axes[2] if self.axes is not None else self.radius + self.tube
 
+    @property
+    def hertz_radius(self) -> float:
+        """The radius [m] of the sphere whose Hertz contact with a plane matches the foot's at its bottom, upright:
+        sqrt(R1 R2) of its two principal radii there (Johnson, Contact Mechanics, 1985, section 4.2: the equivalent
+        radius of an elliptical contact, exact but for correction factors near 1 while the radii are not far apart):
+        a torus's (radius + tube) and tube, an ellipsoid's ax^2 / az and ay^2 / az; a sphere's or ring's its radius
+        (a ring: as a disc), a point's 0. The stiffness stays that of the upright bottom as the foot rolls."""
+        if self.axes is not None:
+            return self.axes[0] * self.axes[1] / self.axes[2]
+        if self.shape == "torus":
+            return math.sqrt((self.radius + self.tube) * self.tube)
+        return self.radius
+
     def quadric(self) -> np.ndarray:
         """An ellipsoid's diag(ax^2, ay^2, az^2) in the leg's frame: its points are centre + Q^(1/2) u, |u| = 1
         (zero for the other shapes)."""

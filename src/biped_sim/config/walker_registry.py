@@ -52,7 +52,7 @@ WALKERS: dict[str, WalkerCapabilities] = {
     # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
     "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ("basin",)),
     "description": WalkerCapabilities(
-        {"compliant": ("planar", "minimal"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
+        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
     ),
     # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs
     "description3d": WalkerCapabilities(

@@ -26,7 +26,7 @@ from pydantic import (
 )
 
 from biped_sim.config.base import Strict
-from biped_sim.config.description import WalkerDescription
+from biped_sim.config.description import JointSpec, WalkerDescription
 from biped_sim.config.parameters import ParameterSpec, mirror_legs, parameter_values, resolve_numbers
 from biped_sim.config.space_description import SpaceWalker
 from biped_sim.errors import quote
@@ -205,6 +205,8 @@ class DescribedWalker(Strict):
         evaluated = resolve_numbers(WalkerDescription, written, names, "walker.description")
         if isinstance(written, dict) and isinstance(written.get("leg"), dict):  # a leg's parts are a description's
             evaluated["leg"] = resolve_numbers(WalkerDescription, written["leg"], names, "walker.description.leg")
+        if isinstance(written, dict) and isinstance(written.get("hip"), dict):  # the mirrored legs' hip joint
+            evaluated["hip"] = resolve_numbers(JointSpec, written["hip"], names, "walker.description.hip")
         try:
             resolved = mirror_legs(evaluated)
         except ValueError as exc:

@@ -34,6 +34,7 @@ from biped_sim.contact.stop import (
     PARENT_ANGLE,
     PARENT_RATE,
     Stops,
+    add_couple,
     joint_entry,
     stop_torques,
     stops_energy,
@@ -167,7 +168,7 @@ NO_ELEMENTS = make_elements(np.zeros((0, 4)), np.zeros(0), np.zeros((0, N_ELEMEN
 
 
 @kernel
-def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
+def _angle_difference(y: np.ndarray, elements: JointElements, e: int) -> tuple[float, float]:
     """(theta, thetadot) of element e: the child's angle and rate relative to the other body's (or to the slope
     normal: the other body -1, the ground, as a stop's)."""
     index = elements.index
@@ -176,14 +177,23 @@ def relative_angle(y: np.ndarray, elements: JointElements, e: int) -> tuple[floa
 
 
 @kernel
+def _apply_angle_torque(y: np.ndarray, elements: JointElements, e: int, tau: float, force: np.ndarray) -> None:
+    """Add the torque tau of element e to its child's angle's generalized force and -tau to the other body's."""
+    add_couple(elements.index, e, tau, force)
+
+
+# as contact.stop's: a formulation whose coordinates are not angles adds its own elements record (multibody.hinge)
+relative_angle = by_type("relative_angle", "elements", {JointElements: _angle_difference})
+apply_element_torque = by_type("apply_element_torque", "elements", {JointElements: _apply_angle_torque})
+
+
+@kernel
 def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) -> float:
     power = 0.0
     for e in range(elements.law.shape[0]):
         theta, theta_dot = relative_angle(y, elements, e)
         tau, p = element_torque(elements.law[e], theta, theta_dot, elements.params[e])
-        force[elements.index[e, CHILD_ANGLE]] += tau
-        if elements.index[e, PARENT_ANGLE] >= 0:
-            force[elements.index[e, PARENT_ANGLE]] -= tau
+        apply_element_torque(y, elements, e, tau, force)
         power += p
     return power
 

@@ -54,6 +54,24 @@ def by_type(name: str, key: str, implementations: Mapping[type, Any]) -> Callabl
         return kernel.py_func.__globals__[kernel.__name__](*args)
 
     generic.__name__ = generic.__qualname__ = name
+    generic.__doc__ = first.py_func.__doc__  # the first implementation's, unless the caller writes its own
     generic.__signature__ = signature  # type: ignore[attr-defined]
     overload_by_type(generic, key, implementations.get, inline=True)  # inlined: no call layer, no reference counts
+    generic.implementations = implementations  # type: ignore[attr-defined]  # read at compile time: share() adds
     return generic
+
+
+def share(generic: Callable[..., Any], new_type: type, like: type) -> None:
+    """Let the :func:`by_type` function ``generic`` call its implementation for ``like`` on arguments of
+    ``new_type`` too (a record of the same fields whose own pieces are other by_type functions' implementations:
+    a higher layer's variant of a record, e.g. :mod:`biped_sim.multibody.hinge`'s stops). Before any compile."""
+    generic.implementations[new_type] = generic.implementations[like]  # type: ignore[attr-defined]
+
+
+def extend(generic: Callable[..., Any], new_type: type, implementation: Any) -> None:
+    """Add ``implementation`` (same parameters) for arguments of ``new_type`` to the :func:`by_type` function
+    ``generic`` (a higher layer's variant of a record). Before any compile."""
+    expected = tuple(inspect.signature(generic).parameters)
+    if tuple(inspect.signature(implementation.py_func).parameters) != expected:
+        raise TypeError(f"{generic.__name__}: the implementations must all take {expected}")
+    generic.implementations[new_type] = implementation  # type: ignore[attr-defined]

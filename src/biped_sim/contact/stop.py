@@ -120,12 +120,32 @@ def joint_entry(y: np.ndarray, k: int) -> float:
 
 
 @kernel
-def stop_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, float]:
+def _angle_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, float]:
     """(delta, deltadot) of stop s: the relative angle past its limit [rad] and its approach rate [rad/s]."""
     index, side = stops.index, stops.limit[s, SIDE]
     theta = joint_entry(y, index[s, CHILD_ANGLE]) - joint_entry(y, index[s, PARENT_ANGLE])
     rate = joint_entry(y, index[s, CHILD_RATE]) - joint_entry(y, index[s, PARENT_RATE])
     return side * (theta - stops.limit[s, ANGLE]), side * rate
+
+
+@kernel
+def add_couple(index: np.ndarray, row: int, tau: float, force: np.ndarray) -> None:
+    """Add tau to the generalized force of the child's angle of ``index[row]`` and -tau to its other body's."""
+    force[index[row, CHILD_ANGLE]] += tau
+    if index[row, PARENT_ANGLE] >= 0:
+        force[index[row, PARENT_ANGLE]] -= tau
+
+
+@kernel
+def _apply_angle_torque(y: np.ndarray, stops: Stops, s: int, tau: float, force: np.ndarray) -> None:
+    """Add the torque tau of stop s to its child's angle's generalized force and -tau to its parent's."""
+    add_couple(stops.index, s, tau, force)
+
+
+# a formulation whose coordinates are not the bodies' angles (the spatial one: multibody.hinge) adds its own stops
+# record to these two and shares the other kernels of this module (contact.registry.share)
+stop_penetration = by_type("stop_penetration", "stops", {Stops: _angle_penetration})
+apply_stop_torque = by_type("apply_stop_torque", "stops", {Stops: _apply_angle_torque})
 
 
 @kernel
@@ -171,10 +191,7 @@ def _stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int
     power = 0.0
     for s in range(stops.law.shape[0]):
         tau, p = stop_torque(y, stops, modes, first_row + s, s)
-        child, parent = stops.index[s, CHILD_ANGLE], stops.index[s, PARENT_ANGLE]
-        force[child] += tau
-        if parent >= 0:
-            force[parent] -= tau
+        apply_stop_torque(y, stops, s, tau, force)
         power += p
     return power
 

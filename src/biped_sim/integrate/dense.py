@@ -136,3 +136,19 @@ def locate_event(tab: Tableau, h: float, y: np.ndarray, system: tuple, sc: Scrat
             lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, (g > 0.0) == (g_lo > 0.0))
         theta_event = min(theta_event, hi)
     return theta_event
+
+
+@kernel(reference_counts=False)
+def sample_dense(
+    tab: Tableau, sc: Scratch, rate: float, k: int, t: float, h: float, t_end: float, y: np.ndarray,
+    times: np.ndarray, states: np.ndarray, n: int,
+) -> int:  # fmt: skip
+    """Record the grid points k / rate in [t, t_end) of the last accepted step (from (t, y), length h) on its dense
+    output (prepared by the caller) into rows n, n + 1, ... of ``times`` and ``states`` (those past their end are
+    dropped: the caller sizes them for a whole step); returns the next free row."""
+    while k / rate < t_end and n < times.shape[0]:
+        times[n] = k / rate
+        dense_eval(tab, (k / rate - t) / h, h, y, sc, states[n])
+        n += 1
+        k += 1
+    return n

@@ -19,8 +19,6 @@ import numpy as np
 from biped_sim.config import Config, config_from_dict, parse_yaml
 from biped_sim.errors import ConfigError
 
-SPACE_LEGS = ("left", "right")  # the bodies of a rigid run of a walker in space, its attitudes' columns
-
 
 @dataclass
 class RunData:
@@ -43,6 +41,7 @@ class RunData:
     violation_normalization: np.ndarray | None = None  # (ns,) ||p.p - 1||, spatial runs only
     attitude: dict[str, np.ndarray] | None = None  # pitch, roll, yaw [rad], pitch_rate [rad/s] (ns, nb), in space only
     dynamics: str = "compliant"  # or 'rigid'
+    attitude_bodies: list[str] | None = None  # the attitudes' columns: the bodies the run wrote (in space only)
 
     def column(self, name: str) -> np.ndarray:
         """One state entry over time, by name (e.g. 'phi_leg0')."""
@@ -70,10 +69,11 @@ class RunData:
 
     @property
     def body_names(self) -> list[str]:
-        """Bodies in state order: from the 'phi_<body>' entries (planar, minimal), else the 'x_<body>' ones (spatial;
-        minimal-coordinate states also hold 'x_hip', which is no body); a rigid run's roles ('<role>_angle')."""
-        if self.dynamics == "rigid" and self.attitude is not None:
-            return list(SPACE_LEGS)  # a rigid walker in space: its legs' attitudes
+        """Bodies in state order: those of the attitudes' columns (a run in space), from the 'phi_<body>' entries
+        (planar, minimal), else the 'x_<body>' ones (spatial; minimal-coordinate states also hold 'x_hip', which is no
+        body); a rigid run's roles ('<role>_angle')."""
+        if self.attitude_bodies is not None:
+            return list(self.attitude_bodies)
         if self.dynamics == "rigid":
             return [name.removesuffix("_angle") for name in self.state_names if name.endswith("_angle")]
         planar = [name[4:] for name in self.state_names if name.startswith("phi_")]
@@ -156,7 +156,15 @@ def _read_trajectory(run_dir: Path, path: Path, summary: dict[str, Any]) -> RunD
             steps={name: ds[:] for name, ds in f["steps"].items()},
             violation_normalization=f["constraints/normalization"][:] if "normalization" in f["constraints"] else None,
             attitude={name: ds[:] for name, ds in f["attitude"].items()} if "attitude" in f else None,
+            attitude_bodies=_attitude_bodies(f),
         )
+
+
+def _attitude_bodies(f: h5py.File) -> list[str] | None:
+    """The bodies of the attitudes' columns (the group's ``bodies`` attribute), None without them (a planar run)."""
+    if "attitude" not in f or "bodies" not in f["attitude"].attrs:
+        return None
+    return [str(name) for name in f["attitude"].attrs["bodies"]]
 
 
 def _rigid_run(run_dir: Path, f: h5py.File, config: Config, summary: dict[str, Any]) -> RunData:
@@ -180,4 +188,5 @@ def _rigid_run(run_dir: Path, f: h5py.File, config: Config, summary: dict[str, A
         steps={name: ds[:] for name, ds in f["steps"].items()},
         attitude={name: ds[:] for name, ds in f["attitude"].items()} if "attitude" in f else None,
         dynamics="rigid",
+        attitude_bodies=_attitude_bodies(f),
     )

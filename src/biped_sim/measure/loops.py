@@ -14,7 +14,6 @@ import numpy as np
 
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_attitude, system_contact, system_energy, system_hip, system_violation
-from biped_sim.rigid.tree_elements import tree_element_power
 from biped_sim.rigid.tree_kernels import tree_energy
 from biped_sim.rigid.tree_layout import RigidTree, point
 
@@ -65,11 +64,9 @@ def attitude_loop(ys: np.ndarray, system: tuple, out: np.ndarray) -> None:
 
 @kernel(reference_counts=False)
 def rigid_loop(params: RigidTree, states: np.ndarray, hip_row: int, energy: np.ndarray, hip: np.ndarray) -> None:
-    """energy[i]: (kinetic, potential) energy and the power its joint elements dissipate, and hip[i]: the hip's
-    position (row ``hip_row`` of the tree) of a rigid walker (its tree's ``params``) at sample i, in the frame of its
-    step (the caller moves it to the run's)."""
+    """energy[i]: (kinetic, potential) energy, and hip[i]: the hip's position (row ``hip_row`` of the tree) of a
+    rigid walker (its tree's ``params``) at sample i, in the frame of its step (the caller moves it to the run's)."""
     n = params.n
     for i in range(states.shape[0]):
-        kinetic, potential = tree_energy(params, states[i])
-        _store(energy[i], (kinetic, potential, tree_element_power(params, states[i])))
+        _store(energy[i], tree_energy(params, states[i]))
         _store(hip[i], point(params, hip_row, states[i, :n]))

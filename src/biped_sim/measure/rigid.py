@@ -2,7 +2,7 @@
 
 Step k's models measure positions from their own origin; :func:`rigid_energy_and_hip` puts every sample in
 one slope frame so that the energy balance E(t) - E(0) + W_impact(t) + W_element(t) - W_push(t) is checked across
-steps (W_element: the dampers' work, the trapezoidal rule over the samples: exact to the samples' spacing squared).
+steps (W_element: the dampers' work, integrated with the flow by the step map, exact to its tolerance).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ class RigidEnergy:
     kinetic: np.ndarray
     potential: np.ndarray
     dissipated_impact: np.ndarray
-    dissipated_elements: np.ndarray  # W_element(t): the joint elements' (dampers') work, trapezoids over the samples
+    dissipated_elements: np.ndarray  # W_element(t): the joint elements' (dampers') work, integrated with the flow
     push_work: np.ndarray  # W_push(t): work of the pushes so far (their kinetic energy jumps)
     residual: np.ndarray
 
@@ -39,6 +39,7 @@ class RigidTrace:
     times: list[np.ndarray] = field(default_factory=list)
     states: list[np.ndarray] = field(default_factory=list)
     sample_step: list[np.ndarray] = field(default_factory=list)
+    element_work: list[np.ndarray] = field(default_factory=list)  # W_element at the samples, since the run's start
     strike_time: list[float] = field(default_factory=list)
     strike_pre: list[np.ndarray] = field(default_factory=list)
     strike_post: list[np.ndarray] = field(default_factory=list)
@@ -47,12 +48,14 @@ class RigidTrace:
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # (time, work, ground normal impulse)
     stop_losses: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (time, energy lost)
 
-    def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int) -> None:
+    def add_samples(self, t: np.ndarray, x: np.ndarray, step_index: int, work: np.ndarray | float = 0.0) -> None:
+        """Samples (t, x) of step ``step_index``, with the joint elements' work since the run's start (0 without)."""
         if not len(t):
             return
         self.times.append(t)
         self.states.append(x.reshape(len(t), -1))
         self.sample_step.append(np.full(len(t), step_index))
+        self.element_work.append(np.broadcast_to(np.asarray(work, dtype=float), t.shape))
 
 
 def strike_feet(walker: RigidWalker, n: int) -> np.ndarray:
@@ -103,9 +106,9 @@ def rigid_energy_and_hip(
     dissipated_by_step = np.concatenate([[0.0], np.cumsum(losses)])
     step_of_sample = np.concatenate(trace.sample_step)
     sample_origin = origin[step_of_sample]
-    terms, hip = np.empty((len(times), 3)), np.empty((len(times), 2))
+    terms, hip = np.empty((len(times), 2)), np.empty((len(times), 2))
     rigid_loop(walker.params, np.ascontiguousarray(states, dtype=np.float64), walker.n_points, terms, hip)
-    elements = np.concatenate([[0.0], np.cumsum(0.5 * (terms[1:, 2] + terms[:-1, 2]) * np.diff(times))])
+    elements = np.concatenate(trace.element_work)
     kinetic = terms[:, 0]
     potential = terms[:, 1] - weight * math.sin(walker.slope) * sample_origin
     sample_level = np.concatenate([[0.0], trace.strike_levels])[step_of_sample] if trace.strike_levels else None

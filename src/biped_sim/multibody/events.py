@@ -33,6 +33,7 @@ from biped_sim.contact.stop import (
 )
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_foot_contact
+from biped_sim.multibody.hinge import HingeStops
 
 
 def event_count(system: tuple) -> int:
@@ -75,7 +76,9 @@ def _no_stop_events(y: np.ndarray, system: tuple, stops: NoStops, g: np.ndarray)
     return None
 
 
-stop_event_functions = by_type("stop_event_functions", "stops", {Stops: _stop_events, NoStops: _no_stop_events})
+stop_event_functions = by_type(
+    "stop_event_functions", "stops", {Stops: _stop_events, HingeStops: _stop_events, NoStops: _no_stop_events}
+)
 stop_event_functions.__doc__ = """The joint stops' event functions after the feet's in ``g`` (see
 :func:`system_event_functions`), of ``system`` whose ``stops`` they are (none for a
 :class:`~biped_sim.contact.stop.NoStops`)."""

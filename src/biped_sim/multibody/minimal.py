@@ -316,7 +316,7 @@ def star_rhs(
 _rhs_of = by_type("rhs", "topology", {Star: star_rhs, Tree: tree_rhs})  # inlined: the star's is the whole rhs
 
 
-@kernel
+@kernel(reference_counts=False)
 def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free): a star's arrow solve
     (:func:`star_rhs`) or a tree's (:func:`~biped_sim.multibody.tree.tree_rhs`), chosen by the topology's type."""

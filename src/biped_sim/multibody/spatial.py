@@ -55,6 +55,7 @@ from biped_sim.multibody.euler_parameters import (
     unit4,
     vec3,
 )
+from biped_sim.multibody.hinge import HingeElements, HingeStops
 from biped_sim.multibody.linalg import cholesky_solve
 
 # constraint primitives and their row counts
@@ -76,6 +77,8 @@ class SpatialSystem(NamedTuple):
     foot_center: np.ndarray  # (nf, 3) disc or sphere centre, body frame
     foot_axis: np.ndarray  # (nf, 3) unit disc axis, body frame; zero = sphere
     foot_radius: np.ndarray  # (nf,)
+    foot_tube: np.ndarray  # (nf,) a torus's tube radius about its disc's edge; 0 = none
+    foot_quadric: np.ndarray  # (nf, 3, 3) an ellipsoid's Q, body frame (points centre + Q^(1/2) u); zero = none
     foot_partner: np.ndarray  # (nf,) int64: the foot this one must be ahead of to arm (-1: none)
     gravity: np.ndarray  # (3,) in the slope frame
     baumgarte: np.ndarray  # (2,) alpha, beta
@@ -83,8 +86,9 @@ class SpatialSystem(NamedTuple):
     friction_params: np.ndarray
     switches: np.ndarray  # (3,) int64: normal model, friction model, scuffing guard
     limits: np.ndarray  # (3,) impact velocity floor, fall hip height, fall leg angle
-    stops: Stops = NO_STOPS  # contact.stop: the joint stops (their modes follow the feet's in the mode table)
-    elements: JointElements = NO_ELEMENTS  # contact.joint_element: none in 3D yet (the state layout reads it)
+    # the joint stops (multibody.hinge: their modes follow the feet's in the mode table), springs and dampers
+    stops: Stops | HingeStops = NO_STOPS
+    elements: JointElements | HingeElements = NO_ELEMENTS
 
 
 class Workspace(NamedTuple):
@@ -123,7 +127,7 @@ def make_workspace(system: SpatialSystem) -> Workspace:
 # ---------------------------------------------------------------- constraints
 
 
-@kernel
+@kernel(reference_counts=False)
 def constraint_terms(
     y: np.ndarray, system: SpatialSystem, c: int, phi_q: np.ndarray, fill: bool
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
@@ -218,7 +222,7 @@ def normalisation(y: np.ndarray, nb: int, b: int) -> tuple[float, float, float]:
     return pp - 1.0, 2.0 * ppd, -2.0 * pdpd
 
 
-@kernel
+@kernel(reference_counts=False)
 def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
     """minv[b] = (G^T J'^-1 G + p p^T / j) / (4 |p|^4): inverse of 4 G^T J' G + 4 j p p^T."""
     jinv = system.body_inertia_inv
@@ -235,7 +239,7 @@ def mass_blocks(y: np.ndarray, system: SpatialSystem, minv: np.ndarray) -> None:
                 minv[b, k, i] = v
 
 
-@kernel
+@kernel(reference_counts=False)
 def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Workspace, qdd: np.ndarray) -> None:
     """Accelerations from the augmented system with Baumgarte stabilisation (forces in work.force)."""
     nb = system.body_mass.shape[0]

@@ -1,10 +1,10 @@
 """The spatial formulation's feet, right-hand side, measurements and formulation record (compiled with numba).
 
 Feet: a disc of radius R (a circle in the body's x'-y' plane, the sagittal plane, around its
-local axis, normally z': the 3D form of the planar walker's arc) or a sphere (axis = 0). The
-contact point is the lowest point of the circle (of the sphere) with respect to the ground
-plane y = 0; penetration, approach velocity and the 2D slip velocity (x, z) are those of the
-material point there. The normal response and the scuffing guard are
+local axis, normally z': the 3D form of the planar walker's arc), a sphere (axis = 0), a torus
+(a disc with a tube) or an ellipsoid (a quadric). The contact point is the foot's lowest point
+with respect to the ground plane y = 0 (:func:`foot_bottom`); penetration, approach velocity and
+the 2D slip velocity (x, z) are those of the material point there. The normal response and the scuffing guard are
 :mod:`biped_sim.contact.response`, as for the planar formulation. The scalar friction laws of
 :mod:`biped_sim.contact.friction` act along the slip direction: F_T = F(|v|) v / |v|, exactly 0
 at |v| = 0 (every law is odd in v and vanishes at 0, so this is continuous). LuGre carries a
@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.response import (
     FALL_HIP_HEIGHT,
     FALL_LEG_ANGLE,
@@ -37,7 +38,7 @@ from biped_sim.contact.response import (
     normal_response,
     stored_energy,
 )
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.euler_parameters import (
     attitude,
     b_mul,
@@ -63,15 +64,59 @@ from biped_sim.multibody.spatial import (
     make_workspace,
 )
 
+DOWN = (0.0, -1.0, 0.0)  # against the ground's normal
+
 
 @kernel
+def foot_bottom(p: tuple, system: SpatialSystem, i: int) -> tuple[tuple, tuple, tuple]:
+    """Foot i's lowest point P against the ground plane y = 0 on a body turned by the parameters p: (c, b, s') with
+    c = A c' its centre and b = P - c from there (slope frame, P = r + c + b), and s' its body-frame lever,
+    A s' = c + b (A = rotate(p, .): p.p times the rotation, so that the lever holds off the unit sphere too).
+
+    A disc (axis a): R d, d the unit direction in its plane most against the normal; a sphere (axis 0): R below
+    the centre; a torus: its disc's point lowered by the tube radius (the tube's section there is a circle in the
+    vertical plane through d, lowest straight below its centre); an ellipsoid (quadric Q, body frame): A Q m /
+    sqrt(m.Q m) / p.p, m = A^T (0, -1, 0) the ground's inward normal in the body frame.
+    """
+    sc = vec3(system.foot_center, i, 0)
+    centre = rotate(p, sc)
+    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]
+    if system.foot_quadric[i, 0, 0] > 0.0:
+        m = rotate_t(p, DOWN)
+        qm = inertia_mul(system.foot_quadric, i, m)
+        k = 1.0 / (pp * math.sqrt(dot3(m, qm)))
+        lever = (k * qm[0], k * qm[1], k * qm[2])
+        return centre, rotate(p, lever), (sc[0] + lever[0], sc[1] + lever[1], sc[2] + lever[2])
+    radius = system.foot_radius[i]
+    axis = vec3(system.foot_axis, i, 0)
+    d = DOWN
+    if dot3(axis, axis) > 0.0:
+        a = rotate(p, axis)
+        inv = 1.0 / math.sqrt(dot3(a, a))
+        a0, a1, a2 = a[0] * inv, a[1] * inv, a[2] * inv
+        norm = math.sqrt(max(1.0 - a1 * a1, 1e-300))
+        d = (a1 * a0 / norm, -(1.0 - a1 * a1) / norm, a1 * a2 / norm)
+    local_d = rotate_t(p, d)
+    scale = radius / (pp * pp)
+    s = (sc[0] + scale * local_d[0], sc[1] + scale * local_d[1], sc[2] + scale * local_d[2])
+    bottom = (radius * d[0], radius * d[1], radius * d[2])
+    tube = system.foot_tube[i]
+    if tube > 0.0:
+        local_n = rotate_t(p, DOWN)
+        k = tube / (pp * pp)
+        s = (s[0] + k * local_n[0], s[1] + k * local_n[1], s[2] + k * local_n[2])
+        bottom = (bottom[0], bottom[1] - tube, bottom[2])
+    return centre, bottom, s
+
+
+@kernel(reference_counts=False)
 def foot_kinematics(
     y: np.ndarray, system: SpatialSystem, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float]:
     """Foot i against the ground plane y = 0 with normal n = (0, 1, 0).
 
     Returns (delta, delta_dot, slip_x, slip_z, x_contact, z_contact, s0, s1, s2): penetration
-    -P.n of the lowest point P of the disc (sphere), approach velocity -v_P.n and 2D slip
+    -P.n of the lowest point P of the foot (:func:`foot_bottom`), approach velocity -v_P.n and 2D slip
     velocity (v_P.x, v_P.z) of the material point at P, P's position in the ground plane, and
     s' = A^-1 (P - r), the body-frame lever of the contact force (its velocity is
     rdot + B(p, s') pdot, so the contact power and the generalized force B^T F agree exactly).
@@ -80,24 +125,10 @@ def foot_kinematics(
     b = system.foot_body[i]
     r = position(y, b)
     p = parameters(y, b)
-    radius = system.foot_radius[i]
-    centre = rotate(p, vec3(system.foot_center, i, 0))
-    axis = vec3(system.foot_axis, i, 0)
-    d = (0.0, -1.0, 0.0)
-    if dot3(axis, axis) > 0.0:
-        a = rotate(p, axis)
-        inv = 1.0 / math.sqrt(dot3(a, a))
-        a0, a1, a2 = a[0] * inv, a[1] * inv, a[2] * inv
-        norm = math.sqrt(max(1.0 - a1 * a1, 1e-300))
-        d = (a1 * a0 / norm, -(1.0 - a1 * a1) / norm, a1 * a2 / norm)
-    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]
-    local_d = rotate_t(p, d)
-    sc = vec3(system.foot_center, i, 0)
-    scale = radius / (pp * pp)
-    s = (sc[0] + scale * local_d[0], sc[1] + scale * local_d[1], sc[2] + scale * local_d[2])
-    px = r[0] + centre[0] + radius * d[0]
-    py = r[1] + centre[1] + radius * d[1]
-    pz = r[2] + centre[2] + radius * d[2]
+    centre, bottom, s = foot_bottom(p, system, i)
+    px = r[0] + centre[0] + bottom[0]
+    py = r[1] + centre[1] + bottom[1]
+    pz = r[2] + centre[2] + bottom[2]
     v = position(y, nb + b)
     w = b_mul(p, s, parameters(y, nb + b))
     return -py, -(v[1] + w[1]), v[0] + w[0], v[2] + w[2], px, pz, s[0], s[1], s[2]
@@ -110,7 +141,7 @@ def foot_contact(y: np.ndarray, system: SpatialSystem, foot: int) -> tuple[float
     return kin[0], kin[1], kin[4]
 
 
-@kernel
+@kernel(reference_counts=False)
 def foot_forces(
     y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int
 ) -> tuple[float, float, float, float, float, float, float, float, float, float, float, float, float, float]:
@@ -144,7 +175,14 @@ def foot_forces(
     return f_n, f_x, f_z, zdx, zdz, p_normal, p_friction, delta, delta_dot, vx, vz, s0, s1, s2
 
 
-@kernel
+# the right-hand side's kernels count no references and its constraint solve is inlined, as the planar
+# formulation's (its module docstring says why: a call passes the whole system and numba counts its arrays)
+_constrained_accelerations = inlined(
+    constrained_accelerations, calls=frozenset({"constraint_terms", "normalisation", "mass_blocks", "cholesky_solve"})
+)
+
+
+@kernel(reference_counts=False)
 def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free)."""
     nb = system.body_mass.shape[0]
@@ -182,7 +220,8 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
         w_friction += p_f
     ydot[2 * n + 2 * nf] = w_normal
     ydot[2 * n + 2 * nf + 1] = w_friction
-    constrained_accelerations(y, system, work, ydot[n : 2 * n])
+    joint_torques(y, system.stops, system.elements, modes, nf, force, ydot, 2 * n + 2 * nf + 2)
+    _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
 # ---------------------------------------------------------------- energy and falls
@@ -203,9 +242,10 @@ def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -
         kinetic += 0.5 * m * dot3(v, v) + 0.5 * dot3(w, inertia_mul(system.body_inertia, b, w))
         potential -= m * dot3(g, position(y, b))
     elastic = 0.0
-    for i in range(system.foot_body.shape[0]):
+    nf = system.foot_body.shape[0]
+    for i in range(nf):
         elastic += stored_energy(system, modes, i, foot_kinematics(y, system, i)[0])
-    return kinetic, potential, elastic
+    return kinetic, potential, elastic + joints_energy(y, system.stops, system.elements, modes, nf)
 
 
 @kernel

@@ -8,6 +8,11 @@ matrix is sum_b m_b J_b^T J_b + J_b e_b e_b^T, each body's terms and its gravity
 kernel (:func:`tree_mass_matrix`, :mod:`~biped_sim.multibody.bodies`), solved by Cholesky in
 :func:`tree_rhs`. ``system`` is a :class:`~biped_sim.multibody.minimal.MinimalSystem` (not imported here:
 that module imports this one). :func:`tree_origins` reads the tree of a planar absolute-coordinate system.
+
+The right-hand side's kernels count no references and the three that take the whole system are inlined in
+:func:`tree_rhs`, as the planar formulation's (:mod:`.planar`'s docstring says why): a call passes the system, some
+two hundred machine words, and numba counts each of its arrays at entry and exit; that cost grew with every field the
+system gained (the joint stops' and elements' records) and made the kneed walker's run 1.65 times 566eddb's.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import numpy as np
 from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
-from biped_sim.kernel import kernel
+from biped_sim.kernel import inlined, kernel
 from biped_sim.multibody.bodies import add_body_terms, body_energy, mirror_upper
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
@@ -96,7 +101,7 @@ def _tree_motion(
 contact_motion = by_type("contact_motion", "topology", {Star: _star_motion, Tree: _tree_motion})
 
 
-@kernel
+@kernel(reference_counts=False)
 def tree_kinematics(y: np.ndarray, system: tuple, table: np.ndarray) -> None:
     """Fill the tree's body rows of ``table`` (the T_* columns), parents before children."""
     parent, joint, com = system.body_parent, system.body_joint, system.body_com
@@ -149,7 +154,7 @@ def body_jacobian(table: np.ndarray, parent: np.ndarray, b: int, jacobian: np.nd
         kx, ky, k = table[k, JX], table[k, JY], parent[k]
 
 
-@kernel
+@kernel(reference_counts=False)
 def tree_mass_matrix(
     y: np.ndarray, system: tuple, table: np.ndarray, mass: np.ndarray, q: np.ndarray, jacobian: np.ndarray,
     with_forces: bool,
@@ -173,7 +178,7 @@ def tree_mass_matrix(
     mirror_upper(mass, n)
 
 
-@kernel
+@kernel(reference_counts=False)
 def _tree_foot_forces(y: np.ndarray, system: tuple, modes: np.ndarray, table: np.ndarray, q: np.ndarray,
                       ydot: np.ndarray) -> tuple[float, float]:  # fmt: skip
     """The feet's generalized forces into ``q`` and their bristle rates into ``ydot``; (W_normal, W_friction) rates."""
@@ -201,7 +206,13 @@ def _tree_foot_forces(y: np.ndarray, system: tuple, modes: np.ndarray, table: np
     return w_normal, w_friction
 
 
-@kernel
+_kinematics = inlined(tree_kinematics)  # the three take the whole system: inlined (module docstring)
+_mass_matrix = inlined(tree_mass_matrix, calls=frozenset({"body_jacobian", "add_body_terms", "mirror_upper"}))
+_foot_forces = inlined(_tree_foot_forces, calls=frozenset({"arc_contact", "arc_forces", "is_loaded",
+                                                          "add_generalized_force"}))  # fmt: skip
+
+
+@kernel(reference_counts=False)
 def tree_rhs(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, ydot: np.ndarray, topology: Tree
 ) -> None:
@@ -210,13 +221,13 @@ def tree_rhs(
     table = work.table
     nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
     n = HIP + nb
-    tree_kinematics(y, system, table)
+    _kinematics(y, system, table)
     mass, q, jacobian = table[nb : nb + n, :n], table[nb : nb + n, n], table[nb : nb + n, n + 1 : n + 3]
     for k in range(n):
         q[k] = 0.0
         ydot[k] = y[n + k]
-    tree_mass_matrix(y, system, table, mass, q, jacobian, True)
-    w_normal, w_friction = _tree_foot_forces(y, system, modes, table, q, ydot)
+    _mass_matrix(y, system, table, mass, q, jacobian, True)
+    w_normal, w_friction = _foot_forces(y, system, modes, table, q, ydot)
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
     joint_torques(y, system.stops, system.elements, modes, nf, q, ydot, 2 * n + nf + 2)

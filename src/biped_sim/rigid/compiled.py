@@ -46,6 +46,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from biped_sim.integrate.stepper import make_scratch
 from biped_sim.integrate.tableaus import tableau
@@ -99,7 +100,7 @@ def _empty_plan() -> StepPlan:
 def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
     return StepRecord(
         np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
-        np.zeros((n_stops, 2)), np.zeros(2),
+        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1), np.zeros(2),
     )  # fmt: skip
 
 
@@ -113,7 +114,7 @@ def compile_walker(walker: RigidWalker) -> CompiledWalker:
     return CompiledWalker(params, tableau("dop853"), scratch, t_limit, _empty_plan(), record)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _push(cw: CompiledWalker, t: float, y: np.ndarray) -> None:
     """The next push's velocity jump on y (in place, through sc.y_new) and its record (t, work, normal impulse)."""
     p, rec, plan = cw.params, cw.record, cw.plan
@@ -126,7 +127,7 @@ def _push(cw: CompiledWalker, t: float, y: np.ndarray) -> None:
     rec.counts[APPLIED] = i + 1
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, counters: np.ndarray):
     """Integrate from (t, y) to the phase's guard, a fall or the time limit, stopping at each pending push (one at or
     before t applies at once) for its jump; y ends at the event (in place)."""
@@ -143,7 +144,7 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
         _push(cw, t, y)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
     """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
     p, rec = cw.params, cw.record
@@ -159,7 +160,7 @@ def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch:
     rec.counts[STOPS] = n + 1
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _tripped(cw: CompiledWalker, x: np.ndarray) -> bool:
     """The swing foot's lowest point at a riser's x, below its top (the profile's strike located there)."""
     plan = cw.plan
@@ -181,6 +182,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
     copy_into(x_start, x_minus)
     for i in range(cw.record.counts.shape[0]):  # not a slice assignment: its shape check's message compiles
         cw.record.counts[i] = 0
+    cw.record.work[0] = 0.0
     t = 0.0
     begin_step(p)
     last = n_phases(p) - 1
@@ -305,6 +307,8 @@ def rigid_step(
         step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]
     if sampled:
         step.samples_t, step.samples_x = rec.samples_t[:sampled].copy(), rec.samples_x[:sampled].copy()
+        step.samples_work = rec.samples_w[:sampled].copy()
+    step.element_work = float(rec.work[0])
     if stops:
         step.stop_strikes = [tuple(row) for row in rec.stops[:stops].tolist()]
     return step

@@ -5,6 +5,13 @@ reads and writes (:class:`CompiledWalker`: the walker, the integration's buffers
 and :class:`StepRecord`). :func:`stretch` integrates from a state to the phase's guard, a fall or a stop time (a
 push's, or the step's time limit), sampling on the way; :func:`polish` moves a located guard onto its zero. The
 algorithm (scipy's DOP853, the events, Newton's polish) is described in :mod:`biped_sim.rigid.compiled`.
+
+The joint elements' dissipated work (their dampers') is integrated with the flow, as if it were one more state
+that nothing feeds back on: over an accepted step by the step's own quadrature (DOP853's weights on the power at
+its stages), up to a sample or an event inside the step by Gauss-Legendre on the dense output (8 points: exact
+for a polynomial of degree 15, the linear damper's power on the degree-7 dense output), through a polish by its
+midpoint rule. So the rigid energy audit closes to the integrator's tolerance at any sampling. It stays out of
+the error norm: the states, and every walker's results, are those of the flow alone.
 """
 
 from __future__ import annotations
@@ -32,7 +39,17 @@ from biped_sim.integrate.stepper import (
 from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.ground import clearance, tree_swing_foot
-from biped_sim.rigid.kernels import fall_checks, fall_inlined, guard, guard_inlined, guard_rate, rigid_rhs, step_stages
+from biped_sim.rigid.kernels import (
+    element_power,
+    fall_checks,
+    fall_inlined,
+    guard,
+    guard_inlined,
+    guard_rate,
+    has_elements,
+    rigid_rhs,
+    step_stages,
+)
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
 from biped_sim.rigid.tree_layout import RigidTree
 
@@ -45,6 +62,8 @@ MIN_STEP = 1e-14  # a smaller step means the flow cannot be integrated: the step
 ROOT_TOL = 4.0 * np.finfo(float).eps  # relative width of the final bracket of an event time
 N_EVENTS = 5  # the guard, and at most four fall functions (two legs, the hip, a torso)
 FD_STEP = 1e-7  # the central difference of the profile guard's rate along the flow (as the scipy reference)
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(8)
+GAUSS_NODES, GAUSS_WEIGHTS = 0.5 * (_NODES + 1.0), 0.5 * _WEIGHTS  # Gauss-Legendre on [0, 1]
 
 
 class StepPlan(NamedTuple):
@@ -66,7 +85,9 @@ class StepRecord(NamedTuple):
     pushes: np.ndarray  # (k, 3): t, work (the kinetic energy's jump), the ground's normal impulse
     samples_t: np.ndarray  # (m,)
     samples_x: np.ndarray  # (m, ny)
+    samples_w: np.ndarray  # (m,) the joint elements' dissipated work since the step's start
     stops: np.ndarray  # (s, 2): t, the kinetic energy lost
+    work: np.ndarray  # (1,) the joint elements' dissipated work since the step's start, at its end
     landing: np.ndarray  # (2,): the landing foot's lowest point at the strike, the stance contact at the step's origin
 
 
@@ -101,7 +122,7 @@ def phase_guard(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray) -> flo
     return clearance(foot_x, foot_y, plan.vertices, plan.ends)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.ndarray) -> float:
     """d(guard)/dt along the flow f: analytic for the walker's guards, a central difference (step FD_STEP along f,
     as the scipy reference) for the profile's (sc.k[3] holds the probe)."""
@@ -132,7 +153,7 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
     return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
@@ -140,7 +161,7 @@ def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: 
     return initial_step_size(tab, sc, h0, d1, span)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
@@ -156,7 +177,7 @@ def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarra
     return guard_inlined(cw.params, phase, y) if mode == OWN else phase_guard(cw, phase, mode, y)
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float, y: np.ndarray) -> float:
     """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
     tab, sc = cw.tab, cw.sc
@@ -178,7 +199,7 @@ def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float,
 
 
 @kernel
-def _first_sample(rate: float, t: float) -> int:
+def first_sample(rate: float, t: float) -> int:
     """The first grid index k with k / rate >= t (0 when not sampling)."""
     if rate == 0.0:
         return 0
@@ -188,15 +209,29 @@ def _first_sample(rate: float, t: float) -> int:
     return k
 
 
-@kernel(reference_counts=False)
-def _sample(cw: CompiledWalker, k: int, t: float, h: float, t_end: float, y: np.ndarray) -> int:
+@njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
+def _dense_work(cw: CompiledWalker, theta: float, h: float, y: np.ndarray) -> float:
+    """The joint elements' dissipated work over [t, t + theta h] of the last accepted step (from (t, y), length h):
+    Gauss-Legendre on its dense output, prepared by the caller (sc.y_dense holds the nodes' states)."""
+    sc = cw.sc
+    total = 0.0
+    for i in range(GAUSS_NODES.shape[0]):
+        dense_eval(cw.tab, theta * GAUSS_NODES[i], h, y, sc, sc.y_dense)
+        total += GAUSS_WEIGHTS[i] * element_power(cw.params, sc.y_dense)
+    return theta * h * total
+
+
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
+def _sample(cw: CompiledWalker, k: int, t: float, h: float, t_end: float, y: np.ndarray, elements: bool) -> int:
     """Record the grid points k / rate in [t, t_end) of the last accepted step (from (t, y), length h) on its dense
-    output, prepared by the caller; returns the next grid index. The buffer is sized for a step's whole grid."""
+    output, prepared by the caller, with the elements' work (``elements``: the walker has some); returns the next
+    grid index. The buffer is sized for a step's whole grid."""
     rate, rec = cw.plan.sample_rate, cw.record
     n = rec.counts[SAMPLED]
     while k / rate < t_end and n < rec.samples_t.shape[0]:
         rec.samples_t[n] = k / rate
         dense_eval(cw.tab, (k / rate - t) / h, h, y, cw.sc, rec.samples_x[n])
+        rec.samples_w[n] = rec.work[0] + (_dense_work(cw, (k / rate - t) / h, h, y) if elements else 0.0)
         n += 1
         k += 1
     rec.counts[SAMPLED] = n
@@ -211,8 +246,9 @@ def stretch(
     limit), sampling on the way; y ends at the event or at t_stop (in place). A fresh start, as scipy's solve_ivp
     after a push: the starting step, the events' values at the start."""
     p, tab, sc = cw.params, cw.tab, cw.sc
-    rate = cw.plan.sample_rate
-    k_next = _first_sample(rate, t)
+    rate, work = cw.plan.sample_rate, cw.record.work
+    elements = has_elements(p)
+    k_next = first_sample(rate, t)
     rigid_rhs(p, y, sc.k[0])
     h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
@@ -223,7 +259,7 @@ def stretch(
         h = min(h, t_stop - t)
         if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
             return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
-        finite = step_stages(p, tab, sc, h, y)
+        finite, stage_power = step_stages(p, tab, sc, h, y, elements)  # the work: the step's quadrature
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
         accepted, factor = step_factor(err, tab.error_order, rejected)
@@ -248,11 +284,14 @@ def stretch(
             if first < 0:
                 _prepare_dense(p, tab, h, y, sc)
                 counters[0] += 3
-            k_next = _sample(cw, k_next, t, h, t_end, y)
+            k_next = _sample(cw, k_next, t, h, t_end, y, elements)
         if first >= 0:
+            if elements:
+                work[0] += _dense_work(cw, best, h, y)
             dense_eval(tab, best, h, y, sc, sc.y_dense)
             copy_into(sc.y_dense, y)
             return (STRIKE if first == 0 else FELL), t_end
+        work[0] += h * stage_power
         t = t_end
         copy_into(sc.y_new, y)
         copy_into(sc.k[tab.stages], sc.k[0])
@@ -261,9 +300,10 @@ def stretch(
     return (STALLED if t_stop >= cw.t_limit else REACHED), t
 
 
-@kernel(reference_counts=False)
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
 def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
-    """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2); returns the new t."""
+    """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2), the elements' work by the
+    same midpoint rule; returns the new t."""
     p, sc = cw.params, cw.sc
     f, f_mid = sc.k[1], sc.k[2]
     for _ in range(4):
@@ -281,5 +321,6 @@ def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, c
         counters[0] += 2
         for i in range(x.shape[0]):
             x[i] += dt * f_mid[i]
+        cw.record.work[0] += dt * element_power(p, sc.y_stage)
         t += dt
     return t

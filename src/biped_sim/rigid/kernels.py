@@ -10,6 +10,7 @@ import numpy as np
 from biped_sim.integrate.stepper import Scratch, propagate, stage_input
 from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import inlined, kernel
+from biped_sim.rigid.tree_elements import tree_element_power
 from biped_sim.rigid.tree_kernels import (
     tree_guard,
     tree_guard_rate,
@@ -53,11 +54,14 @@ def rigid_rhs(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> None:
 
 
 @kernel(reference_counts=False)
-def step_stages(tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndarray) -> bool:
+def step_stages(tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndarray, elements: bool) -> tuple[bool, float]:
     """The stages of an explicit Runge-Kutta step of length h from y (their flows in ``sc.k[1:]``, ``k[0]`` = f(y)
     given), its end state in ``sc.y_new`` and the flow there in ``k[stages]``; returns whether the end state is
-    finite. The flow inlined once, in the loop: the tree's arrays are passed once per step, not once per stage."""
+    finite and, for a walker with joint elements (``elements``), the step's quadrature of the power they dissipate
+    (the method's weights b at its stages; times h, their work over the step). The flow inlined once, in the loop:
+    the tree's arrays are passed once per step, not once per stage."""
     finite = True
+    power = tab.b[0] * element_power(tree, y) if elements else 0.0
     for s in range(1, tab.stages + 1):
         at = sc.y_stage
         if s < tab.stages:
@@ -66,7 +70,9 @@ def step_stages(tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndar
             at = sc.y_new
             finite = propagate(tab.b, tab.stages, h, y, sc.k, at)
         _rhs(tree, at, sc.k[s])
-    return finite
+        if elements and s < tab.stages:
+            power += tab.b[s] * element_power(tree, at)
+    return finite, power
 
 
 @kernel(reference_counts=False)
@@ -99,3 +105,15 @@ def fall_checks(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> int:
     for i in range(n):
         out[1 + i] = fall_inlined(tree, i, x)
     return n
+
+
+@kernel
+def has_elements(tree: RigidTree) -> bool:
+    """The walker has joint elements (springs, dampers): the step integrates their dissipated work."""
+    return tree.elements.shape[0] > 0
+
+
+@kernel(reference_counts=False)
+def element_power(tree: RigidTree, x: np.ndarray) -> float:
+    """Power the joint elements dissipate at state x (>= 0), the integrand of their work."""
+    return tree_element_power(tree, x)

@@ -64,6 +64,10 @@ class SpaceSection:
         """A post-strike state's section coordinates."""
         return np.array([x[i] for i in self.indices])
 
+    def of_keys(self, keys: dict[str, float]) -> np.ndarray:
+        """The section coordinates of a post-strike state given by its keys (those missing 0)."""
+        return self.to_section(np.array([keys.get(name, 0.0) for name in STATE_NAMES]))
+
     def from_section(self, z: np.ndarray) -> np.ndarray:
         """The post-strike state of section coordinates ``z``: the hinge angle that puts the trailing foot on the
         ground (secant iterations from minus twice the pitch)."""
@@ -197,6 +201,20 @@ def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> Limit
     return _cycle(step_map, z, converged, iterations, residual, how, tried)
 
 
+def space_cycle_from(config: Config, keys: dict[str, float]) -> LimitCycle | None:
+    """The period-1 gait by Newton from the post-strike state ``keys`` (a start near the gait: a second, where the
+    search without a guess takes 10-20 CPU s); None when Newton does not converge or the walker falls on the way."""
+    step_map = SpaceMap(space_walker_model(config))
+    try:
+        z, converged, iterations, residual = newton_fixed_point(
+            step_map, step_map.section.of_keys(keys), RIGID_TOLERANCE
+        )
+    except StepFailedError:
+        return None
+    how = "the configured start"
+    return _cycle(step_map, z, converged, iterations, residual, how, how) if converged else None
+
+
 def space_branch(configs: list[Config], settle_steps: int = SETTLE_STEPS) -> list[LimitCycle]:
     """One branch of gaits through a series of walkers (e.g. a foot radius stepped up): the first walker's gait
     found by :func:`space_limit_cycle`, each next one by Newton from the last fixed point (small changes keep to
@@ -250,7 +268,7 @@ def _cycle(
             + ", ".join(section.names),
             "the hinge angle is fixed by the trailing foot on the ground (not a coordinate)"
             + ("" if section.heading else "; level ground: heading left out, its multiplier 1 appended"),
-            f"step map: scipy DOP853 over the compiled flow, rtol {RTOL:g}",
+            f"step map: compiled DOP853, rtol {RTOL:g}",
             f"multipliers: central differences, relative step {FD_STEP:g}",
             "touchdown: the state just before the strike (not mirrored)",
         ],

@@ -18,6 +18,7 @@ function is the smaller of the hip's height above ``fall_height`` and the bank's
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from biped_sim.integrate.dense import (
     dop853_extra_stage_input,
     illinois_point,
     illinois_update,
+    sample_dense,
 )
 from biped_sim.integrate.stepper import (
     Scratch,
@@ -40,20 +42,39 @@ from biped_sim.integrate.stepper import (
 )
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
-from biped_sim.rigid.integration import MIN_STEP, ROOT_TOL, copy_into
+from biped_sim.rigid.integration import MIN_STEP, ROOT_TOL, copy_into, first_sample
 from biped_sim.rigid.space_kernels import bottom, rotations, space_flow
 from biped_sim.rigid.space_model import N_STATE
 from biped_sim.rigid.step import ATOL, RTOL
 
-GUARD, FELL, STALLED = 0, 1, 2  # how a phase ends (:func:`space_phase`)
-PHASE_NAMES = ("guard", "fell", "stalled")
+GUARD, FELL, STALLED, REACHED = 0, 1, 2, 3  # how a phase ends (:func:`space_phase`); REACHED: its stop time
+PHASE_NAMES = ("guard", "fell", "stalled", "until")
 FALL_BANK = 1.2  # [rad] a bank past it is a fall
 N_SPACE_EVENTS = 2  # the phase's guard, the fall function
+SAMPLED, FLOWS, ACCEPTED = 0, 1, 2  # PhaseRecord.counts: samples taken, flow calls, accepted steps
 
 
-def space_scratch() -> tuple[Tableau, Scratch]:
-    """The integration's tableau (DOP853) and buffers, made once per step map."""
-    return tableau("dop853"), make_scratch(N_STATE, 0, N_SPACE_EVENTS)
+class PhaseRecord(NamedTuple):
+    """What the phases of a step write besides their end state: the samples on the grid k / rate of the step's
+    clock and the integrator's counters (``counts``, reset by the caller)."""
+
+    counts: np.ndarray  # (3,) int64: samples, flow calls, accepted steps
+    samples_t: np.ndarray  # (m,)
+    samples_x: np.ndarray  # (m, N_STATE)
+
+
+class SpaceScratch(NamedTuple):
+    """The integration's tableau (DOP853), buffers and record, made once per step map or run."""
+
+    tab: Tableau
+    sc: Scratch
+    record: PhaseRecord
+
+
+def space_scratch(samples: int = 0) -> SpaceScratch:
+    """The integration's tableau, buffers and a record with room for ``samples`` samples a step."""
+    record = PhaseRecord(np.zeros(3, dtype=np.int64), np.empty(samples), np.empty((samples, N_STATE)))
+    return SpaceScratch(tableau("dop853"), make_scratch(N_STATE, 0, N_SPACE_EVENTS), record)
 
 
 @kernel
@@ -114,6 +135,15 @@ def _root(
 
 
 @kernel
+def _prepare_dense(p: np.ndarray, tab: Tableau, sc: Scratch, h: float, y: np.ndarray) -> None:
+    """DOP853's dense-output coefficients of the last step (three extra stages of the flow)."""
+    for e in range(3):
+        row = dop853_extra_stage_input(tab, h, y, sc, e)  # fills sc.y_stage
+        copy_into(space_flow(p, sc.y_stage), sc.k[row])
+    dop853_coefficients(tab, h, y, sc)
+
+
+@kernel
 def _first_event(
     p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, fall_height: float, t: float, h: float, y: np.ndarray
 ) -> tuple[int, float]:
@@ -123,10 +153,7 @@ def _first_event(
     for j in range(N_SPACE_EVENTS):
         if sc.g_old[j] >= 0.0 and sc.g_new[j] <= 0.0:
             if first < 0:
-                for e in range(3):
-                    row = dop853_extra_stage_input(tab, h, y, sc, e)  # fills sc.y_stage
-                    copy_into(space_flow(p, sc.y_stage), sc.k[row])
-                dop853_coefficients(tab, h, y, sc)
+                _prepare_dense(p, tab, sc, h, y)
             theta = _root(p, tab, sc, phase, fall_height, j, t, h, y)
             if theta < best:
                 first, best = j, theta
@@ -146,35 +173,64 @@ def _attempt(p: np.ndarray, tab: Tableau, sc: Scratch, h: float, y: np.ndarray) 
 
 
 @kernel
+def _accepted(
+    p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, fall_height: float, rate: float, k: int, t: float, h: float,
+    y: np.ndarray, rec: PhaseRecord,
+) -> tuple[int, float, int]:  # fmt: skip
+    """After an accepted step from (t, y) of length h: its first event (-1: none) and where (theta; 2.0: none),
+    the samples up to there (or to t + h) taken; returns them and the next grid index."""
+    rec.counts[ACCEPTED] += 1
+    _events(p, phase, fall_height, sc.y_new, sc.g_new)
+    first, theta = _first_event(p, tab, sc, phase, fall_height, t, h, y)
+    rec.counts[FLOWS] += 0 if first < 0 else 3
+    t_end = t + theta * h if first >= 0 else t + h
+    if rate > 0.0 and k / rate < t_end:
+        if first < 0:
+            _prepare_dense(p, tab, sc, h, y)
+            rec.counts[FLOWS] += 3
+        n = sample_dense(tab, sc, rate, k, t, h, t_end, y, rec.samples_t, rec.samples_x, rec.counts[SAMPLED])
+        k += n - rec.counts[SAMPLED]
+        rec.counts[SAMPLED] = n
+    return first, theta, k
+
+
+@kernel
 def space_phase(
-    p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, t: float, t_limit: float, fall_height: float, y: np.ndarray
-) -> tuple[int, float]:
-    """Integrate the stance phase ``phase`` from (t, y) to its guard (GUARD), a fall (FELL) or ``t_limit``
-    (STALLED, as a step too short to take); y ends there (in place). Returns (how, t)."""
+    p: np.ndarray, scratch: SpaceScratch, phase: int, t: float, t_stop: float, t_limit: float, fall_height: float,
+    rate: float, y: np.ndarray,
+) -> tuple[int, float]:  # fmt: skip
+    """Integrate the stance phase ``phase`` from (t, y) to its guard (GUARD), a fall (FELL), ``t_stop`` (REACHED, or
+    STALLED when it is the step's time limit ``t_limit``; also a step too short to take); y ends there (in place).
+    Samples on the grid k / ``rate`` (0: none) of [t, its end) go to ``scratch.record``. A fresh start each call, as
+    scipy's solve_ivp after a push: the starting step, the events' values at the start. Returns (how, t)."""
+    tab, sc, rec = scratch
+    k = first_sample(rate, t)
     copy_into(space_flow(p, y), sc.k[0])
-    h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, t_limit - t)
+    h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, t_stop - t)
     copy_into(space_flow(p, sc.y_stage), sc.k[1])
-    h = initial_step_size(tab, sc, h0, d1, t_limit - t)
+    h = initial_step_size(tab, sc, h0, d1, t_stop - t)
+    rec.counts[FLOWS] += 2
     _events(p, phase, fall_height, y, sc.g_old)
-    rejected = False
-    while t < t_limit:
-        h = min(h, t_limit - t)
+    rejected, stalled = False, STALLED if t_stop >= t_limit else REACHED
+    while t < t_stop:
+        clipped = h >= t_stop - t
+        h = min(h, t_stop - t)
         if h < MIN_STEP:
-            return STALLED, t
+            return (stalled if clipped else STALLED), t
         accepted, factor = step_factor(_attempt(p, tab, sc, h, y), tab.error_order, rejected)
+        rec.counts[FLOWS] += tab.stages
         rejected = not accepted
         if not accepted:
             h *= factor
             continue
-        _events(p, phase, fall_height, sc.y_new, sc.g_new)
-        first, theta = _first_event(p, tab, sc, phase, fall_height, t, h, y)
+        first, theta, k = _accepted(p, tab, sc, phase, fall_height, rate, k, t, h, y, rec)
         if first >= 0:
             dense_eval(tab, theta, h, y, sc, sc.y_dense)
             copy_into(sc.y_dense, y)
             return (GUARD if first == 0 else FELL), t + theta * h
-        t += h
+        t = t_stop if clipped else t + h
         copy_into(sc.y_new, y)
         copy_into(sc.k[tab.stages], sc.k[0])
         copy_into(sc.g_new, sc.g_old)
         h *= factor
-    return STALLED, t
+    return stalled, t

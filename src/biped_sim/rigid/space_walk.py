@@ -22,11 +22,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import OdeSolution
 
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_dynamics import energy, energy_terms, hip_push
+from biped_sim.rigid.space_integration import (
+    ACCEPTED,
+    FLOWS,
+    GUARD,
+    PHASE_NAMES,
+    REACHED,
+    SAMPLED,
+    SpaceScratch,
+    space_phase,
+)
 from biped_sim.rigid.space_model import MIRROR, SpaceModel
-from biped_sim.rigid.space_step import SpaceStep, clearance, passed, phase, struck
+from biped_sim.rigid.space_step import SpaceStep, step_time_limit, struck
 
 MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0])  # a state's signs under the mirror
 
@@ -86,45 +96,37 @@ class WalkStep:
     accepted_steps: int = 0
 
 
-def _samples(segments: list[tuple[float, float, OdeSolution]], end: float, rate: float) -> tuple[np.ndarray, ...]:
-    """The states every 1 / ``rate`` from 0 up to (not at) ``end`` on the segments' dense outputs (a segment
-    begins at a push: a sample at its time is the next segment's first)."""
-    times = np.arange(0.0, end, 1.0 / rate)
-    states = np.empty((len(times), 10))
-    for t0, t1, solution in segments:
-        inside = (times >= t0) & (times < t1)
-        if inside.any():
-            states[inside] = solution(times[inside]).T
-    return times, states
-
-
 def walk_step(
     model: SpaceModel,
     params: np.ndarray,
+    scratch: SpaceScratch,
     x_start: np.ndarray,
     sample_rate: float,
     pushes: Sequence[tuple[float, np.ndarray]] = (),
 ) -> WalkStep:
     """One step from post-strike state ``x_start`` (its contact point the origin) with the samples and the pushes
     pending (time on the step's clock, impulse in the model's frame, in time order; those after the step's end
-    stay pending)."""
+    stay pending), integrated as the step map's (``scratch``: :func:`~biped_sim.rigid.space_integration.space_scratch`
+    with room for a step's samples)."""
     x = np.array(x_start, dtype=float)
     x[8:] = 0.0
-    t, how, segments, applied, counters = 0.0, "guard", [], [], np.zeros(2, dtype=int)
-    for guard in (passed, clearance(model)):
-        how = "until"
-        while how == "until":
-            until = pushes[len(applied)][0] if len(applied) < len(pushes) else None
-            if until is None or until > t:
-                ended = phase(model, params, x, t, guard, until, dense=True)
-                segments.append((t, ended.t, ended.solution))
-                how, t, x = ended.how, ended.t, ended.x
-                counters += (ended.rhs_evals, ended.accepted_steps)
-            if how == "until":
+    limit, fall_height = step_time_limit(model), FALL_HIP_FRACTION * model.leg_length
+    record = scratch.record
+    record.counts[:] = 0
+    t, how, applied = 0.0, GUARD, []
+    for phase in (0, 1):
+        how = REACHED
+        while how == REACHED:
+            stop = min(pushes[len(applied)][0], limit) if len(applied) < len(pushes) else limit
+            if stop > t:
+                how, t = space_phase(params, scratch, phase, t, stop, limit, fall_height, sample_rate, x)
+            if how == REACHED:
                 before = energy(model, x)
                 x, normal = hip_push(model, x, pushes[len(applied)][1])
                 applied.append((t, energy(model, x) - before, normal))
-        if how != "guard":
+        if how != GUARD:
             break
-    step = struck(model, x, t) if how == "guard" else SpaceStep(how, x, None, t, math.nan)  # type: ignore[arg-type]
-    return WalkStep(step, *_samples(segments, t, sample_rate), applied, int(counters[0]), int(counters[1]))
+    step = struck(model, x, t) if how == GUARD else SpaceStep(PHASE_NAMES[how], x, None, t, math.nan)  # type: ignore[arg-type]
+    n = record.counts[SAMPLED]
+    samples = record.samples_t[:n].copy(), record.samples_x[:n].copy()
+    return WalkStep(step, *samples, applied, int(record.counts[FLOWS]), int(record.counts[ACCEPTED]))

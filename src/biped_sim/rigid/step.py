@@ -36,3 +36,5 @@ class RigidStep:
     accepted_steps: int = 0  # DOP853 steps taken
     pushes: list[tuple[float, float, float]] = field(default_factory=list)  # applied: (t, work, ground normal impulse)
     stop_strikes: list[tuple[float, float]] = field(default_factory=list)  # joint stops struck: (t, energy lost)
+    element_work: float = 0.0  # the joint elements' (dampers') dissipated work over the step, integrated with it
+    samples_work: np.ndarray = field(default_factory=lambda: np.zeros(0))  # the same since the step's start

@@ -9,6 +9,7 @@ heel strike's relabelling. :class:`~biped_sim.rigid.tree.RigidWalker` is the mod
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
 
@@ -180,6 +181,42 @@ def tree_elements(tree: Tree, d: WalkerDescription) -> list[list[float]]:
     ]
 
 
+def _is_odd(law: str, params: np.ndarray) -> bool:
+    """The element's law turned around: its torque odd and its energy even in (theta, thetadot), so acting on the
+    pair's other body it is the same element (a linear spring at rest angle 0, a damper); probed at one state."""
+    registered = JOINT_ELEMENT_LAWS[law]  # its plain Python (a kernel has no Python entry point)
+    function, energy = (getattr(f, "py_func", f) for f in (registered.function, registered.energy))
+    theta, rate = 0.37, -1.3
+    torque = function(theta, rate, params)[0]
+    return math.isclose(function(-theta, -rate, params)[0], -torque, rel_tol=1e-12) and math.isclose(
+        energy(-theta, params), energy(theta, params), rel_tol=1e-12
+    )
+
+
+def check_elements_mirrored(d: WalkerDescription, elements: list[list[float]], perm: list[int]) -> None:
+    """Refuse a joint element the heel strike's relabelling would move onto another body.
+
+    At a strike the legs swap coordinates (``perm``) while every element stays on its coordinates, so after it each
+    element acts where its image under the swap would: the walker is the same only if every element's image is an
+    element of the walker (a spring to each leg alike, or the element acting between the two swapped bodies with a
+    law that is the same turned around). Otherwise (a hip spring with a nonzero rest angle, a torso spring to one
+    leg only, a leg held against the ground) it would act on the other physical leg after every strike, which the
+    compliant run does not do, and the step map of limit cycles and basins would not be one map."""
+    keys = [(law, child, other, *values) for law, child, other, *values in elements]
+    present = Counter(keys)
+    for (joint, element, _), (law, child, other, *values) in zip(d.joint_elements(), keys, strict=True):
+        image = (perm[int(child)], -1 if other < 0 else perm[int(other)])
+        turned_around = image == (other, child) and _is_odd(element.law, np.array(values))
+        if turned_around or present[(law, *image, *values)] > 0:
+            continue
+        raise ConfigError(
+            "walker.description.joints",
+            f"{joint.name}.{element.name}: rigid dynamics swaps the legs' coordinates at each heel strike and this "
+            "element has no mirror image on the other leg, so it would act on the other leg after every strike "
+            "(give the other leg the same element, or use dynamics: compliant)",
+        )
+
+
 def _fall_angles(tree: Tree, d: WalkerDescription, config: Config) -> list[float]:
     """Each coordinate's fall angle from the slope normal: a leg's body simulation.fall_leg_angle, a body off the
     legs (a torso) its own ``fall_angle`` (by default the same), as in compliant dynamics."""
@@ -236,6 +273,7 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> RigidTr
     radius = tree.feet[0].radius
     gx, gy = gravity_vector(gravity, config.ground.slope)
     elements = tree_elements(tree, d)
+    check_elements_mirrored(d, elements, perm)
     records, w = _points(tree, rows, light, n)
     coords = list(zip(perm, shift, *(map(bool, f) for f in flags), _fall_angles(tree, d, config), strict=True))
     return RigidTree(

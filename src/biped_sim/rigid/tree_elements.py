@@ -12,7 +12,7 @@ from biped_sim.kernel import kernel
 from biped_sim.rigid.tree_layout import RigidTree
 
 
-@kernel
+@kernel(reference_counts=False)
 def joint_element(
     elements: np.ndarray, params: np.ndarray, e: int, q: np.ndarray, qd: np.ndarray
 ) -> tuple[int, int, float, float]:
@@ -26,7 +26,7 @@ def joint_element(
     return child, other, tau, power
 
 
-@kernel
+@kernel(reference_counts=False)
 def element_forces(elements: np.ndarray, params: np.ndarray, q: np.ndarray, qd: np.ndarray, forces: np.ndarray) -> None:
     """Add the joint elements' torques to the generalized forces: with absolute angles as coordinates a couple tau
     on (child, other) is tau on the child's coordinate and -tau on the other's, none on the ground (the tree's

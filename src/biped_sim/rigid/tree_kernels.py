@@ -105,7 +105,7 @@ def _assemble(tree: RigidTree, t: int, m: int, qd: np.ndarray, flow: bool, relea
     return used
 
 
-@kernel
+@kernel(reference_counts=False)
 def _solve(a: np.ndarray, v: np.ndarray, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix a for the vector at v[r:], in place: Cramer's rule up to
     2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the constrained system is

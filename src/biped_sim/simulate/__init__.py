@@ -46,7 +46,16 @@ __all__ = [
     "prepare_model",
     "run",
     "simulate",
+    "study_formulation",
 ]
+
+
+def study_formulation(config: Config) -> str:
+    """The formulation a study's runs use: minimal coordinates for a planar compliant config (the same walker, the
+    same equations, fewer coordinates and no constraint drift, so each of a study's many runs is cheaper), else
+    the config's own."""
+    kind = config.formulation.kind
+    return "minimal" if kind == "planar" and config.dynamics == "compliant" else kind
 
 
 def initial_state(config: Config) -> InitialState | dict[str, float]:

@@ -1,13 +1,18 @@
-"""A first run's measures compiled in a second process, while this one compiles the integration loop.
+"""A first run's measures and the loop's late callees compiled in a second process, while this one compiles the loop.
 
 On an empty compile cache a run compiles one function at a time (numba's compiler lock holds a process to one
 thread): the integration loop first, then, after the integration, its measures (the step table and every channel
 of its files: the measure loops and the twins Python calls). The measures do not depend on the integration, only
-on the types of its arrays, so :func:`prepare_compiling_aside` starts a process that measures a stand-in of the
-run (:func:`stand_in`: two samples and two heel strikes of the model in its start state) and writes what it
-compiles to the on-disk cache, on a second core while this process compiles the loop; the run then loads its
-measures from the cache (:func:`join`). It does so only when building the model compiled something (a cold
-cache for the run's group) and the process may use more than one core; on a warm cache the run starts no process.
+on the types of its arrays, so :func:`prepare_compiling_aside` forks a process that writes to the on-disk cache,
+on a second core while this process compiles the loop: first the contact channels (their tree, the contact
+forces, is the right-hand side's, the largest the loop's compile reaches early), then the loop's own kernels
+that its compile reaches last (:func:`compile_loop_callees`), then the measures of a stand-in of the run
+(:func:`stand_in`: two samples and two heel strikes of the model in its start state). The loop's compile and the
+run's measures then load them from the cache (:func:`join` waits for the process before the run is measured).
+It does so only when building the model compiled something (a cold cache for the run's group) and the process
+may use more than one core; on a warm cache the run starts no process. A fork, not a new interpreter: the
+process starts at once, with the model and everything the build compiled, rather than some 2.5 CPU s of imports
+later.
 """
 
 from __future__ import annotations
@@ -16,11 +21,19 @@ import signal
 from multiprocessing import get_context
 from multiprocessing.process import BaseProcess
 
+import numpy as np
+
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config
-from biped_sim.integrate.driver import Integration, finish_integration
+from biped_sim.integrate import blowup, dense, recorder, stepper
+from biped_sim.integrate.driver import STIFF_METHODS, Integration, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
+from biped_sim.integrate.tableaus import tableau
+from biped_sim.kernel import Kernel, compile_for
+from biped_sim.measure.channels import contact_channels
 from biped_sim.measure.steps import step_table
+from biped_sim.multibody import events
+from biped_sim.multibody.dispatch import contact_buffers, make_workspace
 from biped_sim.rigid.start import RigidStart
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
@@ -43,6 +56,40 @@ def stand_in(model: BuiltModel) -> Integration:
     return finish_integration(rec, 1.0)
 
 
+def loop_callees(config: Config, model: BuiltModel) -> tuple[tuple[Kernel, tuple[object, ...]], ...]:
+    """The explicit loop's own kernels with arguments of the types it calls them with, those its compile reaches
+    last first (none for a stiff method, which has no loop); the arguments come from the driver's constructors."""
+    if config.integrator.method in STIFF_METHODS:
+        return ()
+    system, y = model.system, np.array(model.y0, dtype=np.float64)
+    modes = np.array(model.modes0, dtype=np.float64)
+    sc = stepper.make_scratch(len(y), len(modes), events.event_count(system))
+    rec, tab = make_recorder(len(y), len(modes), 1, 1, 0), tableau(config.integrator.method)
+    work = make_workspace(system)
+    return (
+        (blowup.fall, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, 1)),
+        (events.system_is_leading, (y, system, 0)),
+        (events.system_update_modes, (0.0, y, system, modes, contact_buffers(system))),
+        (dense.dense_eval, (tab, 0.0, 0.0, y, sc, sc.y_new)),
+        (dense.dense_coefficients, (tab, 0.0, y, sc)),
+        (stepper._rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
+        (recorder.has_room, (rec, len(modes))),
+        (recorder.record_sample, (rec, 0.0, y, modes)),
+    )
+
+
+def compile_loop_callees(config: Config, model: BuiltModel) -> None:
+    """Compile (and cache) the explicit loop's own kernels (:func:`loop_callees`), those it reaches last first.
+
+    The run's process compiles the loop (:func:`~biped_sim.integrate.explicit.advance`) while this one runs:
+    numba's front end first works over the loop's whole inlined body, then types it from its start, compiling
+    each kernel at its first call, or loading it from the on-disk cache if another process has written it. The
+    late callees (the fall's checks, the event update, the dense output) compiled here are in the cache by then.
+    """
+    for function, args in loop_callees(config, model):
+        compile_for(function, args)
+
+
 def measure_stand_in(config: Config, model: BuiltModel) -> None:
     """Everything a run of ``model`` measures (its file's channels and its summary), over :func:`stand_in`."""
     run = stand_in(model)
@@ -51,10 +98,12 @@ def measure_stand_in(config: Config, model: BuiltModel) -> None:
     _ = result.summary
 
 
-def _measure_quietly(config: Config, model: BuiltModel) -> None:
-    """:func:`measure_stand_in` in the second process, which exits without a word if it fails: the run then
-    compiles its measures itself (and reports any error of its own)."""
+def _compile_quietly(config: Config, model: BuiltModel) -> None:
+    """The contact channels, :func:`compile_loop_callees`, :func:`measure_stand_in`, in the second process, which
+    exits without a word if it fails: the run then compiles them itself (and reports any error of its own)."""
     try:
+        contact_channels(model, stand_in(model))  # the contact forces: the loop's compile reaches them early
+        compile_loop_callees(config, model)
         measure_stand_in(config, model)
     except Exception:  # the run measures for real and reports what went wrong
         raise SystemExit(1) from None
@@ -70,8 +119,8 @@ def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | S
         model = prepare_model(config)
     if not compiled or not isinstance(model, BuiltModel) or available_cores() < 2:
         return model, None
-    process = get_context("spawn").Process(target=_measure_quietly, args=(config, model), daemon=True)
-    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: the new interpreter ignores Ctrl-C
+    process = get_context("fork").Process(target=_compile_quietly, args=(config, model), daemon=True)
+    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: the forked process ignores Ctrl-C
     try:
         process.start()
     finally:

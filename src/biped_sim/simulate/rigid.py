@@ -216,11 +216,12 @@ def walk(config: Config, start: RigidStart, progress: Callable[[float], None] | 
         else ProfileStrike(walker, ground, Footing(-walker.contact_point(x[: walker.n_q])[0], 0.0))
     )
     evals = accepted = 0
+    work = 0.0  # the joint elements' dissipated work since the run's start, at the step's start
     while True:
         step_index = len(trace.strike_time)
         finished = t0 >= t_end or (max_steps is not None and step_index >= max_steps)
         if finished or time.monotonic() > deadline:
-            trace.add_samples(np.array([t0]), x, step_index)  # the state the run ends on, just after a strike
+            trace.add_samples(np.array([t0]), x, step_index, work)  # the state the run ends on, after a strike
             if finished:
                 return trace, WalkEnd("walking", None, None, t0, evals, accepted)
             return trace, WalkEnd("timeout", TIMEOUT_REASON, t0, t0, evals, accepted)
@@ -233,12 +234,14 @@ def walk(config: Config, start: RigidStart, progress: Callable[[float], None] | 
         local = step.samples_t < step.period  # the strike (or fall) state is recorded below, not interpolated
         t_samples = t0 + step.samples_t[local]
         kept = t_samples <= t_end
-        trace.add_samples(t_samples[kept], step.samples_x[local][kept], step_index)
+        trace.add_samples(
+            t_samples[kept], step.samples_x[local][kept], step_index, work + step.samples_work[local][kept]
+        )
         t_step_end = t0 + step.period
         if t_step_end > t_end:
             return trace, WalkEnd("walking", None, None, t_end, evals, accepted)
         if step.status != "strike" or step.x_plus is None:
-            trace.add_samples(np.array([t_step_end]), step.x_minus, step_index)
+            trace.add_samples(np.array([t_step_end]), step.x_minus, step_index, work + step.element_work)
             return trace, WalkEnd("fell", fall_reason(walker, step), t_step_end, t_step_end, evals, accepted)
         trace.strike_time.append(t_step_end)
         trace.strike_pre.append(step.x_minus)
@@ -247,7 +250,7 @@ def walk(config: Config, start: RigidStart, progress: Callable[[float], None] | 
         if profile is not None:
             profile = profile.after(step.x_minus, step.x_plus)
             trace.strike_levels.append(profile.footing.level)
-        t0, x = t_step_end, step.x_plus
+        t0, x, work = t_step_end, step.x_plus, work + step.element_work
         if progress is not None:
             progress(t0)
 

@@ -19,6 +19,7 @@ runs' lateral columns (:mod:`biped_sim.measure.space_rigid`).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,17 +36,19 @@ from biped_sim.io.run_files import Channel, TrajectoryFile
 from biped_sim.measure.rigid import RigidEnergy
 from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, leg_attitudes, space_samples, space_step_table
 from biped_sim.measure.steps import StepTable
+from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
+from biped_sim.rigid.space_integration import FALL_BANK, space_scratch
 from biped_sim.rigid.space_kernels import space_params
 from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, pose
-from biped_sim.rigid.space_step import FALL_BANK, FALL_HIP_FRACTION, SpaceStep
+from biped_sim.rigid.space_step import SpaceStep, step_time_limit
 from biped_sim.rigid.space_walk import Frame, walk_step
 from biped_sim.rigid.step import MAX_STEP_TIME, RTOL
 from biped_sim.simulate.result import RunResult, ordered_pushes, wall_deadline
 from biped_sim.simulate.rigid import RIGID_ENERGY_TERMS, WalkEnd, summarize_rigid
-from biped_sim.walkers.space_walker import check_initial
+from biped_sim.walkers.space_walker import BODY_NAMES, check_initial
 
-INTEGRATOR = f"scipy DOP853 rtol {RTOL:g} over the compiled flow (rigid, in space)"
+INTEGRATOR = f"DOP853 rtol {RTOL:g} (rigid, in space)"
 STATE_UNITS = "rad, rad/s, m (see state_names)"
 
 
@@ -169,8 +172,9 @@ class SpaceRunResult(RunResult):
             Channel("strikes/post_impact", self._strike_states(self.trace.strike_post, 1), STATE_UNITS, False)
         )
         return TrajectoryFile(
-            self.time, "s", self.state, list(STATE_NAMES), STATE_UNITS, channels, root_attrs={"dynamics": "rigid"}
-        )
+            self.time, "s", self.state, list(STATE_NAMES), STATE_UNITS, channels, root_attrs={"dynamics": "rigid"},
+            group_attrs={"attitude": {"bodies": BODY_NAMES}},
+        )  # fmt: skip
 
 
 def fall_reason(model: SpaceModel, step: SpaceStep) -> str:
@@ -188,6 +192,7 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
     model, params = start.model, space_params(start.model)
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
     deadline, pushes = wall_deadline(config), ordered_pushes(config)
+    scratch = space_scratch(math.ceil(step_time_limit(model) * rate) + 1)
     trace = SpaceTrace(frames=[Frame(np.zeros(3), 1.0)])
     t0, x, evals, accepted = 0.0, start.state, 0, 0
     while True:
@@ -200,7 +205,7 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
                 status, None if finished else TIMEOUT_REASON, None if finished else t0, t0, evals, accepted
             )
         pending = [(at - t0, frame.impulse(impulse)) for at, impulse in pushes[len(trace.pushes) :]]
-        walked = walk_step(model, params, x, rate, pending)
+        walked = walk_step(model, params, scratch, x, rate, pending)
         trace.pushes += [(t0 + at, work, normal) for at, work, normal in walked.pushes]
         evals, accepted = evals + walked.rhs_evals, accepted + walked.accepted_steps
         step, kept = walked.step, t0 + walked.samples_t <= t_end

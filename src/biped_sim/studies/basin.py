@@ -54,7 +54,7 @@ from biped_sim.rigid.compiled import STRIKE, walk_starts
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.limit_cycle import limit_cycle
-from biped_sim.studies.space_basin import basin_keys, space_cells
+from biped_sim.studies.space_basin import basin_keys, space_cells, space_gait
 from biped_sim.studies.tasks import results_as_done
 
 KEY_PREFIX = "simulation.initial."
@@ -328,9 +328,10 @@ def gait_target(spec: BasinSpec, cycle: LimitCycle | None) -> dict[str, float] |
 
 
 def find_gait(config: Config) -> LimitCycle | None:
-    """The period-1 gait from the config's start (None when there is none to find)."""
+    """The period-1 gait from the config's start (None when there is none to find); a walker in space's near its
+    start when one is given (:func:`~biped_sim.studies.space_basin.space_gait`)."""
     try:
-        return limit_cycle(config)
+        return space_gait(config) if capabilities(config.walker.kind).space else limit_cycle(config)
     except (ConfigError, StepFailedError):
         return None
 

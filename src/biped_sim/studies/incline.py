@@ -129,6 +129,8 @@ def spatial_sphere(
         foot_center=np.zeros((1, 3)),
         foot_axis=np.zeros((1, 3)),  # a sphere
         foot_radius=np.array([RADIUS]),
+        foot_tube=np.zeros(1),
+        foot_quadric=np.zeros((1, 3, 3)),
         foot_partner=np.array([-1], dtype=np.int64),
         gravity=np.array([GRAVITY * math.sin(slope), -GRAVITY * math.cos(slope), 0.0]),
         baumgarte=np.array([baumgarte.alpha, baumgarte.beta]),

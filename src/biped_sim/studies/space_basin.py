@@ -14,8 +14,8 @@ import numpy as np
 from biped_sim.config import Config
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.limit_cycle import StepFailedError
-from biped_sim.rigid.space_cycle import SpaceMap, SpaceSection, space_walker_model
+from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
+from biped_sim.rigid.space_cycle import SpaceMap, SpaceSection, space_cycle_from, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_model import STATE_NAMES
 
 
@@ -24,6 +24,15 @@ def basin_keys(config: Config) -> tuple[str, ...]:
     if capabilities(config.walker.kind).space:
         return SpaceSection(space_walker_model(config)).names
     return config.initial_keys()
+
+
+def space_gait(config: Config) -> LimitCycle:
+    """The gait a basin in space converges to: Newton from the configured start when ``simulation.initial`` gives
+    one (:func:`~biped_sim.rigid.space_cycle.space_cycle_from`), else, or when that fails, the search without a
+    guess (:func:`~biped_sim.rigid.space_cycle.space_limit_cycle`)."""
+    initial = config.simulation.initial
+    near = space_cycle_from(config, initial) if isinstance(initial, dict) else None
+    return near or space_limit_cycle(config)
 
 
 def space_cells(
@@ -37,12 +46,7 @@ def space_cells(
     base = initial if isinstance(initial, dict) else gait
     if base is None:
         raise ConfigError("simulation.initial", "rigid_limit_cycle: no gait found to map the basin around")
-    cells = []
-    for start in starts:
-        keys = {**base, **start}
-        z = section.to_section(np.array([keys.get(name, 0.0) for name in STATE_NAMES]))
-        cells.append(_walk(step_map, z, steps))
-    return cells
+    return [_walk(step_map, section.of_keys({**base, **start}), steps) for start in starts]
 
 
 def _walk(step_map: SpaceMap, z: np.ndarray, steps: int) -> tuple[int, dict[str, float] | None]:

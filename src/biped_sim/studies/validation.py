@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -234,8 +234,13 @@ def energy_balance_checks() -> list[Check]:
     ]
 
 
-def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None) -> tuple[list[Check], dict[str, Any]]:
-    """Run every check, write report.md and report.json into ``out_dir``; returns the checks and extras."""
+def run_validation(
+    out_dir: Path,
+    progress: Callable[[str], None] | None = None,
+    extra: Sequence[tuple[str, Callable[[], list[Check]]]] = (),
+) -> tuple[list[Check], dict[str, Any]]:
+    """Run every check (then the ``extra`` stages: (name, checks) of the layers above, as the MuJoCo comparison),
+    write report.md and report.json into ``out_dir``; returns the checks and extras."""
     refs = load_rigid_references()
     start = time.perf_counter()
     checks: list[Check] = []
@@ -252,6 +257,7 @@ def run_validation(out_dir: Path, progress: Callable[[str], None] | None = None)
         ("energy balance", energy_balance_checks),
         ("fit recovery", fit_recovery_checks),
         ("uncertainty: Sobol indices, mean period, rimless wheel MFPT", uncertainty_checks),
+        *extra,
     ]
     for name, stage in stages:
         if progress:

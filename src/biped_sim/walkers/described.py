@@ -59,6 +59,7 @@ class Tree:
     foot_centre: np.ndarray  # (nf, 2) in the body frame
     foot_radius: np.ndarray  # (nf,)
     foot_lateral: np.ndarray  # (nf,) along the joints' axis (the spatial formulation's)
+    joint_lateral: np.ndarray  # (nb,) each body's origin along z' from its joint's ``at`` (the spatial formulation's)
     foot_names: list[str]
     legs: list[list[int]]  # body indices, hip down
 
@@ -107,11 +108,11 @@ def resolve_tree(description: WalkerDescription) -> Tree:
     names = _tree_order(description)
     index = {name: k for k, name in enumerate(names)}
     nb = len(names)
-    parent, joint_at = np.full(nb, -1, dtype=np.int64), np.zeros((nb, 2))
+    parent, joint_at, joint_lateral = np.full(nb, -1, dtype=np.int64), np.zeros((nb, 2)), np.zeros(nb)
     stops = []
     for joint in description.joints:
         c = index[joint.child]
-        parent[c], joint_at[c] = index[joint.parent], joint.at
+        parent[c], joint_at[c], joint_lateral[c] = index[joint.parent], joint.at, joint.lateral
         stops += [(parent[c], c, s.side, s.angle, s.model, s.stiffness, s.restitution, s.latch) for s in joint.stops]
     folded = [_fold(description, name) for name in names]
     feet = description.feet
@@ -134,6 +135,7 @@ def resolve_tree(description: WalkerDescription) -> Tree:
         foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
         foot_radius=np.array([f.radius for f in feet]),
         foot_lateral=np.array([f.lateral for f in feet]),
+        joint_lateral=joint_lateral,
         foot_names=[f.name for f in feet],
         legs=[[index[b] for b in leg] for leg in description.legs],
         fall_angle=[next(b.fall_angle for b in description.bodies if b.name == name) for name in names],

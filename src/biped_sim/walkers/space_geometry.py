@@ -11,7 +11,7 @@ y along the normal, z to the right (:mod:`biped_sim.multibody.spatial`): the pro
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -55,7 +55,8 @@ def attitude(psi: float, phi: float, theta: float) -> np.ndarray:
 @dataclass(frozen=True)
 class LegGeometry:
     """One leg in the walker frame with the hinge at zero: centre of mass, inertia about it, the foot's centre,
-    radius and unit plane normal (a ring's; a sphere or a point has none)."""
+    radius, unit plane normal (a ring's or torus's; a sphere, an ellipsoid or a point has none), tube radius (a
+    torus's, else 0) and quadric (an ellipsoid's Q, its points centre + Q^(1/2) u; zero for the other shapes)."""
 
     mass: float
     com: np.ndarray
@@ -63,6 +64,8 @@ class LegGeometry:
     foot_centre: np.ndarray
     foot_radius: float
     foot_normal: np.ndarray | None
+    foot_tube: float = 0.0
+    foot_quadric: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
 
 
 def leg_geometry(space: SpaceDescription, frame: int) -> LegGeometry:
@@ -73,7 +76,7 @@ def leg_geometry(space: SpaceDescription, frame: int) -> LegGeometry:
     turn = rot_x(space.splay)  # outward: the foot toward +y
     mirror = MIRROR if frame == 1 else np.eye(3)
     normal = None
-    if foot.shape == "ring":
+    if foot.shape in ("ring", "torus"):
         normal = mirror @ turn @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
     return LegGeometry(
         mass=leg.mass,
@@ -82,6 +85,8 @@ def leg_geometry(space: SpaceDescription, frame: int) -> LegGeometry:
         foot_centre=mirror @ (hip + turn @ np.array(foot.centre)),
         foot_radius=foot.radius,
         foot_normal=normal,
+        foot_tube=foot.tube,
+        foot_quadric=mirror @ turn @ foot.quadric() @ turn.T @ mirror,
     )
 
 
@@ -93,18 +98,22 @@ def with_point_mass(leg: LegGeometry, mass: float) -> LegGeometry:
     inertia = leg.inertia.copy()
     for m, at in ((leg.mass, leg.com - com), (mass, -com)):
         inertia += m * (at @ at * np.eye(3) - np.outer(at, at))
-    return LegGeometry(total, com, inertia, leg.foot_centre, leg.foot_radius, leg.foot_normal)
+    return replace(leg, mass=total, com=com, inertia=inertia)
 
 
 def lowest_point(leg: LegGeometry, rotation: np.ndarray) -> np.ndarray:
     """The foot's lowest point from the walker frame's origin (rigid slope frame), its leg turned by ``rotation``:
-    a ring's point in its plane most against the normal, a sphere's below its centre, a point itself."""
+    a ring's point in its plane most against the normal (a torus's: lowered by its tube), a sphere's below its
+    centre, an ellipsoid's at -Q z / sqrt(z.Q z) from its centre (Q turned with the leg), a point itself."""
     centre = rotation @ leg.foot_centre
+    if leg.foot_quadric[2, 2] > 0.0:
+        q = rotation @ leg.foot_quadric @ rotation.T
+        return centre - q[:, 2] / math.sqrt(q[2, 2])
     if leg.foot_normal is None:
         return centre - leg.foot_radius * EZ
     n = rotation @ leg.foot_normal
     w = EZ - n[2] * n
-    return centre - leg.foot_radius * w / np.linalg.norm(w)
+    return centre - leg.foot_radius * w / np.linalg.norm(w) - leg.foot_tube * EZ
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,10 @@ leg as it lies on the hinge axis), joined by a revolute hinge: a SPHERICAL primi
 (primitive 0: the "hip" that the falls and the measurements read) and two PERPENDICULAR ones keeping the hinge
 axis z' of one leg along the other's. Feet: a sphere is the formulation's sphere, a point a sphere of radius 0,
 and a ring its disc whose axis is the ring's plane normal (the lowest point of a circle against the ground
-plane, in closed form). Friction acts in the tangent plane on the slip velocity vector (LuGre with a bristle
-vector), as for every spatial walker.
+plane, in closed form), a torus that disc with its tube, an ellipsoid its quadric
+(:func:`~biped_sim.multibody.spatial_kernels.foot_bottom`); a torus's or ellipsoid's Hertz stiffness is that of its
+bottom's equivalent radius (``SpaceFoot.hertz_radius``). Friction acts in the tangent plane on the slip velocity
+vector (LuGre with a bristle vector), as for every spatial walker.
 
 The start: ``simulation.initial`` holds the rigid gait's post-strike state (:data:`SPACE_STATE_KEYS`: the stance
 leg's heading, bank, pitch and angular velocity, the hinge angle and rate; ``rigid_limit_cycle`` resolves it to the
@@ -94,17 +96,18 @@ def build_space_walker(config: Config, initial: object) -> BuiltModel:
     start = check_initial(initial)
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
     total_mass = legs[0].mass + legs[1].mass
-    stiffness = contact_stiffness(config, space.leg.foot.radius)
+    stiffness = contact_stiffness(config, space.leg.foot.hertz_radius)
     normal, friction, switches = contact_arrays(config, stiffness, total_mass)
     inertia = np.array([body_inertia(leg) for leg in legs])
-    ring = space.leg.foot.shape == "ring"
     system = SpatialSystem(
         body_mass=np.array([leg.mass for leg in legs]),
         **jointed_bodies(inertia, hinge(legs)),
         foot_body=np.array([0, 1], dtype=np.int64),
         foot_center=np.array([TO_SPATIAL @ (leg.foot_centre - leg.com) for leg in legs]),
-        foot_axis=np.array([TO_SPATIAL @ leg.foot_normal if ring else np.zeros(3) for leg in legs]),
+        foot_axis=np.array([np.zeros(3) if leg.foot_normal is None else TO_SPATIAL @ leg.foot_normal for leg in legs]),
         foot_radius=np.array([leg.foot_radius for leg in legs]),
+        foot_tube=np.array([leg.foot_tube for leg in legs]),
+        foot_quadric=np.array([TO_SPATIAL @ leg.foot_quadric @ TO_SPATIAL.T for leg in legs]),
         foot_partner=np.array([1, 0], dtype=np.int64),
         gravity=spatial_gravity(config),
         baumgarte=np.array([config.formulation.baumgarte.alpha, config.formulation.baumgarte.beta]),

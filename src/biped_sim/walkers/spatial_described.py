@@ -27,9 +27,10 @@ import numpy as np
 from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.multibody.hinge import FRAME, hinge_index, make_hinge_elements, make_hinge_stops
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.describe import describe
-from biped_sim.walkers.described import build_described, resolve_tree
+from biped_sim.walkers.described import Tree, build_described, resolve_tree
 from biped_sim.walkers.model import BuiltModel
 
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
@@ -37,11 +38,12 @@ DISC_AXIS = Z  # the feet are discs in the body's sagittal plane
 
 
 def revolute(
-    body_a: int, hip_a: tuple[float, float], body_b: int, hip_b: tuple[float, float]
+    body_a: int, hip_a: tuple[float, float], body_b: int, hip_b: tuple[float, float], lateral: float = 0.0
 ) -> list[tuple[int, int, int, tuple[float, ...]]]:
-    """Revolute joint about z' at the points (x', y') = hip_a of body a and hip_b of body b, both in z' = 0."""
+    """Revolute joint about z' at the points (x', y') = hip_a of body a, ``lateral`` along its z' (a hip width),
+    and hip_b of body b in its z' = 0."""
     return [
-        (SPHERICAL, body_a, body_b, (hip_a[0], hip_a[1], 0.0, hip_b[0], hip_b[1], 0.0, 0.0)),
+        (SPHERICAL, body_a, body_b, (hip_a[0], hip_a[1], lateral, hip_b[0], hip_b[1], 0.0, 0.0)),
         (PERPENDICULAR, body_a, body_b, (*X, *Z, 0.0)),
         (PERPENDICULAR, body_a, body_b, (*Y, *Z, 0.0)),
     ]
@@ -97,12 +99,14 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
     planar = build_described(config, initial)
     tree = resolve_tree(describe(config))
     ps = planar.system
+    nb = planar.n_bodies
     primitives = [
         p
         for (a, b), (xa, ya, xb, yb) in zip(ps.joint_bodies, ps.joint_points, strict=True)
-        for p in revolute(int(a), (float(xa), float(ya)), int(b), (float(xb), float(yb)))
+        for p in revolute(int(a), (float(xa), float(ya)), int(b), (float(xb), float(yb)), tree.joint_lateral[int(b)])
     ]
-    if not np.any(tree.foot_lateral):
+    lateral = lateral_places(tree)
+    if not np.any(lateral[tree.foot_body] + tree.foot_lateral):
         primitives += planar_to_ground(0)
     inertia = tree.spatial_inertia
     if bad := [name for name, j in zip(tree.names, inertia, strict=True) if np.linalg.eigvalsh(j).min() <= 0.0]:
@@ -114,6 +118,8 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         foot_center=np.column_stack([ps.foot_center, tree.foot_lateral]),
         foot_axis=np.array([DISC_AXIS] * len(tree.foot_names)),
         foot_radius=ps.foot_radius.copy(),
+        foot_tube=np.zeros(len(tree.foot_names)),
+        foot_quadric=np.zeros((len(tree.foot_names), 3, 3)),
         foot_partner=ps.foot_partner.copy(),
         gravity=spatial_gravity(config),
         baumgarte=ps.baumgarte.copy(),
@@ -121,18 +127,45 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         friction_params=ps.friction_params,
         switches=ps.switches,
         limits=ps.limits.copy(),
+        stops=make_hinge_stops(
+            ps.stops, _hinge_rows([(p, c) for p, c, *_ in tree.stops], nb), _lifted_frames(tree.stops)
+        ),
+        elements=make_hinge_elements(
+            ps.elements, _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb), _lifted_frames(tree.elements)
+        ),
     )
-    return replace(planar, system=system, y0=_spatial_state(planar, system))
+    return replace(planar, system=system, y0=_spatial_state(planar, system, lateral))
 
 
-def _spatial_state(planar: BuiltModel, system: SpatialSystem) -> np.ndarray:
-    """The planar model's start in the spatial system's state (the planar bristles run along x)."""
+def lateral_places(tree: Tree) -> np.ndarray:
+    """(nb,): each body's centre of mass along z from the root's, the joints' ``lateral`` offsets summed down the
+    tree (its bodies are in tree order: parents first)."""
+    places = np.zeros(len(tree.names))
+    for c in range(1, len(tree.names)):
+        places[c] = places[tree.parent[c]] + tree.joint_lateral[c]
+    return places
+
+
+def _hinge_rows(pairs: list[tuple[int, int]], n_bodies: int) -> np.ndarray:
+    """The spatial ``index`` rows of the joints between (other body, child) pairs (-1: the ground)."""
+    return np.array([hinge_index(c, a, n_bodies) for a, c in pairs], dtype=np.int64).reshape(-1, 4)
+
+
+def _lifted_frames(rows: list[tuple]) -> np.ndarray:
+    """The hinge frames of lifted planar joints: the axis z' and the references x' (theta = phi_c - phi_p)."""
+    return np.array([[*Z, *X, *X]] * len(rows), dtype=np.float64).reshape(-1, FRAME)
+
+
+def _spatial_state(planar: BuiltModel, system: SpatialSystem, lateral: np.ndarray) -> np.ndarray:
+    """The planar model's start in the spatial system's state, each body at its ``lateral`` place (the planar
+    bristles run along x)."""
     planar_layout, layout = (formulation_of(s).layout_of(s) for s in (planar.system, system))
     nb, nf = planar.n_bodies, planar.n_feet
     q, qd = sagittal_to_spatial(
         np.array([planar.y0[planar_layout.position(b)] for b in range(nb)]),
         np.array([planar.y0[planar_layout.velocity(b)] for b in range(nb)]),
     )
+    q[:, 2] = lateral
     y0 = np.zeros(layout.size)
     for b in range(nb):
         y0[layout.position(b)] = q[b]

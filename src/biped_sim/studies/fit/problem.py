@@ -32,7 +32,7 @@ from biped_sim.config import Config, derive, set_dotted
 from biped_sim.errors import ConfigError, quote
 from biped_sim.io.references import MAX_STEPS, MEASURED_UNITS, Reference
 from biped_sim.multibody.dispatch import system_foot_contact
-from biped_sim.simulate import simulate
+from biped_sim.simulate import simulate, study_formulation
 from biped_sim.studies.fit.parameters import FitParameter, check_parameters
 
 PENALTY_SCALES = 2.0  # a missing step costs 2 to 4 of its target's magnitude (see the module docstring)
@@ -223,9 +223,8 @@ class FitProblem:
 
     @property
     def evaluation_formulation(self) -> str:
-        """The formulation an evaluation runs: minimal coordinates for a planar config (same walker, cheaper)."""
-        kind = self.config.formulation.kind
-        return "minimal" if kind == "planar" and self.config.dynamics == "compliant" else kind
+        """The formulation an evaluation runs (:func:`~biped_sim.simulate.study_formulation`)."""
+        return study_formulation(self.config)
 
     def values(self, u: np.ndarray | list[float]) -> dict[str, float]:
         """Parameter values at normalised point ``u``."""

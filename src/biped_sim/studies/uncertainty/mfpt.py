@@ -6,9 +6,10 @@ Two grounds:
 * ``height`` (any walker): a ``random`` ground profile (heights drawn every ``SPACING`` leg lengths, standard
   deviation ``roughness`` leg lengths, seeded) from the start on; a run stops at a fall or after ``cap`` heel
   strikes;
-* ``slope`` (the rigid rimless wheel): the slope of every step drawn from N(slope, roughness^2), walked by the
-  compiled rigid step map, with the Markov chain of its analytic apex-to-apex map beside it as a check
-  (:mod:`.rimless_chain`).
+* ``slope`` (the rigid rimless wheel, a rigid walker in space): the slope of every step drawn from
+  N(slope, roughness^2), walked by the compiled rigid step map; the wheel's with the Markov chain of its analytic
+  apex-to-apex map beside it as a check (:mod:`.rimless_chain`), the walker in space's with each step's state turned
+  into its slope's frame (:mod:`.space_slopes`).
 
 The estimate (:func:`mfpt_estimate`): a metastable walker has a constant chance p of falling at each step, so its
 first-passage time T, the step on which it falls (the falling step counted: the Markov chain's strikes plus one), is
@@ -33,10 +34,11 @@ from scipy import optimize, stats
 from biped_sim.config import Config, derive
 from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ArgumentError, ConfigError
+from biped_sim.simulate import study_formulation
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.studies.tasks import results_as_done
 from biped_sim.studies.uncertainty.rimless_chain import Wheel, chain_mfpt, walks_random_slopes, wheel_walks
-from biped_sim.studies.uncertainty.samples import run_formulation
+from biped_sim.studies.uncertainty.space_slopes import space_slope_walks
 
 CONFIDENCE = 0.95
 SPACING = 0.1  # [leg lengths] between the random heights
@@ -88,18 +90,24 @@ def _likelihood_interval(k: int, total: float, threshold: float) -> tuple[float,
     return low, high
 
 
-def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
-    """One walk on random heights of ``roughness`` leg lengths: (strikes, fell)."""
-    from biped_sim.simulate import simulate  # the engine: imported by the workers that walk
-
+def height_walk_config(config: Config, roughness: float, seed: int, cap: int) -> Config:
+    """``config`` on random heights of ``roughness`` leg lengths, stopped after ``cap`` heel strikes (a compliant
+    planar walker in minimal coordinates, as every study runs it)."""
     leg = config.walker.leg_length
     t_end = TIME_PER_STEP * cap * math.sqrt(leg / config.gravity)
     profile = {"kind": "random", "spacing": SPACING * leg, "roughness": roughness * leg, "seed": seed,
                "start": 0.0, "length": 2.0 * cap * leg}  # fmt: skip
     values: dict[str, Any] = {"ground.profile": profile, "simulation.max_steps": cap, "simulation.t_end": t_end}
     if config.dynamics == "compliant":
-        values |= {"formulation.kind": run_formulation(config), "output.sample_rate": 100.0}
-    result = simulate(derive(config, values))
+        values |= {"formulation.kind": study_formulation(config), "output.sample_rate": 100.0}
+    return derive(config, values)
+
+
+def height_walk(config: Config, roughness: float, seed: int, cap: int) -> tuple[int, bool]:
+    """One walk on random heights of ``roughness`` leg lengths: (strikes, fell)."""
+    from biped_sim.simulate import simulate  # the engine: imported by the workers that walk
+
+    result = simulate(height_walk_config(config, roughness, seed, cap))
     strikes = len(result.steps.strike_time)
     return min(strikes, cap), not (result.status == "walking" and strikes >= cap)
 
@@ -153,7 +161,9 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
     if ground not in GROUNDS:
         raise ArgumentError("ground", f"unknown ground {ground!r}; expected one of {', '.join(GROUNDS)}")
     if ground == "slope" and not walks_random_slopes(config):
-        raise ArgumentError("ground", "random slopes per step are walked by the rigid rimless wheel only")
+        raise ArgumentError(
+            "ground", "random slopes per step are walked by the rigid rimless wheel and rigid walkers in space only"
+        )
     if ground == "height" and not capabilities(config.walker.kind).profiles:
         # refused here, before any worker: a worker would meet it only after resolving the walker's start
         raise ConfigError("ground.profile", f"the {config.walker.kind} walker walks on flat ground only")
@@ -173,6 +183,10 @@ def mfpt_curve(
     """The MFPT at each roughness level over ``seeds`` walks capped at ``cap`` strikes."""
     check_mfpt_input(config, ground, roughness, seeds, cap)
     levels = [float(h) for h in roughness]
+    if ground == "slope" and capabilities(config.walker.kind).space:
+        estimates = [mfpt_estimate(*space_slope_walks(config, h, range(seeds), cap)) for h in levels]
+        notes = ["slope of each step ~ N(slope, roughness^2), a kink at each new contact point; the step map in space"]
+        return MfptCurve(ground, levels, estimates, None, seeds, cap, notes)
     if ground == "slope":
         walks = [wheel_walks(config, h, range(seeds), cap) for h in levels]
         estimates = [mfpt_estimate(*w) for w in walks]

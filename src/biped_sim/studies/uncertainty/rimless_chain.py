@@ -31,6 +31,7 @@ import numpy as np
 from scipy import stats
 
 from biped_sim.config import Config
+from biped_sim.config.walker_registry import capabilities
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_kernel, with_slope
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -41,8 +42,11 @@ CHAIN_SPAN = 3.0  # the grid of apex rates reaches this many times the nominal a
 
 
 def walks_random_slopes(config: Config) -> bool:
-    """Whether ``config`` is a rigid wheel (a walker of one leg with spokes), which walks random slopes per step."""
-    return config.dynamics == "rigid" and bool(rigid_walker(config).shift)
+    """Whether ``config`` walks random slopes per step: a rigid wheel (a walker of one leg with spokes) or a rigid
+    walker in space (its step map, :mod:`.space_slopes`)."""
+    if config.dynamics != "rigid":
+        return False
+    return capabilities(config.walker.kind).space or bool(rigid_walker(config).shift)
 
 
 @dataclass(frozen=True)

@@ -41,12 +41,6 @@ RIGID_SCALARS = ("floquet_max", *(f"fixed_{k}" for k in LEG_KEYS))
 WALKING = "walking"
 
 
-def run_formulation(config: Config) -> str:
-    """Minimal coordinates for a planar compliant config (same walker, cheaper), else its own formulation."""
-    kind = config.formulation.kind
-    return "minimal" if kind == "planar" and config.dynamics == "compliant" else kind
-
-
 def _steady(values: list[float]) -> float:
     return float(np.mean(values[-STEADY_STEPS:])) if len(values) >= STEADY_STEPS else math.nan
 
@@ -117,9 +111,11 @@ class ChunkTask:
 
 def run_sample(config: Config, keys: tuple[str, ...], row: np.ndarray) -> dict[str, Any]:
     """One sample: the config at ``row``'s values, run; a refused value or a raising run is its result."""
+    from biped_sim.simulate import study_formulation  # the engine: imported by the workers that run samples
+
     try:
         variant = derive(config, {**dict(zip(keys, (float(v) for v in row), strict=True)),
-                                  "formulation.kind": run_formulation(config)})  # fmt: skip
+                                  "formulation.kind": study_formulation(config)})  # fmt: skip
     except ConfigError as exc:
         return failed_outputs("invalid", str(exc))
     try:
