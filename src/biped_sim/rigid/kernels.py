@@ -54,7 +54,9 @@ def rigid_rhs(tree: RigidTree, x: np.ndarray, out: np.ndarray) -> None:
 
 
 @kernel(reference_counts=False)
-def step_stages(tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndarray, elements: bool) -> tuple[bool, float]:
+def step_stages(
+    tree: RigidTree, tab: Tableau, sc: Scratch, h: float, y: np.ndarray, elements: bool
+) -> tuple[bool, float]:
     """The stages of an explicit Runge-Kutta step of length h from y (their flows in ``sc.k[1:]``, ``k[0]`` = f(y)
     given), its end state in ``sc.y_new`` and the flow there in ``k[stages]``; returns whether the end state is
     finite and, for a walker with joint elements (``elements``), the step's quadrature of the power they dissipate
