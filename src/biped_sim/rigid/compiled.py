@@ -100,7 +100,7 @@ def _empty_plan() -> StepPlan:
 def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
     return StepRecord(
         np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
-        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1), np.zeros(2),
+        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1), np.zeros(1),
     )  # fmt: skip
 
 
@@ -202,8 +202,8 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             return TRIPPED, t
         t = polish(cw, own, mode, t, x_minus, counters)
         _end_phase(cw, own, t, x_minus, x_plus)
-    landing = cw.record.landing  # the step's length, read in Python without a call of the compiled point
-    landing[0], landing[1] = tree_swing_foot(p, x_minus, 0.0, 0.0)
+    landing_x, _ = tree_swing_foot(p, x_minus, 0.0, 0.0)
+    cw.record.length[0] = landing_x - (-p.radius * x_start[p.rolling[0]])  # walker.step_length's, read without a call
     tree_impact(p, x_minus, True, x_plus)
     return STRIKE, t
 
@@ -298,7 +298,7 @@ def rigid_step(
     if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
         code = STALLED
     strike, rec = code == STRIKE, cw.record
-    length = float(rec.landing[0] - walker.contact_point(x0)[0]) if strike else math.nan  # walker.step_length's
+    length = float(rec.length[0]) if strike else math.nan
     evals, accepted = counters.tolist()
     step = RigidStep(STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, evals,
                      accepted_steps=accepted)  # fmt: skip

@@ -88,7 +88,7 @@ class StepRecord(NamedTuple):
     samples_w: np.ndarray  # (m,) the joint elements' dissipated work since the step's start
     stops: np.ndarray  # (s, 2): t, the kinetic energy lost
     work: np.ndarray  # (1,) the joint elements' dissipated work since the step's start, at its end
-    landing: np.ndarray  # (2,): the landing foot's lowest point at the strike, the stance contact at the step's origin
+    length: np.ndarray  # (1,) the step's length: the landing foot's lowest point at the strike from the stance contact
 
 
 class CompiledWalker(NamedTuple):
