@@ -189,7 +189,7 @@ def test_bad_profiles_are_one_line_errors_naming_the_field(profile: str, field: 
     assert "\n" not in str(error.value)
 
 
-@pytest.mark.parametrize("other", ["formulation.kind=spatial", "friction.model=lugre"])
+@pytest.mark.parametrize("other", ["friction.model=lugre"])
 def test_profiles_are_refused_where_they_are_not_modelled(other: str) -> None:
     with pytest.raises(ConfigError, match=r"^ground\.profile: "):
         config_from_dict({}, [STEP_DOWN, other])

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import json
+import os
 import pkgutil
+import subprocess
+import sys
+from pathlib import Path
 from typing import NamedTuple
 
 import numba
@@ -16,7 +21,15 @@ from numba.core.registry import CPUDispatcher
 
 import biped_sim
 from biped_sim.integrate.explicit import advance
-from biped_sim.kernel import PYTHON_ENTRY_SUFFIX, Kernel, inlined, kernel, missing_numba_internals, overload_by_type
+from biped_sim.kernel import (
+    OVERLOAD_SUFFIX,
+    PYTHON_ENTRY_SUFFIX,
+    Kernel,
+    inlined,
+    kernel,
+    missing_numba_internals,
+    overload_by_type,
+)
 
 
 @kernel
@@ -80,6 +93,34 @@ def test_a_call_is_resolved_by_its_argument_type_at_compile_time() -> None:
     assert _level(_Tilted(1.0, 0.5), 2.0) == 2.0  # from Python: looked up by type
 
 
+_LEVELS_IN_A_NEW_PROCESS = """
+import json
+from biped_sim._compiled_cache import recording_compilations
+from tests.test_kernel import _Flat, _levels, _Tilted
+with recording_compilations() as compiled:
+    _levels(_Flat(1.0), _Tilted(1.0, 0.5))
+print(json.dumps(compiled))
+"""
+
+
+@pytest.mark.slow
+def test_an_overload_implementation_compiled_in_one_process_is_loaded_from_the_cache_in_the_next(
+    tmp_path: Path,
+) -> None:
+    """numba compiles an overload's implementation (even one it inlines) with every caller that reaches it first in
+    a process; cached under a name of its own (not the kernel's: other options), a second process loads it."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # empty: the first process compiles everything
+    runs = [subprocess.run([sys.executable, "-c", _LEVELS_IN_A_NEW_PROCESS], env=env, capture_output=True, text=True)]
+    runs.append(
+        subprocess.run([sys.executable, "-c", _LEVELS_IN_A_NEW_PROCESS], env=env, capture_output=True, text=True)
+    )
+    assert all(run.returncode == 0 for run in runs), [run.stderr for run in runs]
+    first, second = (json.loads(run.stdout.strip().splitlines()[-1]) for run in runs)
+    implementations = {f"tests.test_kernel.{k}{OVERLOAD_SUFFIX}" for k in ("_flat_level", "_tilted_level")}
+    assert implementations <= set(first)
+    assert "tests.test_kernel._levels" in second and not implementations & set(second)  # the caller, not them
+
+
 def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> None:
     values = np.arange(5.0)
     assert _calls_the_kernel(values) == 20.0  # compiled caller: the kernel itself
@@ -89,6 +130,28 @@ def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> Non
     assert entry is not None and not entry.targetoptions.get("no_cpython_wrapper", False)
     assert entry.py_func.__qualname__ == "_weighted_sum" + PYTHON_ENTRY_SUFFIX  # its own cache file
     assert _weighted_sum(values, 1.0) == 10.0 and _weighted_sum.python_entry is entry  # compiled once
+
+
+@kernel(literal_arguments=False)
+def _halved(x: float, half: bool) -> float:
+    return 0.5 * x if half else x
+
+
+@kernel
+def _halved_by_value(x: float, half: bool) -> float:
+    return 0.5 * x if half else x
+
+
+@njit
+def _both_ways(x: float) -> tuple[float, float]:
+    return _halved(x, True) + _halved(x, False), _halved_by_value(x, True) + _halved_by_value(x, False)
+
+
+def test_constants_passed_from_compiled_code_specialise_a_kernel_only_with_literal_arguments() -> None:
+    """numba compiles a kernel once per constant a compiled caller passes (``True``, ``False``); with
+    ``literal_arguments=False`` once for the constants' type."""
+    assert _both_ways(2.0) == (3.0, 3.0)
+    assert len(_halved.signatures) == 1 and len(_halved_by_value.signatures) == 2
 
 
 def test_a_kernel_without_reference_counts_refuses_to_allocate() -> None:

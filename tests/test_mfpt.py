@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from biped_sim import load_config
-from biped_sim.studies.uncertainty.mfpt import mfpt_curve, mfpt_estimate
+from biped_sim.report.uncertainty import mfpt_figure
+from biped_sim.studies.uncertainty.mfpt import MfptCurve, mfpt_curve, mfpt_estimate
 from biped_sim.studies.uncertainty.rimless_chain import Wheel
 
 from .conftest import CONFIGS, invoke, one_line_error
@@ -29,6 +31,18 @@ def test_censored_walks_give_steps_over_falls_and_no_fall_only_a_lower_bound() -
     assert censored.ci[0] < 211 < censored.ci[1]
     none = mfpt_estimate(np.array([100, 100]), np.array([False, False]))
     assert math.isinf(none.mfpt) and math.isinf(none.ci[1]) and 0 < none.ci[0] < 200
+
+
+def test_a_level_without_falls_is_drawn_as_its_lower_bound_without_warnings() -> None:
+    fell = mfpt_estimate(np.array([10, 100]), np.array([True, False]))
+    none = mfpt_estimate(np.array([100, 100]), np.array([False, False]))
+    curve = MfptCurve("slope", [0.02, 0.01], [fell, none], chain=None, seeds=2, cap=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        figure = mfpt_figure([curve])
+    (ax,) = figure.axes
+    bound = next(line for line in ax.get_lines() if line.get_label() == "no fall: MFPT above")
+    assert list(bound.get_xdata()) == [0.01] and list(bound.get_ydata()) == [none.ci[0]]
 
 
 def test_the_apex_map_has_the_wheel_s_fixed_point() -> None:

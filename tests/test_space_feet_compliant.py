@@ -1,4 +1,4 @@
-"""Compliant torus and ellipsoid feet in the spatial formulation (:func:`~biped_sim.multibody.spatial_kernels.
+"""Compliant torus and ellipsoid feet in the spatial formulation (:func:`~biped_sim.multibody.spatial_feet.
 foot_bottom`): their lowest point against the ground where geometry puts it, their limits (a torus of no tube is
 the ring, of no ring radius the sphere; an ellipsoid of equal axes the sphere), a body resting on one at the Hertz
 static sinkage, and a rocking body's energy audit."""
@@ -15,7 +15,8 @@ from biped_sim.contact.normal import hertz_stiffness
 from biped_sim.integrate.driver import integrate_model
 from biped_sim.multibody.euler_parameters import rotate
 from biped_sim.multibody.spatial import SpatialSystem
-from biped_sim.multibody.spatial_kernels import foot_bottom, foot_kinematics, mechanical_energy
+from biped_sim.multibody.spatial_feet import foot_bottom, foot_kinematics
+from biped_sim.multibody.spatial_kernels import mechanical_energy
 from biped_sim.simulate import prepare_model, simulate
 from biped_sim.simulate.compliant import summarize
 from biped_sim.studies.friction_checks import dry_limit_parameters
@@ -26,7 +27,8 @@ from tests.test_space_compliant import GAIT, TINKERTOY, tinkertoy
 
 RADIUS, TUBE = 0.08, 0.03  # [m] the ring's radius and the torus's tube
 AXES = (0.12, 0.05, 0.08)  # [m] the ellipsoid's semi-axes along the body's x', y' (up), z': resting on the shortest
-SAGITTAL = np.array([0.0, 0.0, 1.0])  # a disc's axis: its plane the body's x'-y' plane
+SAGITTAL = np.array([0.0, 0.0, 1.0])
+UP = np.array([0.0, 1.0, 0.0])  # a disc's axis: its plane the body's x'-y' plane
 # a generic attitude (not unit: the kernels take |p| != 1 as the integration leaves it) and rates
 P = np.array([0.93, 0.21, -0.17, 0.26])
 STATE = np.array([0.01, 0.2, -0.03, *P, 0.3, -0.1, 0.2, 0.05, -0.4, 0.3, 0.2])
@@ -107,10 +109,17 @@ def test_the_torus_s_bottom_is_its_lowest_point() -> None:
     assert np.linalg.norm(nearest - np.array(bottom)) < 1e-3
 
 
-def settled(system: SpatialSystem, height: float, sinkage: float, spin: tuple = (0.0, 0.0, 0.0)) -> tuple:
-    """(system, run) of the body released at rest (or at ``spin``) upright, its bottom ``height`` above its centre,
-    sunk 1.5 times ``sinkage``, run 1 s."""
-    q = np.array([[0.0, height - 1.5 * sinkage, 0.0, 1.0, 0.0, 0.0, 0.0]])
+def settled(
+    system: SpatialSystem,
+    height: float,
+    sinkage: float,
+    spin: tuple = (0.0, 0.0, 0.0),
+    attitude: tuple = (1.0, 0.0, 0.0, 0.0),
+    normal: np.ndarray = UP,
+) -> tuple:
+    """(system, run) of the body released at rest (or at ``spin``) upright (or at ``attitude``), its bottom ``height``
+    above its centre (along ``normal``, the ground's at the origin), sunk 1.5 times ``sinkage``, run 1 s."""
+    q = np.array([[*((height - 1.5 * sinkage) * normal), *attitude]])
     qd = np.array([[0.0, 0.0, 0.0, 0.0, *(0.5 * w for w in spin)]])
     y0, modes0 = standing_start(system, q, qd, (0,), 1e-2)  # its damping near critical
     return integrate_model(system, y0, modes0, INTEGRATOR, t_end=1.0, sample_rate=100.0)

@@ -129,12 +129,13 @@ def test_uncertainty_runs_on_a_walker_in_space_over_a_walker_parameter(tmp_path:
     assert (np.diff(samples["steady_period"]) > 0).all() and samples["steady_period"].min() > RIGID_PERIOD
 
 
-FLAT_ONLY = "the description3d walker walks on flat ground only"
+FLAT_ONLY = "the description3d walker walks on flat ground only with dynamics: rigid (profiles: dynamics: compliant)"
+RIGID_TOY = TINKERTOY.with_name("tinkertoy.yaml")
 
 
-def test_mfpt_of_a_walker_in_space_on_random_heights_is_refused_in_one_line_naming_the_ground() -> None:
-    """Random ground profiles are not walked by the walker in space (its MFPT walks random slopes)."""
+def test_mfpt_of_a_rigid_walker_in_space_on_random_heights_is_refused_in_one_line_naming_the_ground() -> None:
+    """Random ground profiles are not walked by the rigid walker in space (its MFPT walks random slopes)."""
     for start in (["--set", started(GAIT), "-j", "1"], ["-j", "2"]):  # without a start: refused before any worker
-        result = invoke("mfpt", str(TINKERTOY), "--ground", "height", *start, "--seeds", "2", "--roughness", "0.001")
+        result = invoke("mfpt", str(RIGID_TOY), "--ground", "height", *start, "--seeds", "2", "--roughness", "0.001")
         assert result.exit_code == 2
         assert one_line_error(result.stderr) == f"error: ground.profile: {FLAT_ONLY}"

@@ -35,7 +35,7 @@ from types import FunctionType
 from typing import Any
 
 import numba
-from numba import njit, types
+from numba import jit, njit, types
 from numba.core import config
 from numba.core.dispatcher import Dispatcher
 from numba.core.errors import NumbaExperimentalFeatureWarning
@@ -50,12 +50,22 @@ warnings.filterwarnings(
 )
 
 PYTHON_ENTRY_SUFFIX = "_python_entry"  # the twin's qualified name, hence its own cache file
+OVERLOAD_SUFFIX = "_overload"  # an overload implementation's qualified name, hence its own cache file
 
 
 class Kernel(CPUDispatcher):
     """A dispatcher compiled without the CPython wrapper; a call from Python runs its wrapped twin."""
 
     _python_entry: CPUDispatcher | None = None
+    literal_arguments = True  # kernel(literal_arguments=False): constants passed by compiled callers typed by type
+
+    def get_call_template(self, args: tuple, kws: dict) -> Any:
+        """numba's typing of a compiled caller's call; without ``literal_arguments``, a constant argument (``True``,
+        ``0``) counts as its type, not its value: one specialisation for all calls, not one per constant passed."""
+        if not self.literal_arguments:
+            args = tuple(types.unliteral(a) for a in args)
+            kws = {name: types.unliteral(a) for name, a in kws.items()}
+        return super().get_call_template(args, kws)
 
     @property
     def python_entry(self) -> CPUDispatcher | None:
@@ -89,18 +99,28 @@ def kernel_options(reference_counts: bool = True) -> dict[str, Any]:
     return {"nopython": True, "no_cpython_wrapper": True, "no_cfunc_wrapper": True, "_nrt": reference_counts}
 
 
-def kernel(function: Callable[..., Any] | None = None, *, reference_counts: bool = True) -> Any:
+# an overload implementation's: cached, as numba compiles it even where it inlines it (once, to check that it compiles)
+OVERLOAD_OPTIONS = {**kernel_options(), "cache": True}
+
+
+def kernel(
+    function: Callable[..., Any] | None = None, *, reference_counts: bool = True, literal_arguments: bool = True
+) -> Any:
     """Compile ``function`` as an engine kernel (``@kernel`` or ``@kernel(reference_counts=False)``).
 
     nopython, cached on disk, no CPython or C wrapper (:class:`Kernel`). With ``reference_counts=False``
     numba's reference counting is off inside it (numba's ``_nrt`` option): for a function that allocates
-    nothing and returns no array. Under ``NUMBA_DISABLE_JIT`` the function is returned as it is.
+    nothing and returns no array. With ``literal_arguments=False`` a compiled caller's constant arguments do not
+    make specialisations of their own (numba otherwise compiles the kernel, and everything it calls, once per
+    constant value: a kernel called with ``True`` and with ``False`` twice). Under ``NUMBA_DISABLE_JIT`` the
+    function is returned as it is.
     """
 
     def compile_kernel(python_function: Callable[..., Any]) -> Any:
         if config.DISABLE_JIT:
             return python_function
         dispatcher = Kernel(py_func=python_function, locals={}, targetoptions=kernel_options(reference_counts))
+        dispatcher.literal_arguments = literal_arguments
         dispatcher.enable_caching()
         return dispatcher
 
@@ -124,7 +144,16 @@ def implementation_of(kernel: Any) -> FunctionType:
     whose arguments would each cost a reference count at every right-hand-side evaluation.
     """
     code = getattr(kernel, "py_func", kernel)  # a plain Python function (over kernels) is its own code
-    return FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
+    implementation = FunctionType(code.__code__, code.__globals__, code.__name__, code.__defaults__, code.__closure__)
+    implementation.__qualname__ = code.__qualname__ + OVERLOAD_SUFFIX  # not the kernel's cache index (other options)
+    return implementation
+
+
+def overload_implementation(kernel: Any) -> Dispatcher:
+    """``kernel`` as :func:`overload_by_type` has numba compile it (its code, name and options, so its cache entries):
+    compiled for a caller's argument types (:func:`compile_for`), it is in the cache when another process's compile of
+    that caller needs it."""
+    return jit(**OVERLOAD_OPTIONS)(implementation_of(kernel))
 
 
 def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable[[type], Any], inline: bool) -> None:
@@ -148,7 +177,7 @@ def overload_by_type(generic: Callable[..., Any], key: str, kernel_for: Callable
         return None
 
     typer.__signature__ = signature  # type: ignore[attr-defined]
-    overload(generic, jit_options=kernel_options(), **({"inline": "always"} if inline else {}))(typer)
+    overload(generic, jit_options=OVERLOAD_OPTIONS, **({"inline": "always"} if inline else {}))(typer)
 
 
 def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatcher:

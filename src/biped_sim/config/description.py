@@ -10,6 +10,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from biped_sim.config.base import NormalModelName, Strict
+from biped_sim.config.space_description import InertiaSpec, SpaceFoot, Vector3
 from biped_sim.contact.joint_element import ELEMENT_PARAMETERS, JOINT_ELEMENT_LAWS
 
 Vector2 = tuple[float, float]
@@ -17,6 +18,8 @@ SIDES = ("stance", "swing")
 JointElementName = Literal[tuple(JOINT_ELEMENT_LAWS)]  # type: ignore[valid-type]
 GROUND = "ground"  # an element's ``against`` for the slope normal (body -1 to the kernels): it holds an absolute angle
 MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
+LATERAL = (0.0, 0.0, 1.0)  # the joints' default axis z' (the walker's right): a planar walker's hinges
+IN_SPACE = "formulation.kind: spatial with dynamics: compliant"  # where the description's features in space act
 
 
 def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
@@ -55,6 +58,17 @@ class BodySpec(Strict):
         "moments about the body's x and y axes and the tensor's xy entry (xx, yy, xy) [kg m^2], its point masses "
         "added by parallel axes; none given: the moment of inertia about every axis (a walker kept planar).",
     )
+    inertia_tensor: InertiaSpec | None = Field(
+        None,
+        description="The full inertia tensor about the centre of mass in the body frame (x' forward, y' up the body, "
+        "z' the walker's right) [kg m^2], its point masses added by parallel axes; its zz is the body's moment in "
+        "the plane (instead of inertia, radius_of_gyration or spatial_inertia).",
+    )
+    com_lateral: float = Field(
+        0.0,
+        description="The spatial formulation's centre of mass along z' from the body's origin [m] (a planar model "
+        "puts every body in the sagittal plane); the mirrored leg's is negated.",
+    )
     fall_angle: float | None = Field(
         None,
         gt=0,
@@ -66,11 +80,17 @@ class BodySpec(Strict):
     def _one_inertia(self) -> BodySpec:
         if self.inertia is not None and self.radius_of_gyration is not None:
             raise ValueError("radius_of_gyration: give inertia or radius_of_gyration, not both")
+        others = (self.inertia, self.radius_of_gyration, self.spatial_inertia)
+        if self.inertia_tensor is not None and any(v is not None for v in others):
+            raise ValueError("inertia_tensor: the full tensor replaces inertia, radius_of_gyration and spatial_inertia")
         return self
 
     @property
     def moment_of_inertia(self) -> float:
-        """The moment of inertia about the centre of mass [kg m^2]: ``inertia``, or mass r^2, or 0."""
+        """The moment of inertia about the centre of mass [kg m^2] (about z'): ``inertia``, or mass r^2, or the
+        tensor's zz, or 0."""
+        if self.inertia_tensor is not None:
+            return self.inertia_tensor.matrix()[2, 2]
         if self.radius_of_gyration is not None:
             return self.mass * self.radius_of_gyration**2
         return self.inertia or 0.0
@@ -160,6 +180,14 @@ class JointSpec(Strict):
         "right) from ``at`` [m]: a hip width, the second leg's hip point beside the first's (the mirrored leg's "
         "``hip``); a planar model hinges every body in the sagittal plane.",
     )
+    axis: Vector3 = Field(
+        LATERAL,
+        description="The spatial formulation's joint axis in the parent's frame (x' forward, y' up the body, z' the "
+        "walker's right; every body frame is its parent's with the joint at 0): z' hinges in the sagittal plane, x' "
+        "rolls, y' yaws; its stops and elements act on the angle about it. Another than z' needs "
+        f"{IN_SPACE}; the body hung on it starts with the joint at its initial angle and rate (the body's state "
+        "keys, relative to its parent) and the mirrored leg's is mirrored (x' and y' components negated).",
+    )
     stops: list[StopSpec] = Field(default_factory=list, description="One-sided limits of the relative angle.")
     elements: list[ElementSpec] = Field(
         default_factory=list, description="Passive elements (springs, dampers) acting across the joint."
@@ -170,12 +198,19 @@ class JointSpec(Strict):
         names = [e.name for e in self.elements]
         if len(set(names)) != len(names):
             raise ValueError("elements: names must be unique on a joint")
+        if math.hypot(*self.axis) < 1e-12:
+            raise ValueError("axis: a joint's axis must not be zero")
         sides = [stop.side for stop in self.stops]
         if len(set(sides)) != len(sides):
             raise ValueError("stops: at most one stop per side")
         if len(self.stops) == 2 and self.lower_upper()[0] > self.lower_upper()[1]:
             raise ValueError("stops: the lower stop's angle must not be above the upper stop's (equal: locked)")
         return self
+
+    @property
+    def lateral_axis(self) -> bool:
+        """Whether the joint hinges about z' (in the sagittal plane: the planar formulation's joints)."""
+        return self.axis[0] == 0.0 and self.axis[1] == 0.0 and self.axis[2] > 0.0
 
     def lower_upper(self) -> tuple[float, float]:
         """The (lower, upper) limits of the relative angle (-inf / +inf where the joint has no stop)."""
@@ -185,7 +220,9 @@ class JointSpec(Strict):
 
 
 class FootSpec(Strict):
-    """A foot: an arc (radius > 0) or a point (radius 0) on a body, its centre in the body frame."""
+    """A foot: an arc (radius > 0) or a point (radius 0) on a body, its centre in the body frame; in space also a
+    sphere, a torus or an ellipsoid (:class:`~biped_sim.config.space_description.SpaceFoot`'s shapes, in the body's
+    sagittal plane: a torus's ring in x'-y', an ellipsoid's semi-axes along x', y', z')."""
 
     name: str = Field(..., min_length=1, description="Unique foot name.")
     body: str = Field(..., description="The body carrying it.")
@@ -197,6 +234,58 @@ class FootSpec(Strict):
         "plane; a planar model puts every foot in the sagittal plane. A walker with a foot off it stands on its "
         "feet in roll and yaw; one without is held in its plane.",
     )
+    shape: Literal["arc", "sphere", "torus", "ellipsoid"] = Field(
+        "arc",
+        description="'arc' (a point at radius 0; in space a disc's edge in the sagittal plane); with "
+        f"{IN_SPACE}: 'sphere', 'torus' (a ring of ``radius`` in its ``plane`` thickened by ``tube``) or "
+        "'ellipsoid' (``axes``).",
+    )
+    tube: float = Field(0.0, ge=0, description="A torus's tube radius [m] (the other shapes: 0).")
+    plane: Literal["sagittal", "lateral"] = Field(
+        "sagittal",
+        description="A torus's ring's plane: 'sagittal' (x'-y': curved radius + tube fore-aft, tube sideways) or "
+        "'lateral' (y'-z', its lowest point ``radius`` below the centre: tube fore-aft, radius + tube sideways, a "
+        "foot rounder sideways than fore-aft, which stands in roll).",
+    )
+    axes: Vector3 | None = Field(
+        None,
+        description="An ellipsoid's semi-axes along x', y', z' [m] (radius 0): curved ax^2 / ay fore-aft and az^2 / "
+        "ay sideways at its bottom, upright. It starts on the arc of its y' semi-axis, exact upright (tilted, its "
+        "bottom's height and rolling differ by (1 - ax^2 / ay^2) of the tilt's square: a short transient).",
+    )
+
+    @model_validator(mode="after")
+    def _a_shape(self) -> FootSpec:
+        if self.plane != "sagittal" and self.shape != "torus":
+            raise ValueError("plane: only a torus's ring has a plane other than the sagittal")
+        self.in_space()  # SpaceFoot's checks of radius, tube and axes
+        return self
+
+    def in_space(self) -> SpaceFoot:
+        """The foot as description3d's foot, in its leg frame (x forward, y left, z up: x', -z', y')."""
+        shape = {"arc": "point" if self.radius == 0.0 else "ring"}.get(self.shape, self.shape)
+        axes = None if self.axes is None else (self.axes[0], self.axes[2], self.axes[1])
+        normal = (0.0, 1.0, 0.0) if self.plane == "sagittal" else (1.0, 0.0, 0.0)
+        return SpaceFoot(
+            shape=shape, centre=(self.centre[0], -self.lateral, self.centre[1]), radius=self.radius, tube=self.tube,
+            axes=axes, normal=normal,
+        )  # fmt: skip
+
+    def sagittal_arc(self) -> tuple[tuple[float, float], float]:
+        """(centre, radius) of the arc a planar model of the foot rolls on in its sagittal plane (an ellipsoid's:
+        its y' semi-axis, exact upright; a torus in the lateral plane: its tube's, ``radius`` below its centre)."""
+        if self.axes is not None:
+            return self.centre, self.axes[1]
+        if self.plane == "lateral":
+            return (self.centre[0], self.centre[1] - self.radius), self.tube
+        return self.centre, self.radius + self.tube
+
+    @property
+    def sagittal_radius(self) -> float:
+        """The radius of :meth:`sagittal_arc`, its centre's reach below the foot's centre added [m]: the bottom's
+        depth below the centre upright."""
+        (_, y), radius = self.sagittal_arc()
+        return radius + (self.centre[1] - y)
 
 
 class WalkerDescription(Strict):
@@ -270,6 +359,13 @@ class WalkerDescription(Strict):
                 raise ValueError(f"joints: element {element.name!r} of joint {joint.name!r} acts against its own body")
         return self
 
+    def features_in_space(self) -> list[str]:
+        """The dotted fields that only the spatial formulation represents: joints about another axis than z', feet
+        of another shape than an arc (a planar model refuses them, naming the first)."""
+        return [f"walker.description.joints.{j.name}.axis" for j in self.joints if not j.lateral_axis] + [
+            f"walker.description.feet.{f.name}.shape" for f in self.feet if f.shape != "arc"
+        ]
+
     def joint_elements(self) -> list[tuple[JointSpec, ElementSpec, str]]:
         """Every joint's passive elements with the body each acts against (its ``against``, or the joint's parent),
         in the joints' order."""
@@ -328,7 +424,7 @@ class WalkerDescription(Strict):
             for child, joint in joint_of.items():
                 if joint.parent in origin and child not in origin:
                     origin[child] = (origin[joint.parent][0] + joint.at[0], origin[joint.parent][1] + joint.at[1])
-        return -min(origin[f.body][1] + f.centre[1] - f.radius for f in self.feet)
+        return -min(origin[f.body][1] + f.centre[1] - f.sagittal_radius for f in self.feet)
 
     def state_keys(self) -> tuple[str, ...]:
         """The initial-state keys: per leg role (stance, then swing if two legs) and body role, angle then rate,

@@ -15,6 +15,7 @@ import copy
 import functools
 import math
 import operator
+import types
 import typing
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -119,6 +120,8 @@ def resolve_numbers(model: type[BaseModel], data: Any, names: Mapping[str, float
         elif key in records and isinstance(value, list):
             out[key] = [resolve_numbers(records[key], item, names, f"{where}.{key}.{_label(item, i)}") for i, item in
                         enumerate(value)]  # fmt: skip
+        elif key in records and isinstance(value, dict):  # a record of its own (a body's inertia_tensor)
+            out[key] = resolve_numbers(records[key], value, names, f"{where}.{key}")
     return out  # a key outside the model is left for the model to refuse
 
 
@@ -132,11 +135,18 @@ def _field_kinds(model: type[BaseModel]) -> tuple[frozenset[str], dict[str, type
 
 
 def _record_type(annotation: Any) -> type[BaseModel] | None:
-    """The record type of a ``list[Record]`` field, else None."""
+    """The record type of a ``list[Record]`` or a ``Record | None`` field, else None."""
     args = typing.get_args(annotation)
-    if typing.get_origin(annotation) is list and args and isinstance(args[0], type) and issubclass(args[0], BaseModel):
+    origin = typing.get_origin(annotation)
+    if origin is list and args and isinstance(args[0], type) and issubclass(args[0], BaseModel):
         return args[0]
+    if origin in (typing.Union, types.UnionType) and len(records := [a for a in args if _is_record(a)]) == 1:
+        return records[0]
     return None
+
+
+def _is_record(annotation: Any) -> bool:
+    return isinstance(annotation, type) and issubclass(annotation, BaseModel)
 
 
 def _label(item: Any, index: int) -> str:
@@ -195,13 +205,30 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+MIRRORED = {  # what the mirror across the sagittal plane (z' -> -z') negates: part -> (key, entries or None)
+    "joints": (("lateral", None), ("axis", (0, 1))),  # an axis is a turn's: its in-plane components flip
+    "feet": (("lateral", None),),
+    "bodies": (("com_lateral", None),),
+}
+
+
 def _mirror_lateral(leg: dict[str, Any]) -> None:
     """The second leg is the first's mirror image across its sagittal plane: its joints' and feet's ``lateral``
-    places negated (numbers by now: the parameters are evaluated before the mirror)."""
-    for part in ("joints", "feet"):
-        for item in leg.get(part, []):
-            if isinstance(item, dict) and isinstance(item.get("lateral"), int | float):
-                item["lateral"] = -item["lateral"]
+    places, its bodies' ``com_lateral``, its joints' axes (x' and y' components: z' -> -z' turns a rotation's
+    sense) and its bodies' tensors' xz and yz products negated (numbers by now: the parameters are evaluated
+    before the mirror)."""
+    for part, keys in MIRRORED.items():
+        for item in (i for i in leg.get(part, []) if isinstance(i, dict)):
+            for key, entries in keys:
+                value = item.get(key)
+                if entries is None and isinstance(value, int | float):
+                    item[key] = -value
+                elif entries is not None and isinstance(value, list | tuple) and len(value) == 3:
+                    item[key] = [-v if k in entries and isinstance(v, int | float) else v for k, v in enumerate(value)]
+            tensor = item.get("inertia_tensor") if part == "bodies" else None
+            if isinstance(tensor, dict):
+                item["inertia_tensor"] = {**tensor, **{k: -tensor[k] for k in ("xz", "yz")
+                                                       if isinstance(tensor.get(k), int | float)}}  # fmt: skip
 
 
 def _leg_copy(leg: dict[str, Any], own: set[str], suffix: str) -> dict[str, Any]:

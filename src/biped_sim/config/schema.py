@@ -15,9 +15,9 @@ from pydantic import (
 )
 
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
-from biped_sim.config.description import LEG_KEYS
+from biped_sim.config.description import IN_SPACE, LEG_KEYS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
-from biped_sim.config.walker_registry import capabilities, refusal
+from biped_sim.config.walker_registry import capabilities, profile_refusal, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
 from biped_sim.errors import quote
@@ -256,8 +256,8 @@ class Config(Strict):
         caps = capabilities(self.walker.kind)
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
-        if self.ground.profile.kind != "flat" and not caps.profiles:
-            raise ValueError(f"ground.profile: the {self.walker.kind} walker walks on flat ground only")
+        if self.ground.profile.kind != "flat" and (reason := profile_refusal(self.walker.kind, self.dynamics)):
+            raise ValueError(f"ground.profile: {reason}")
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
@@ -267,7 +267,7 @@ class Config(Strict):
                 "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
                 "(formulation.kind: spatial, or walker.kind: description3d)"
             )
-        if reason := profile_support_error(self.ground, self.dynamics, self.formulation.kind, self.friction.model):
+        if reason := profile_support_error(self.ground, self.dynamics, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
         hertz = self.contact.materials is not None or self.dynamics == "compliant"
         if self.contact.stiffness is None and hertz and self.walker.point_feet:
@@ -283,10 +283,13 @@ class Config(Strict):
         return self
 
     def _described_walker_checks(self) -> None:
-        """A described walker's bodies all carry mass."""
+        """A described walker's bodies all carry mass; its features in space only in the spatial formulation."""
         described = self.walker.description
         if described is None:
             return
+        in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        if not in_space and (features := described.features_in_space()):
+            raise ValueError(f"{features[0]}: only in space ({IN_SPACE}); a planar or rigid model has it not")
         massless = described.massless_bodies()
         if self.dynamics == "rigid" and len(massless) < len(described.bodies):  # held by a locked joint, or light
             one_stop = {j.child for j in described.joints if len(j.stops) == 1}

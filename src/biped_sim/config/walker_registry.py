@@ -26,7 +26,7 @@ class WalkerCapabilities:
     """What one walker kind supports."""
 
     formulations: dict[str, tuple[str, ...]]  # dynamics -> formulation kinds
-    profiles: bool  # ground profiles other than flat
+    profiles: tuple[str, ...]  # the dynamics in which it walks ground profiles other than flat
     pushes: bool  # simulation.pushes
     studies: tuple[str, ...]  # names from STUDIES
     nondimensional: bool = False  # written in units of g = l = hip mass = 1 (Garcia's): rigid gravity 1, no SI units
@@ -43,20 +43,28 @@ class WalkerCapabilities:
 
 WALKERS: dict[str, WalkerCapabilities] = {
     "compass": WalkerCapabilities(
-        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, STUDIES, strike_check=True
+        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)},
+        DYNAMICS,
+        True,
+        STUDIES,
+        strike_check=True,
     ),
     "simplest": WalkerCapabilities(
-        {"rigid": ("planar",)}, True, True, RIGID_STUDIES, nondimensional=True, light_legs=True
+        {"rigid": ("planar",)}, ("rigid",), True, RIGID_STUDIES, nondimensional=True, light_legs=True
     ),
-    "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, True, True, RIGID_STUDIES, energy_per_kg=True),
+    "rimless_wheel": WalkerCapabilities({"rigid": ("planar",)}, ("rigid",), True, RIGID_STUDIES, energy_per_kg=True),
     # Liu's machine: its sagittal motion in minimal coordinates, the whole machine in spatial ones
-    "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, True, True, ("basin",)),
+    "four_legged": WalkerCapabilities({"compliant": ("spatial", "minimal")}, ("compliant",), True, ("basin",)),
     "description": WalkerCapabilities(
-        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)}, True, True, (*RIGID_STUDIES, "converge")
+        {"compliant": ("planar", "minimal", "spatial"), "rigid": ("planar",)},
+        DYNAMICS,
+        True,
+        (*RIGID_STUDIES, "converge"),
     ),
-    # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs
+    # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs (on
+    # ground profiles too: its rigid step map reads the plane)
     "description3d": WalkerCapabilities(
-        {"rigid": ("planar",), "compliant": ("spatial",)}, False, True, ("limit_cycle", "basin"), space=True
+        {"rigid": ("planar",), "compliant": ("spatial",)}, ("compliant",), True, ("limit_cycle", "basin"), space=True
     ),
 }
 
@@ -79,6 +87,16 @@ def refusal(kind: str, dynamics: str, formulation: str) -> tuple[str, str] | Non
         return "formulation.kind", f"{formulation!r} is available with dynamics: {' and '.join(offered)} only"
     kinds = " or ".join(caps.formulations[dynamics])
     return "walker.kind", f"{kind!r} needs formulation.kind: {kinds} with dynamics: {dynamics}"
+
+
+def profile_refusal(kind: str, dynamics: str) -> str | None:
+    """Why walker ``kind`` walks no ground profile other than flat in ``dynamics`` (a one-line reason), or None."""
+    walks = WALKERS[kind].profiles
+    if dynamics in walks:
+        return None
+    if not walks:
+        return f"the {kind} walker walks on flat ground only"
+    return f"the {kind} walker walks on flat ground only with dynamics: {dynamics} (profiles: dynamics: {walks[0]})"
 
 
 def supports_study(kind: str, study: str) -> bool:

@@ -166,19 +166,17 @@ class SlopedGround(Protocol):
     profile: GroundProfile
 
 
-def profile_support_error(ground: SlopedGround, dynamics: str, formulation: str, friction: str) -> str | None:
+def profile_support_error(ground: SlopedGround, dynamics: str, friction: str) -> str | None:
     """Why ``ground.profile`` cannot run with these settings (a one-line reason), or None.
 
     The walker starts with its stance foot at x = 0 on level ground; profiles other than flat run in
-    the compliant planar and minimal formulations (the spatial feet read the plane), without LuGre friction (one
-    bristle state per foot cannot serve two contact features), and in the rigid models (their heel strike reads
-    the profile: :mod:`biped_sim.rigid.ground`).
+    every compliant formulation (the spatial one: :mod:`biped_sim.multibody.spatial_feet`), without LuGre friction
+    (one bristle state per foot cannot serve two contact features), and in the rigid models (their heel strike
+    reads the profile: :mod:`biped_sim.rigid.ground`).
     """
     profile = ground.profile
     if isinstance(profile, FlatProfile):
         return None
-    if dynamics == "compliant" and formulation == "spatial":
-        return "profiles other than flat need formulation.kind: planar or minimal (or dynamics: rigid)"
     if dynamics == "compliant" and friction == "lugre":
         return "profiles other than flat do not support friction.model: lugre"
     vertices, ends = profile_arrays(profile, ground.slope)

@@ -103,6 +103,13 @@ def recorder_for(
     return make_recorder(ny, nf, n_samples, n_strikes, initial_stance_foot), interval
 
 
+def explicit_loop(system: tuple, y: np.ndarray, modes: np.ndarray, method: str, rec: Recorder) -> Loop:
+    """What the explicit loop works on for ``system`` from the state (y, modes) by ``method``, recording into ``rec``
+    (its tableau, workspace, contact buffers and scratch): a run's, and the argument types of a compile aside."""
+    scratch = make_scratch(len(y), len(modes), event_count(system))
+    return Loop(tableau(method), system, make_workspace(system), contact_buffers(system), y, modes, scratch, rec)
+
+
 def integrate_model(
     system: tuple,
     y0: np.ndarray,
@@ -133,9 +140,7 @@ def integrate_model(
     if stiff and checks.energy > 0.0:  # the explicit loop sets the checks' reference itself (compiled, no twin)
         start_checks(rec, system, y, modes)
     if not stiff:
-        tab = tableau(integrator.method)
-        scratch = make_scratch(ny, nf, event_count(system))
-        loop = Loop(tab, system, make_workspace(system), contact_buffers(system), y, modes, scratch, rec)
+        loop = explicit_loop(system, y, modes, integrator.method, rec)
     applied = []
     for segment_end in [at for at, _ in pushes] + [t_end]:
         if stiff:
@@ -146,7 +151,7 @@ def integrate_model(
             )  # fmt: skip
         else:
             cfg = Settings(
-                segment_end, integrator.dt, integrator.adaptive and tab.kind != FIXED, integrator.rtol,
+                segment_end, integrator.dt, integrator.adaptive and loop.tab.kind != FIXED, integrator.rtol,
                 integrator.atol, integrator.max_step, interval, max_strikes or 0, checks,
             )  # fmt: skip
             loop = loop._replace(rec=rec)

@@ -115,7 +115,7 @@ def step_factor(err: float, error_order: int, after_rejection: bool) -> tuple[bo
 
 
 @kernel
-def _rms_norm(v: np.ndarray, scale: np.ndarray) -> float:
+def rms_norm(v: np.ndarray, scale: np.ndarray) -> float:
     """sqrt(mean((v / scale)^2))."""
     s = 0.0
     for i in range(v.shape[0]):
@@ -158,8 +158,8 @@ def initial_step_trial(y: np.ndarray, sc: Scratch, rtol: float, atol: float, max
     ny = y.shape[0]
     for i in range(ny):
         sc.y_dense[i] = atol + rtol * abs(y[i])
-    d0 = _rms_norm(y, sc.y_dense)
-    d1 = _rms_norm(sc.k[0], sc.y_dense)
+    d0 = rms_norm(y, sc.y_dense)
+    d1 = rms_norm(sc.k[0], sc.y_dense)
     h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
     h0 = min(h0, max_step)
     for i in range(ny):
@@ -172,7 +172,7 @@ def initial_step_size(tab: Tableau, sc: Scratch, h0: float, d1: float, max_step:
     """Second half of the starting step: from k[1] = f at the trial point, the estimate of f' and the step."""
     for i in range(sc.y_stage.shape[0]):
         sc.y_stage[i] = sc.k[1, i] - sc.k[0, i]
-    d2 = _rms_norm(sc.y_stage, sc.y_dense) / h0
+    d2 = rms_norm(sc.y_stage, sc.y_dense) / h0
     q = tab.error_order + 1
     if max(d1, d2) <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)

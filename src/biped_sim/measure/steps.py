@@ -150,7 +150,18 @@ def _rolling_coordinate(y: np.ndarray, model: BuiltModel, foot: int) -> float:
     system = model.system
     m = measures(system)
     theta = m.pitch(y, system, int(system.foot_body[foot]))[0]
-    return _contact_x(y, system, foot) + system.foot_radius[foot] * theta
+    return _contact_x(y, system, foot) + _rolling_radius(system, foot) * theta
+
+
+def _rolling_radius(system: object, foot: int) -> float:
+    """The foot's radius of curvature fore-aft at its bottom: its arc's (a planar model's), a sphere's, a disc's in
+    the sagittal plane plus its tube, a ring's in the lateral plane only its tube's (an ellipsoid's taken as its
+    zero radius: its slip reads as the contact point's travel)."""
+    radius = float(system.foot_radius[foot])  # type: ignore[attr-defined]
+    axis = getattr(system, "foot_axis", None)
+    if axis is None or not np.any(axis[foot]):
+        return radius
+    return radius * abs(float(axis[foot][2])) + float(system.foot_tube[foot])  # type: ignore[attr-defined]
 
 
 def step_table(model: BuiltModel, run: Integration) -> StepTable:

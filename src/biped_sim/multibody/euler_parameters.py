@@ -141,7 +141,7 @@ def parameters(y: np.ndarray, b: int) -> tuple[float, float, float, float]:
     return y[7 * b + 3], y[7 * b + 4], y[7 * b + 5], y[7 * b + 6]
 
 
-@kernel
+@kernel(literal_arguments=False)
 def vec3(a: np.ndarray, row: int, k: int) -> tuple[float, float, float]:
     """a[row, k:k + 3] as a tuple."""
     return a[row, k], a[row, k + 1], a[row, k + 2]

@@ -40,6 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from biped_sim.contact.ground import FLAT_GROUND, Ground
 from biped_sim.contact.joint_element import NO_ELEMENTS, JointElements
 from biped_sim.contact.stop import NO_STOPS, Stops
 from biped_sim.kernel import kernel
@@ -89,6 +90,7 @@ class SpatialSystem(NamedTuple):
     # the joint stops (multibody.hinge: their modes follow the feet's in the mode table), springs and dampers
     stops: Stops | HingeStops = NO_STOPS
     elements: JointElements | HingeElements = NO_ELEMENTS
+    ground: Ground = FLAT_GROUND  # contact.ground: FlatGround or ProfileGround (kernels specialise on its type)
 
 
 class Workspace(NamedTuple):

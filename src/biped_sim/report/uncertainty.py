@@ -91,9 +91,13 @@ def mfpt_figure(curves: Sequence[MfptCurve]) -> Figure:
         x = np.array(curve.roughness)
         mfpt = np.array([e.mfpt for e in curve.estimates])
         ci = np.array([e.ci for e in curve.estimates])
-        upper = np.where(np.isfinite(ci[:, 1]), ci[:, 1], mfpt)
-        ax.errorbar(x, mfpt, yerr=[mfpt - ci[:, 0], upper - mfpt], marker="o", ls="", color=f"C{i}", capsize=2,
+        fell = np.isfinite(mfpt)
+        m, low, high = mfpt[fell], ci[fell, 0], ci[fell, 1]
+        high = np.where(np.isfinite(high), high, m)  # an unbounded upper end: drawn to the estimate
+        ax.errorbar(x[fell], m, yerr=[m - low, high - m], marker="o", ls="", color=f"C{i}", capsize=2,
                     label=f"{curve.ground} walks ({curve.seeds} seeds)")  # fmt: skip
+        if not fell.all():  # no walk fell: only the interval's lower end is known
+            ax.plot(x[~fell], ci[~fell, 0], marker="^", ls="", color=f"C{i}", label="no fall: MFPT above")
         if curve.chain is not None:
             ax.plot(x, curve.chain, color=f"C{i}", label="Markov chain")
     ax.set_yscale("log")

@@ -54,7 +54,7 @@ FLOW, IMPACT, AT_REST = 0, 1, 2  # the light rows' right side: gravity and bias;
 RELEASED = 2.0  # a lock's active field: held through the stance, released through the heel strike
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _row_jacobian(tree: RigidTree, t: int, w: np.ndarray, qd: np.ndarray, jacobian: np.ndarray) -> tuple[float, float]:
     """Write the Jacobian columns of the point whose w vectors are w to ``jacobian`` (n x 2) and return its bias
     acceleration Jdot qd = -sum_k Rot(theta_k) w_k thetadot_k^2 (from the same turned vectors: one pass, cached
@@ -70,7 +70,7 @@ def _row_jacobian(tree: RigidTree, t: int, w: np.ndarray, qd: np.ndarray, jacobi
     return bx, by
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _assemble(tree: RigidTree, t: int, m: int, qd: np.ndarray, flow: bool, release: bool) -> int:
     """Write M of table t and the active lock rows into the workspace's (m x m) matrix and, for the ``flow``, the
     generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into its right side, work[:m] (each row's terms by
@@ -105,7 +105,7 @@ def _assemble(tree: RigidTree, t: int, m: int, qd: np.ndarray, flow: bool, relea
     return used
 
 
-@kernel(reference_counts=False)
+@kernel(reference_counts=False, literal_arguments=False)
 def _solve(a: np.ndarray, v: np.ndarray, used: int, r: int) -> None:
     """Solve the leading (used x used) block of the matrix a for the vector at v[r:], in place: Cramer's rule up to
     2 x 2 (the compass, the wheel), else Gaussian elimination with partial pivoting (the constrained system is
@@ -140,7 +140,7 @@ def _solve(a: np.ndarray, v: np.ndarray, used: int, r: int) -> None:
         v[r + col] = total / a[col, col]
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _pin_light(tree: RigidTree, t: int) -> None:
     """Give the light coordinates of table t (zero rows and columns of M) a unit diagonal and a zero right side,
     so that the heavy solve leaves them at 0 for :func:`_light_tier`."""
@@ -150,7 +150,7 @@ def _pin_light(tree: RigidTree, t: int) -> None:
             tree.work[k] = 0.0
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _light_tier(tree: RigidTree, t: int, q: np.ndarray, qd: np.ndarray, mode: int, m: int) -> None:
     """The light coordinates' equations, the limit of infinitesimal foot masses (Garcia et al. 1998): each light
     row's balance across the light coordinates, sum_i J_iL^T (J_i a - b_i) = 0, with the heavy part of a already
@@ -232,7 +232,7 @@ def tree_energy(tree: RigidTree, x: np.ndarray) -> tuple[float, float]:
     return kinetic, potential + tree_element_energy(tree, q)
 
 
-@kernel
+@kernel(literal_arguments=False)
 def _impact_rates(tree: RigidTree, t: int, q: np.ndarray, qd: np.ndarray, release: bool) -> None:
     """The rates after a plastic impact with the active locks (the RELEASED ones free when ``release``) in table t,
     written to the workspace's right side; its own right side is each row's momentum just before, m J'^T v- + I
@@ -269,7 +269,7 @@ def _released_closing(tree: RigidTree) -> bool:
     return False
 
 
-@kernel
+@kernel(literal_arguments=False)
 def tree_impact(tree: RigidTree, x: np.ndarray, strike: bool, out: np.ndarray) -> None:
     """out = the state after a plastic impact with the active locks: a stop strike (table 0), or the heel strike
     (``strike``: table 1, the new stance foot pinned; then the roles swapped, coordinate k after it being

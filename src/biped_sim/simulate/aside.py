@@ -5,7 +5,7 @@ thread): the integration loop first, then, after the integration, its measures (
 of its files: the measure loops and the twins Python calls). The measures do not depend on the integration, only
 on the types of its arrays, so :func:`prepare_compiling_aside` forks a process that writes to the on-disk cache,
 on a second core while this process compiles the loop: first the contact channels (their tree, the contact
-forces, is the right-hand side's, the largest the loop's compile reaches early), then the loop's own kernels
+forces, is the right-hand side's, the largest the loop's compile reaches early), then the loop's callees
 that its compile reaches last (:func:`compile_loop_callees`), then the measures of a stand-in of the run
 (:func:`stand_in`: two samples and two heel strikes of the model in its start state). The loop's compile and the
 run's measures then load them from the cache (:func:`join` waits for the process before the run is measured).
@@ -22,18 +22,18 @@ from multiprocessing import get_context
 from multiprocessing.process import BaseProcess
 
 import numpy as np
+from numba.core.dispatcher import Dispatcher
 
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config
 from biped_sim.integrate import blowup, dense, recorder, stepper
-from biped_sim.integrate.driver import STIFF_METHODS, Integration, finish_integration
+from biped_sim.integrate.driver import STIFF_METHODS, Integration, explicit_loop, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
-from biped_sim.integrate.tableaus import tableau
-from biped_sim.kernel import Kernel, compile_for
+from biped_sim.kernel import compile_for, overload_implementation
 from biped_sim.measure.channels import contact_channels
 from biped_sim.measure.steps import step_table
 from biped_sim.multibody import events
-from biped_sim.multibody.dispatch import contact_buffers, make_workspace
+from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.start import RigidStart
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
@@ -56,35 +56,39 @@ def stand_in(model: BuiltModel) -> Integration:
     return finish_integration(rec, 1.0)
 
 
-def loop_callees(config: Config, model: BuiltModel) -> tuple[tuple[Kernel, tuple[object, ...]], ...]:
-    """The explicit loop's own kernels with arguments of the types it calls them with, those its compile reaches
-    last first (none for a stiff method, which has no loop); the arguments come from the driver's constructors."""
+def loop_callees(config: Config, model: BuiltModel) -> tuple[tuple[Dispatcher, tuple[object, ...]], ...]:
+    """The explicit loop's callees with arguments of the types it calls them with, those its compile reaches last
+    first (none for a stiff method, which has no loop): the formulation's fall (the overload implementation its
+    ``system_fall`` compiles), then the loop's own kernels; the arguments come from the driver's constructor
+    (:func:`~biped_sim.integrate.driver.explicit_loop`).
+
+    Not the right-hand side: the loop's compile reaches it some 3 CPU s after its start, before a second process
+    started with it could have compiled it with the contact forces below it (about 6 CPU s)."""
     if config.integrator.method in STIFF_METHODS:
         return ()
-    system, y = model.system, np.array(model.y0, dtype=np.float64)
-    modes = np.array(model.modes0, dtype=np.float64)
-    sc = stepper.make_scratch(len(y), len(modes), events.event_count(system))
-    rec, tab = make_recorder(len(y), len(modes), 1, 1, 0), tableau(config.integrator.method)
-    work = make_workspace(system)
+    y, modes = np.array(model.y0, dtype=np.float64), np.array(model.modes0, dtype=np.float64)
+    loop = explicit_loop(model.system, y, modes, config.integrator.method, make_recorder(len(y), len(modes), 1, 1, 0))
+    system, work, sc, rec = loop.system, loop.work, loop.sc, loop.rec
     return (
+        (overload_implementation(formulation_of(system).fall), (y, system)),
         (blowup.fall, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, 1)),
         (events.system_is_leading, (y, system, 0)),
-        (events.system_update_modes, (0.0, y, system, modes, contact_buffers(system))),
-        (dense.dense_eval, (tab, 0.0, 0.0, y, sc, sc.y_new)),
-        (dense.dense_coefficients, (tab, 0.0, y, sc)),
-        (stepper._rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
+        (events.system_update_modes, (0.0, y, system, modes, loop.contact)),
+        (dense.dense_eval, (loop.tab, 0.0, 0.0, y, sc, sc.y_new)),
+        (dense.dense_coefficients, (loop.tab, 0.0, y, sc)),
+        (stepper.rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
         (recorder.has_room, (rec, len(modes))),
         (recorder.record_sample, (rec, 0.0, y, modes)),
     )
 
 
 def compile_loop_callees(config: Config, model: BuiltModel) -> None:
-    """Compile (and cache) the explicit loop's own kernels (:func:`loop_callees`), those it reaches last first.
+    """Compile (and cache) the explicit loop's callees (:func:`loop_callees`), those it reaches last first.
 
     The run's process compiles the loop (:func:`~biped_sim.integrate.explicit.advance`) while this one runs:
     numba's front end first works over the loop's whole inlined body, then types it from its start, compiling
-    each kernel at its first call, or loading it from the on-disk cache if another process has written it. The
-    late callees (the fall's checks, the event update, the dense output) compiled here are in the cache by then.
+    each callee at its first call, or loading it from the on-disk cache if another process has written it. The
+    late callees compiled here (the fall and its checks, the event update, the dense output) are in the cache by then.
     """
     for function, args in loop_callees(config, model):
         compile_for(function, args)

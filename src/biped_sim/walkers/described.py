@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import Config, InitialState
-from biped_sim.config.description import WalkerDescription
+from biped_sim.config.description import LATERAL, FootSpec, WalkerDescription
 from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, JointElements, element_parameters, make_elements
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.profile import profile_ground
@@ -62,6 +62,10 @@ class Tree:
     joint_lateral: np.ndarray  # (nb,) each body's origin along z' from its joint's ``at`` (the spatial formulation's)
     foot_names: list[str]
     legs: list[list[int]]  # body indices, hip down
+    com_lateral: np.ndarray  # (nb,) centre of mass along z' from the body's origin (the spatial formulation's)
+    joint_axis: np.ndarray  # (nb, 3) the axis of the body's joint in its parent's frame (root: z')
+    foot_hertz: np.ndarray  # (nf,) the radius of Hertz's sphere at each foot's bottom (an arc's: its radius)
+    foot_shape: np.ndarray  # (nf, 16) the spatial formulation's foot (:func:`foot_in_space`)
 
 
 def _tree_order(description: WalkerDescription) -> list[str]:
@@ -90,8 +94,11 @@ def _fold(description: WalkerDescription, name: str) -> tuple[float, np.ndarray,
 def _spatial_inertia(description: WalkerDescription, name: str, com: np.ndarray, inertia: float) -> np.ndarray:
     """Body ``name``'s inertia tensor about its folded centre of mass ``com`` (3, 3): its ``spatial_inertia`` with
     its parts added by parallel axes (all in the sagittal plane z' = 0), ``inertia`` (the folded moment) about z';
-    none given, ``inertia`` about every axis."""
+    none given, ``inertia`` about every axis; its ``inertia_tensor`` or a centre of mass off the plane
+    (:func:`_tensor_in_space`)."""
     body = next(b for b in description.bodies if b.name == name)
+    if body.inertia_tensor is not None or body.com_lateral != 0.0:
+        return _tensor_in_space(description, name)
     if body.spatial_inertia is None:
         return np.eye(3) * inertia
     xx, yy, xy = body.spatial_inertia
@@ -101,6 +108,18 @@ def _spatial_inertia(description: WalkerDescription, name: str, com: np.ndarray,
         dx, dy = r - com
         xx, yy, xy = xx + m * dy**2, yy + m * dx**2, xy - m * dx * dy
     return np.array([[xx, xy, 0.0], [xy, yy, 0.0], [0.0, 0.0, inertia]])
+
+
+def _tensor_in_space(description: WalkerDescription, name: str) -> np.ndarray:
+    """Body ``name``'s inertia tensor about its folded centre of mass in space (the point masses at z' = 0): its
+    ``inertia_tensor`` (or its moment about every axis) and each part's m (|d|^2 1 - d d^T)."""
+    body = next(b for b in description.bodies if b.name == name)
+    own = body.inertia_tensor.matrix() if body.inertia_tensor is not None else np.eye(3) * body.moment_of_inertia
+    parts = [(body.mass, np.array([*body.com, body.com_lateral]))] + [
+        (p.mass, np.array([*p.at, 0.0])) for p in description.point_masses if p.body == name
+    ]
+    com = sum(m * r for m, r in parts) / sum(m for m, _ in parts)
+    return own + sum(m * ((r - com) @ (r - com) * np.eye(3) - np.outer(r - com, r - com)) for m, r in parts)
 
 
 def resolve_tree(description: WalkerDescription) -> Tree:
@@ -132,14 +151,40 @@ def resolve_tree(description: WalkerDescription) -> Tree:
             for child, other, e in description.element_bodies(index)
         ],
         foot_body=np.array([index[f.body] for f in feet], dtype=np.int64),
-        foot_centre=np.array([f.centre for f in feet], dtype=np.float64).reshape(-1, 2),
-        foot_radius=np.array([f.radius for f in feet]),
+        foot_centre=np.array([f.sagittal_arc()[0] for f in feet], dtype=np.float64).reshape(-1, 2),
+        foot_radius=np.array([f.sagittal_arc()[1] for f in feet]),
         foot_lateral=np.array([f.lateral for f in feet]),
         joint_lateral=joint_lateral,
         foot_names=[f.name for f in feet],
+        com_lateral=np.array([_com_lateral(description, name) for name in names]),
+        joint_axis=np.array([_axis(description, name) for name in names]),
+        foot_shape=np.array([foot_in_space(f) for f in feet]).reshape(-1, 16),
+        foot_hertz=np.array([f.in_space().hertz_radius for f in feet]),
         legs=[[index[b] for b in leg] for leg in description.legs],
         fall_angle=[next(b.fall_angle for b in description.bodies if b.name == name) for name in names],
     )
+
+
+def foot_in_space(foot: FootSpec) -> np.ndarray:
+    """(16,): the foot's centre (x', y'), disc axis (z' for an arc and a sagittal torus, x' for a lateral torus, 0
+    for a sphere or an ellipsoid), radius, tube and quadric (an ellipsoid's diag(ax^2, ay^2, az^2), else 0)."""
+    axis = {"sphere": (0.0,) * 3, "ellipsoid": (0.0,) * 3}.get(foot.shape, LATERAL)
+    axis = (1.0, 0.0, 0.0) if foot.plane == "lateral" else axis
+    quadric = np.diag(np.square(foot.axes)) if foot.axes is not None else np.zeros((3, 3))
+    return np.array([*foot.centre, *axis, foot.radius, foot.tube, *quadric.ravel()])
+
+
+def _com_lateral(description: WalkerDescription, name: str) -> float:
+    """Body ``name``'s folded centre of mass along z' (its point masses at z' = 0)."""
+    body = next(b for b in description.bodies if b.name == name)
+    mass = body.mass + sum(p.mass for p in description.point_masses if p.body == name)
+    return body.mass * body.com_lateral / mass if body.com_lateral else 0.0
+
+
+def _axis(description: WalkerDescription, name: str) -> np.ndarray:
+    """The unit axis of body ``name``'s joint in its parent's frame (the root's: z')."""
+    axis = np.array(next((j.axis for j in description.joints if j.child == name), LATERAL), dtype=np.float64)
+    return axis / np.linalg.norm(axis)
 
 
 def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
@@ -300,7 +345,7 @@ def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: l
     return state
 
 
-def _angle_key(tree: Tree, keys: list[str], b: int) -> tuple[str, str]:
+def angle_key(tree: Tree, keys: list[str], b: int) -> tuple[str, str]:
     """(body b's initial angle key, the limit it is held to): a leg's body in ``keys``' order (stance leg, then swing
     leg, hip down) against simulation.fall_leg_angle, a body off the legs its ``<name>_angle`` against its own."""
     per_leg = 2 * len(tree.legs[0])
@@ -323,7 +368,7 @@ def tree_start(
     limits = fall_angles(tree, config)
     for b in range(len(tree.names)):
         if abs(angles[b, 0]) >= limits[b]:
-            key, limit = _angle_key(tree, keys, b)
+            key, limit = angle_key(tree, keys, b)
             raise ConfigError(f"simulation.initial.{key}", f"beyond {limit}: the walker starts fallen")
     foot = stance_feet(tree)[0]
     contact = np.array([0.0, -static_penetration])
@@ -377,7 +422,7 @@ def build_described(config: Config, initial: InitialState | Mapping[str, float])
     description = describe(config)
     tree = resolve_tree(description)
     length = description.leg_length()
-    radius = float(np.max(tree.foot_radius))
+    radius = float(np.max(tree.foot_hertz))
     stiffness = contact_stiffness(config, radius)
     total_mass = float(np.sum(tree.mass))
     system = planar_tree_system(tree, config, stiffness, length)

@@ -7,7 +7,7 @@ leg as it lies on the hinge axis), joined by a revolute hinge: a SPHERICAL primi
 axis z' of one leg along the other's. Feet: a sphere is the formulation's sphere, a point a sphere of radius 0,
 and a ring its disc whose axis is the ring's plane normal (the lowest point of a circle against the ground
 plane, in closed form), a torus that disc with its tube, an ellipsoid its quadric
-(:func:`~biped_sim.multibody.spatial_kernels.foot_bottom`); a torus's or ellipsoid's Hertz stiffness is that of its
+(:func:`~biped_sim.multibody.spatial_feet.foot_bottom`); a torus's or ellipsoid's Hertz stiffness is that of its
 bottom's equivalent radius (``SpaceFoot.hertz_radius``). Friction acts in the tangent plane on the slip velocity
 vector (LuGre with a bristle vector), as for every spatial walker.
 
@@ -24,6 +24,7 @@ import numpy as np
 
 from biped_sim.config import Config
 from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.contact.profile import profile_ground
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.spatial import PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.model import (
@@ -115,6 +116,7 @@ def build_space_walker(config: Config, initial: object) -> BuiltModel:
         friction_params=friction,
         switches=switches,
         limits=contact_limits(config),
+        ground=profile_ground(config.ground.profile, config.ground.slope),
     )
     sinkage = static_contact_penetration(config, total_mass, stiffness)
     q, qd = start_state(legs, start, sinkage)

@@ -28,24 +28,37 @@ from biped_sim.config import Config, InitialState
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.multibody.hinge import FRAME, hinge_index, make_hinge_elements, make_hinge_stops
+from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import Tree, build_described, resolve_tree
 from biped_sim.walkers.model import BuiltModel
+from biped_sim.walkers.space_start import held_initial, turn_joints
 
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
-DISC_AXIS = Z  # the feet are discs in the body's sagittal plane
+
+
+def across(axis: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Two unit vectors u, v = axis x u perpendicular to the unit ``axis`` (z': x', y'; else u from x', or y' for an
+    axis along x')."""
+    u = np.array(X) - axis[0] * axis
+    u = u if np.linalg.norm(u) > 1e-6 else np.array(Y) - axis[1] * axis
+    u /= np.linalg.norm(u)
+    return tuple(u), tuple(np.cross(axis, u))
 
 
 def revolute(
-    body_a: int, hip_a: tuple[float, float], body_b: int, hip_b: tuple[float, float], lateral: float = 0.0
+    body_a: int, point_a: tuple[float, ...], body_b: int, point_b: tuple[float, ...], axis: tuple[float, ...] = Z
 ) -> list[tuple[int, int, int, tuple[float, ...]]]:
-    """Revolute joint about z' at the points (x', y') = hip_a of body a, ``lateral`` along its z' (a hip width),
-    and hip_b of body b in its z' = 0."""
+    """Revolute joint about ``axis`` (body a's frame, body b's alike at the joint's zero) at the point ``point_a``
+    of body a and ``point_b`` of body b: the two points coincide, body a's two vectors across the axis stay
+    perpendicular to body b's axis."""
+    u, v = across(np.asarray(axis, dtype=np.float64))
+    axis = tuple(float(a) for a in axis)
     return [
-        (SPHERICAL, body_a, body_b, (hip_a[0], hip_a[1], lateral, hip_b[0], hip_b[1], 0.0, 0.0)),
-        (PERPENDICULAR, body_a, body_b, (*X, *Z, 0.0)),
-        (PERPENDICULAR, body_a, body_b, (*Y, *Z, 0.0)),
+        (SPHERICAL, body_a, body_b, (*point_a, *point_b, 0.0)),
+        (PERPENDICULAR, body_a, body_b, (*u, *axis, 0.0)),
+        (PERPENDICULAR, body_a, body_b, (*v, *axis, 0.0)),
     ]
 
 
@@ -96,17 +109,18 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
     and start) lifted, each foot at its ``lateral`` place, each body with its spatial inertia, a revolute joint per
     planar joint; a walker with every foot in its sagittal plane also held in it by a planar joint of its root to
     the ground frame (a single disc foot is laterally unstable), one standing on feet apart free in roll and yaw."""
-    planar = build_described(config, initial)
-    tree = resolve_tree(describe(config))
+    description = describe(config)
+    tree = resolve_tree(description)
+    planar = build_described(config, held_initial(tree, initial, description.state_keys()))
     ps = planar.system
     nb = planar.n_bodies
+    points = joint_points(tree, ps)
     primitives = [
-        p
-        for (a, b), (xa, ya, xb, yb) in zip(ps.joint_bodies, ps.joint_points, strict=True)
-        for p in revolute(int(a), (float(xa), float(ya)), int(b), (float(xb), float(yb)), tree.joint_lateral[int(b)])
-    ]
+        p for (a, b), (s_a, s_b) in zip(ps.joint_bodies, points, strict=True)
+        for p in revolute(int(a), s_a, int(b), s_b, tuple(tree.joint_axis[int(b)]))
+    ]  # fmt: skip
     lateral = lateral_places(tree)
-    if not np.any(lateral[tree.foot_body] + tree.foot_lateral):
+    if not np.any(lateral[tree.foot_body] + tree.foot_lateral) and tree.com_lateral[0] == 0.0:
         primitives += planar_to_ground(0)
     inertia = tree.spatial_inertia
     if bad := [name for name, j in zip(tree.names, inertia, strict=True) if np.linalg.eigvalsh(j).min() <= 0.0]:
@@ -115,11 +129,13 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         body_mass=ps.body_mass.copy(),
         **jointed_bodies(inertia, primitives),
         foot_body=ps.foot_body.copy(),
-        foot_center=np.column_stack([ps.foot_center, tree.foot_lateral]),
-        foot_axis=np.array([DISC_AXIS] * len(tree.foot_names)),
-        foot_radius=ps.foot_radius.copy(),
-        foot_tube=np.zeros(len(tree.foot_names)),
-        foot_quadric=np.zeros((len(tree.foot_names), 3, 3)),
+        foot_center=np.column_stack(
+            [tree.foot_shape[:, :2] - tree.com[tree.foot_body], tree.foot_lateral - tree.com_lateral[tree.foot_body]]
+        ),
+        foot_axis=tree.foot_shape[:, 2:5].copy(),
+        foot_radius=tree.foot_shape[:, 5].copy(),
+        foot_tube=tree.foot_shape[:, 6].copy(),
+        foot_quadric=tree.foot_shape[:, 7:].reshape(-1, 3, 3).copy(),
         foot_partner=ps.foot_partner.copy(),
         gravity=spatial_gravity(config),
         baumgarte=ps.baumgarte.copy(),
@@ -128,13 +144,34 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
         switches=ps.switches,
         limits=ps.limits.copy(),
         stops=make_hinge_stops(
-            ps.stops, _hinge_rows([(p, c) for p, c, *_ in tree.stops], nb), _lifted_frames(tree.stops)
+            ps.stops,
+            _hinge_rows([(p, c) for p, c, *_ in tree.stops], nb),
+            _frames(tree, [c for _, c, *_ in tree.stops]),
         ),
         elements=make_hinge_elements(
-            ps.elements, _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb), _lifted_frames(tree.elements)
+            ps.elements,
+            _hinge_rows([(a, c) for c, a, *_ in tree.elements], nb),
+            _frames(tree, [c for c, *_ in tree.elements]),
         ),
+        ground=ps.ground,
     )
-    return replace(planar, system=system, y0=_spatial_state(planar, system, lateral))
+    q, qd = _spatial_state(planar, lateral + tree.com_lateral)
+    on_parent = {int(b): np.array(s_a) for (_, b), (s_a, _) in zip(ps.joint_bodies, points, strict=True)}
+    turn_joints(tree, description.state_keys(), initial, on_parent, q, qd)
+    return replace(planar, system=system, y0=_state_vector(planar, system, q, qd))
+
+
+def joint_points(tree: Tree, planar: PlanarSystem) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
+    """Each joint's point on its parent and on its child from their centres of mass, body frames (the planar
+    system's joints' order): the planar points, along z' the child's ``lateral`` offset and the centres of mass'
+    ``com_lateral``."""
+    return [
+        (
+            (float(xa), float(ya), tree.joint_lateral[b] - tree.com_lateral[a]),
+            (float(xb), float(yb), 0.0 - tree.com_lateral[b]),
+        )
+        for (a, b), (xa, ya, xb, yb) in zip(planar.joint_bodies, planar.joint_points, strict=True)
+    ]
 
 
 def lateral_places(tree: Tree) -> np.ndarray:
@@ -151,21 +188,30 @@ def _hinge_rows(pairs: list[tuple[int, int]], n_bodies: int) -> np.ndarray:
     return np.array([hinge_index(c, a, n_bodies) for a, c in pairs], dtype=np.int64).reshape(-1, 4)
 
 
-def _lifted_frames(rows: list[tuple]) -> np.ndarray:
-    """The hinge frames of lifted planar joints: the axis z' and the references x' (theta = phi_c - phi_p)."""
-    return np.array([[*Z, *X, *X]] * len(rows), dtype=np.float64).reshape(-1, FRAME)
+def _frames(tree: Tree, children: list[int]) -> np.ndarray:
+    """The hinge frames of the joints of these children: the joint's axis and a reference across it, alike in both
+    bodies' frames (z' and x' for a planar joint: theta = phi_c - phi_p)."""
+    rows = [[*tree.joint_axis[c], *across(tree.joint_axis[c])[0], *across(tree.joint_axis[c])[0]] for c in children]
+    return np.array(rows, dtype=np.float64).reshape(-1, FRAME)
 
 
-def _spatial_state(planar: BuiltModel, system: SpatialSystem, lateral: np.ndarray) -> np.ndarray:
-    """The planar model's start in the spatial system's state, each body at its ``lateral`` place (the planar
-    bristles run along x)."""
-    planar_layout, layout = (formulation_of(s).layout_of(s) for s in (planar.system, system))
-    nb, nf = planar.n_bodies, planar.n_feet
+def _spatial_state(planar: BuiltModel, lateral: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The planar model's start as spatial (q, qd), one row per body, each body's centre of mass at its ``lateral``
+    place."""
+    planar_layout = formulation_of(planar.system).layout_of(planar.system)
+    nb = planar.n_bodies
     q, qd = sagittal_to_spatial(
         np.array([planar.y0[planar_layout.position(b)] for b in range(nb)]),
         np.array([planar.y0[planar_layout.velocity(b)] for b in range(nb)]),
     )
     q[:, 2] = lateral
+    return q, qd
+
+
+def _state_vector(planar: BuiltModel, system: SpatialSystem, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """The spatial system's state of bodies (q, qd) and the planar start's bristles (which run along x)."""
+    planar_layout, layout = (formulation_of(s).layout_of(s) for s in (planar.system, system))
+    nb, nf = planar.n_bodies, planar.n_feet
     y0 = np.zeros(layout.size)
     for b in range(nb):
         y0[layout.position(b)] = q[b]
