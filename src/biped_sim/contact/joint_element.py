@@ -27,14 +27,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import literal_unroll
 
-from biped_sim.contact.registry import by_type, registered_functions
+from biped_sim.contact.registry import by_type, registered_functions, share
 from biped_sim.contact.stop import (
     CHILD_ANGLE,
     CHILD_RATE,
     PARENT_ANGLE,
     PARENT_RATE,
     Stops,
-    add_couple,
+    apply_joint_torque,
     joint_entry,
     stop_torques,
     stops_energy,
@@ -176,15 +176,10 @@ def _angle_difference(y: np.ndarray, elements: JointElements, e: int) -> tuple[f
     return theta, y[index[e, CHILD_RATE]] - joint_entry(y, index[e, PARENT_RATE])
 
 
-@kernel
-def _apply_angle_torque(y: np.ndarray, elements: JointElements, e: int, tau: float, force: np.ndarray) -> None:
-    """Add the torque tau of element e to its child's angle's generalized force and -tau to the other body's."""
-    add_couple(elements.index, e, tau, force)
-
-
-# as contact.stop's: a formulation whose coordinates are not angles adds its own elements record (multibody.hinge)
+# as contact.stop's: a formulation whose coordinates are not angles adds its own elements record (multibody.hinge);
+# an element's couple is a stop's (contact.stop.apply_joint_torque, the same index columns)
 relative_angle = by_type("relative_angle", "elements", {JointElements: _angle_difference})
-apply_element_torque = by_type("apply_element_torque", "elements", {JointElements: _apply_angle_torque})
+share(apply_joint_torque, JointElements, Stops)
 
 
 @kernel
@@ -193,7 +188,7 @@ def _element_torques(y: np.ndarray, elements: JointElements, force: np.ndarray) 
     for e in range(elements.law.shape[0]):
         theta, theta_dot = relative_angle(y, elements, e)
         tau, p = element_torque(elements.law[e], theta, theta_dot, elements.params[e])
-        apply_element_torque(y, elements, e, tau, force)
+        apply_joint_torque(y, elements, e, tau, force)
         power += p
     return power
 

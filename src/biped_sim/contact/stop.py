@@ -129,23 +129,21 @@ def _angle_penetration(y: np.ndarray, stops: Stops, s: int) -> tuple[float, floa
 
 
 @kernel
-def add_couple(index: np.ndarray, row: int, tau: float, force: np.ndarray) -> None:
-    """Add tau to the generalized force of the child's angle of ``index[row]`` and -tau to its other body's."""
+def _apply_angle_torque(y: np.ndarray, joints: tuple, row: int, tau: float, force: np.ndarray) -> None:
+    """Add the torque tau of row ``row`` of ``joints`` (a stop's or a joint element's: both records' ``index``
+    rows name the child's and the other body's angle) to the child's angle's generalized force, -tau to the
+    other body's (none for the ground)."""
+    index = joints.index
     force[index[row, CHILD_ANGLE]] += tau
     if index[row, PARENT_ANGLE] >= 0:
         force[index[row, PARENT_ANGLE]] -= tau
 
 
-@kernel
-def _apply_angle_torque(y: np.ndarray, stops: Stops, s: int, tau: float, force: np.ndarray) -> None:
-    """Add the torque tau of stop s to its child's angle's generalized force and -tau to its parent's."""
-    add_couple(stops.index, s, tau, force)
-
-
 # a formulation whose coordinates are not the bodies' angles (the spatial one: multibody.hinge) adds its own stops
-# record to these two and shares the other kernels of this module (contact.registry.share)
+# record to these two and shares the other kernels of this module (contact.registry.share); apply_joint_torque
+# serves the joint elements too (contact.joint_element adds its record): one couple for both
 stop_penetration = by_type("stop_penetration", "stops", {Stops: _angle_penetration})
-apply_stop_torque = by_type("apply_stop_torque", "stops", {Stops: _apply_angle_torque})
+apply_joint_torque = by_type("apply_joint_torque", "joints", {Stops: _apply_angle_torque})
 
 
 @kernel
@@ -191,7 +189,7 @@ def _stop_torques(y: np.ndarray, stops: Stops, modes: np.ndarray, first_row: int
     power = 0.0
     for s in range(stops.law.shape[0]):
         tau, p = stop_torque(y, stops, modes, first_row + s, s)
-        apply_stop_torque(y, stops, s, tau, force)
+        apply_joint_torque(y, stops, s, tau, force)
         power += p
     return power
 

@@ -121,8 +121,9 @@ def _hinge_penetration(y: np.ndarray, stops: HingeStops, s: int) -> tuple[float,
 
 
 @kernel
-def _hinge_stop_torque(y: np.ndarray, stops: HingeStops, s: int, tau: float, force: np.ndarray) -> None:
-    hinge_couple(y, stops.index, stops.frame, s, tau, force)
+def _hinge_torque(y: np.ndarray, joints: tuple, row: int, tau: float, force: np.ndarray) -> None:
+    """:func:`hinge_couple` of row ``row`` of ``joints`` (a :class:`HingeStops` or :class:`HingeElements`)."""
+    hinge_couple(y, joints.index, joints.frame, row, tau, force)
 
 
 @kernel
@@ -130,17 +131,12 @@ def _hinge_relative_angle(y: np.ndarray, elements: HingeElements, e: int) -> tup
     return hinge_angle(y, elements.index, elements.frame, e)
 
 
-@kernel
-def _hinge_element_torque(y: np.ndarray, elements: HingeElements, e: int, tau: float, force: np.ndarray) -> None:
-    hinge_couple(y, elements.index, elements.frame, e, tau, force)
-
-
 extend(stop.stop_penetration, HingeStops, _hinge_penetration)
-extend(stop.apply_stop_torque, HingeStops, _hinge_stop_torque)
+extend(stop.apply_joint_torque, HingeStops, _hinge_torque)
 for _generic in (stop.stop_rate, stop.stop_torques, stop.stops_energy, stop.update_stop_modes):
     share(_generic, HingeStops, stop.Stops)
 extend(joint_element.relative_angle, HingeElements, _hinge_relative_angle)
-extend(joint_element.apply_element_torque, HingeElements, _hinge_element_torque)
+share(stop.apply_joint_torque, HingeElements, HingeStops)
 for _generic in (joint_element.element_torques, joint_element.elements_energy):
     share(_generic, HingeElements, joint_element.JointElements)
 
