@@ -80,16 +80,17 @@ from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
 from biped_sim.rigid.tree_kernels import after_phase, begin_step, skip_phase, tree_energy, tree_impact, tree_push
-from biped_sim.rigid.tree_layout import gravity_vector
+from biped_sim.rigid.tree_layout import P_GX, P_GY, P_L, gravity_vector, phase_offset
 
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
 
 def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
-    """``cw`` on a ground of another slope (the buffers are shared): the step of a walk on ground whose slope
-    changes from step to step."""
-    gx, gy = gravity_vector(math.hypot(cw.params.gx, cw.params.gy), slope)
-    return cw._replace(params=cw.params._replace(gx=gx, gy=gy))
+    """``cw`` on a ground of another slope (a copy of the parameters; the buffers are shared): the step of a
+    walk on ground whose slope changes from step to step."""
+    params = cw.params.copy()
+    params[P_GX], params[P_GY] = gravity_vector(math.hypot(params[P_GX], params[P_GY]), slope)
+    return cw._replace(params=params)
 
 
 def _empty_plan() -> StepPlan:
@@ -100,17 +101,17 @@ def _empty_plan() -> StepPlan:
 def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
     return StepRecord(
         np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
-        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1), np.zeros(1),
+        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1),
     )  # fmt: skip
 
 
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work), with the plain step's plan."""
-    params = walker.params.copy()  # a copy: the kernels keep their workspace and the locks' state in it
+    params = walker.params.copy()  # a copy: the kernels keep their workspace in it
     ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     scratch = make_scratch(ny, 1, N_EVENTS)
-    record = _record(ny, 0, 0, len(params.phases))
+    record = _record(ny, 0, 0, int(n_phases(params)))
     return CompiledWalker(params, tableau("dop853"), scratch, t_limit, _empty_plan(), record)
 
 
@@ -148,7 +149,7 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
     """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
     p, rec = cw.params, cw.record
-    struck = p.phases[phase].kind == STOP_PHASE
+    struck = int(p[phase_offset(p, phase)]) == STOP_PHASE
     n = rec.counts[STOPS]
     if not struck or n >= rec.stops.shape[0]:
         after_phase(p, phase, x, scratch)
@@ -165,7 +166,7 @@ def _tripped(cw: CompiledWalker, x: np.ndarray) -> bool:
     """The swing foot's lowest point at a riser's x, below its top (the profile's strike located there)."""
     plan = cw.plan
     foot_x, foot_y = tree_swing_foot(cw.params, x, plan.footing[0], plan.footing[1])
-    return riser_hit(foot_x, foot_y, plan.vertices, RISER_TOLERANCE * cw.params.leg_length)
+    return riser_hit(foot_x, foot_y, plan.vertices, RISER_TOLERANCE * cw.params[P_L])
 
 
 @kernel(reference_counts=False)
@@ -193,7 +194,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             continue
         if mode == OUT and phase_guard(cw, own, mode, x_minus) <= 0.0:
             continue  # the swing foot is already past its mid-stance scuff
-        if mode == ON_PROFILE and phase_guard(cw, own, mode, x_minus) < -RISER_TOLERANCE * p.leg_length:
+        if mode == ON_PROFILE and phase_guard(cw, own, mode, x_minus) < -RISER_TOLERANCE * p[P_L]:
             return TRIPPED, t  # below the profile: in a riser
         status, t = _phase(cw, own, mode, t, x_minus, counters)
         if status != STRIKE:
@@ -202,8 +203,6 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             return TRIPPED, t
         t = polish(cw, own, mode, t, x_minus, counters)
         _end_phase(cw, own, t, x_minus, x_plus)
-    landing_x, _ = tree_swing_foot(p, x_minus, 0.0, 0.0)
-    cw.record.length[0] = landing_x - (-p.radius * x_start[p.rolling[0]])  # walker.step_length's, read without a call
     tree_impact(p, x_minus, True, x_plus)
     return STRIKE, t
 
@@ -297,11 +296,12 @@ def rigid_step(
     code, period = step_kernel(cw, x0, x_minus, x_plus, counters)
     if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
         code = STALLED
-    strike, rec = code == STRIKE, cw.record
-    length = float(rec.length[0]) if strike else math.nan
+    strike = code == STRIKE
+    length = walker.step_length(x0, x_minus) if strike else math.nan
     evals, accepted = counters.tolist()
     step = RigidStep(STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, evals,
                      accepted_steps=accepted)  # fmt: skip
+    rec = cw.record
     applied, sampled, stops = rec.counts.tolist()
     if applied:  # the record read only where it holds something: a plain step costs no more than before
         step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]

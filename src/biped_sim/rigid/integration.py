@@ -34,6 +34,8 @@ from biped_sim.integrate.stepper import (
     error_norm,
     initial_step_size,
     initial_step_trial,
+    propagate,
+    stage_input,
     step_factor,
 )
 from biped_sim.integrate.tableaus import Tableau
@@ -41,17 +43,14 @@ from biped_sim.kernel import kernel
 from biped_sim.rigid.ground import clearance, tree_swing_foot
 from biped_sim.rigid.kernels import (
     element_power,
-    fall_checks,
-    fall_inlined,
+    fall_check,
     guard,
-    guard_inlined,
     guard_rate,
     has_elements,
+    n_fall_checks,
     rigid_rhs,
-    step_stages,
 )
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
-from biped_sim.rigid.tree_layout import RigidTree
 
 STRIKE, FELL, STALLED, TRIPPED = 0, 1, 2, 3
 STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
@@ -88,13 +87,12 @@ class StepRecord(NamedTuple):
     samples_w: np.ndarray  # (m,) the joint elements' dissipated work since the step's start
     stops: np.ndarray  # (s, 2): t, the kinetic energy lost
     work: np.ndarray  # (1,) the joint elements' dissipated work since the step's start, at its end
-    length: np.ndarray  # (1,) the step's length: the landing foot's lowest point at the strike from the stance contact
 
 
 class CompiledWalker(NamedTuple):
     """A rigid walker as the kernels read it, with the integration's buffers and a step's plan and record."""
 
-    params: RigidTree
+    params: np.ndarray
     tab: Tableau
     sc: Scratch
     t_limit: float  # a step longer than this stalls
@@ -143,7 +141,10 @@ def _guard_rate(cw: CompiledWalker, phase: int, mode: int, x: np.ndarray, f: np.
 def _events(cw: CompiledWalker, phase: int, mode: int, y: np.ndarray, out: np.ndarray) -> int:
     """out[0] = the phase's guard, out[1:] = the fall functions; returns how many were written."""
     out[0] = phase_guard(cw, phase, mode, y)
-    return fall_checks(cw.params, y, out) + 1
+    n = n_fall_checks(cw.params)
+    for i in range(n):
+        out[1 + i] = fall_check(cw.params, i, y)
+    return n + 1
 
 
 @kernel
@@ -154,7 +155,7 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
 
 
 @njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
-def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
+def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
     rigid_rhs(p, sc.y_stage, sc.k[1])
@@ -162,7 +163,7 @@ def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: 
 
 
 @njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
-def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+def _prepare_dense(p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
     for e in range(3):
         rigid_rhs(p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
@@ -171,10 +172,7 @@ def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scra
 
 @njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
 def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarray) -> float:
-    """Event j's value at y (the walker's guard and fall functions inlined: the search evaluates them often)."""
-    if j > 0:
-        return fall_inlined(cw.params, j - 1, y)
-    return guard_inlined(cw.params, phase, y) if mode == OWN else phase_guard(cw, phase, mode, y)
+    return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.params, j - 1, y)
 
 
 @njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
@@ -259,7 +257,14 @@ def stretch(
         h = min(h, t_stop - t)
         if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
             return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
-        finite, stage_power = step_stages(p, tab, sc, h, y, elements)  # the work: the step's quadrature
+        stage_work = tab.b[0] * element_power(p, y) if elements else 0.0  # the step's quadrature, weights b
+        for s in range(1, tab.stages):
+            stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
+            rigid_rhs(p, sc.y_stage, sc.k[s])
+            if elements:
+                stage_work += tab.b[s] * element_power(p, sc.y_stage)
+        finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
+        rigid_rhs(p, sc.y_new, sc.k[tab.stages])
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
         accepted, factor = step_factor(err, tab.error_order, rejected)
@@ -291,7 +296,7 @@ def stretch(
             dense_eval(tab, best, h, y, sc, sc.y_dense)
             copy_into(sc.y_dense, y)
             return (STRIKE if first == 0 else FELL), t_end
-        work[0] += h * stage_power
+        work[0] += h * stage_work
         t = t_end
         copy_into(sc.y_new, y)
         copy_into(sc.k[tab.stages], sc.k[0])
