@@ -9,8 +9,8 @@ import pytest
 
 from biped_sim import config_from_dict, simulate
 from biped_sim.errors import ConfigError
+from biped_sim.multibody import euler_parameters
 from biped_sim.multibody.dispatch import formulation_of, measures
-from biped_sim.multibody.euler_parameters import point_state
 from biped_sim.multibody.minimal import tree_system
 from biped_sim.multibody.tree import tree_state
 from biped_sim.rigid.build import rigid_walker
@@ -18,7 +18,7 @@ from biped_sim.rigid.compiled import rigid_step
 from biped_sim.simulate import prepare_model
 from biped_sim.testing import default_walker
 
-from .conftest import DEFAULT_CONFIG, invoke, one_line_error
+from .conftest import DEFAULT_CONFIG, invoke, one_line_error, plain_engine
 
 IMPULSE = np.array([0.3, -0.2])  # [N s]: forward and down, about 0.1 m/s on the 4 kg walker
 PUSH = "simulation.pushes=[{time: 0.3, impulse: [0.4, 0.1]}]"
@@ -44,13 +44,15 @@ def mid_stance_state(*overrides: str) -> tuple[tuple, np.ndarray]:
 
 def test_a_planar_push_keeps_the_joints_and_gives_the_walker_exactly_the_impulse() -> None:
     system, y = mid_stance_state()
-    after = formulation_of(system).hip_impulse(y, system, IMPULSE)
+    with plain_engine():  # the push's equations (a compiled run's pushes: the tests below)
+        after = formulation_of(system).hip_impulse(y, system, IMPULSE)
+        violation = measures(system).violation
+        violations = [violation(state, system) for state in (after, y)]
+        hip = np.array(measures(system).hip(y, system))
     n = 3 * system.body_mass.shape[0]
     assert np.array_equal(after[:n], y[:n]) and np.array_equal(after[2 * n :], y[2 * n :])
-    violation = measures(system).violation
-    assert violation(after, system)[0] == violation(y, system)[0]
-    assert abs(violation(after, system)[1] - violation(y, system)[1]) < 1e-14  # Phidot unchanged, to round-off
-    hip = np.array(measures(system).hip(y, system))
+    assert violations[0][0] == violations[1][0]
+    assert abs(violations[0][1] - violations[1][1]) < 1e-14  # Phidot unchanged, to round-off
     linear_before, angular_before = planar_momenta(y, system, hip)
     linear_after, angular_after = planar_momenta(after, system, hip)
     # the joints are internal (the feet touch by penalty forces, finite): the walker is free-floating at the jump
@@ -61,20 +63,21 @@ def test_a_planar_push_keeps_the_joints_and_gives_the_walker_exactly_the_impulse
 def test_a_spatial_push_keeps_the_joints_and_the_normalisation_and_moves_the_hip_as_the_planar_one() -> None:
     planar, y_planar = mid_stance_state()
     spatial, y = mid_stance_state("formulation.kind=spatial")
-    after = formulation_of(spatial).hip_impulse(y, spatial, IMPULSE)
-    violation = measures(spatial).violation
-    np.testing.assert_allclose(violation(after, spatial), violation(y, spatial), rtol=0, atol=1e-14)
     nb = spatial.body_mass.shape[0]
-    rates = lambda state: state[7 * nb : 14 * nb].reshape(nb, 7)[:, :3]  # noqa: E731
-    momentum_change = spatial.body_mass @ (rates(after) - rates(y))
-    np.testing.assert_allclose(momentum_change, [*IMPULSE, 0.0], rtol=0, atol=1e-14)
     s_a = tuple(spatial.con_vecs[0, :3])
 
     def hip_velocity(state: np.ndarray) -> np.ndarray:
-        return np.array(point_state(state, nb, spatial.con_bodies[0, 0], s_a)[1])
+        return np.array(euler_parameters.point_state(state, nb, spatial.con_bodies[0, 0], s_a)[1])
 
-    spatial_jump = hip_velocity(after) - hip_velocity(y)
-    planar_after = formulation_of(planar).hip_impulse(y_planar, planar, IMPULSE)
+    with plain_engine():  # the push's equations (a compiled run's pushes: the tests below)
+        after = formulation_of(spatial).hip_impulse(y, spatial, IMPULSE)
+        violation = measures(spatial).violation
+        np.testing.assert_allclose(violation(after, spatial), violation(y, spatial), rtol=0, atol=1e-14)
+        spatial_jump = hip_velocity(after) - hip_velocity(y)
+        planar_after = formulation_of(planar).hip_impulse(y_planar, planar, IMPULSE)
+    rates = lambda state: state[7 * nb : 14 * nb].reshape(nb, 7)[:, :3]  # noqa: E731
+    momentum_change = spatial.body_mass @ (rates(after) - rates(y))
+    np.testing.assert_allclose(momentum_change, [*IMPULSE, 0.0], rtol=0, atol=1e-14)
     n = 3 * planar.body_mass.shape[0]
     a, (sx, sy) = planar.joint_bodies[0, 0], planar.joint_points[0, :2]
 
@@ -92,10 +95,11 @@ def test_a_minimal_push_gives_the_walker_exactly_the_impulse_and_moves_the_hip_a
     planar, y_planar = mid_stance_state()
     system = tree_system(planar)
     y = tree_state(y_planar, planar)
-    after = formulation_of(system).hip_impulse(y, system, IMPULSE)
+    with plain_engine():  # the push's equations (a compiled run's pushes: the tests below)
+        after = formulation_of(system).hip_impulse(y, system, IMPULSE)
+        planar_after = formulation_of(planar).hip_impulse(y_planar, planar, IMPULSE)
     n = 2 + system.body_mass.shape[0]
     assert np.array_equal(after[:n], y[:n]) and np.array_equal(after[2 * n :], y[2 * n :])
-    planar_after = formulation_of(planar).hip_impulse(y_planar, planar, IMPULSE)
     # the same state in both coordinates: the jumps agree to round-off (hip velocity, leg rates)
     np.testing.assert_allclose(after, tree_state(planar_after, planar), rtol=0, atol=1e-13)
 
@@ -109,7 +113,8 @@ def test_a_compliant_run_books_the_push_work_and_its_energy_balance_closes() -> 
     system = pushed.model.system
     before = run.y[first - 1]  # the state at the push time, just before it
     kinetic = lambda state: measures(system).mechanical_energy(state, system, run.modes[first - 1])[0]  # noqa: E731
-    expected = kinetic(formulation_of(system).hip_impulse(before, system, np.array([0.4, 0.1]))) - kinetic(before)
+    with plain_engine():  # the push's work by the source's equations, against the compiled run's
+        expected = kinetic(formulation_of(system).hip_impulse(before, system, np.array([0.4, 0.1]))) - kinetic(before)
     assert run.pushes[0, 2] == pytest.approx(expected, rel=1e-9)
     assert energy.push_work[first - 1] == 0.0 and energy.push_work[first] == run.pushes[0, 2]
     scale = pushed.model.total_mass * pushed.config.gravity * pushed.model.leg_length

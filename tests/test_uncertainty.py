@@ -209,7 +209,21 @@ def test_the_polynomial_chaos_surrogate_is_exact_on_a_polynomial() -> None:
     assert found.holdout_error is not None and found.holdout_error < 1e-10
 
 
-@pytest.mark.slow  # a degree-8 expansion in chaospy: about 50 s
+def test_the_indices_read_from_the_coefficients_are_chaospy_s_sensitivities() -> None:
+    import chaospy
+
+    from biped_sim.studies.uncertainty.surrogate import coefficient_indices
+
+    joint = chaospy.J(chaospy.Uniform(-1.0, 1.0), chaospy.Normal(0.0, 1.0))  # norms other than 1: not normalised
+    expansion, norms = chaospy.generate_expansion(2, joint, retall=True)
+    x = joint.sample(30, rule="sobol", seed=1)
+    model, coefficients = chaospy.fit_regression(expansion, x, np.sin(x[0]) * np.exp(x[1] / 2) + x[1] ** 3, retall=1)
+    s1, st = coefficient_indices(expansion, np.asarray(norms) * np.asarray(coefficients) ** 2)
+    assert s1 == pytest.approx(chaospy.Sens_m(model, joint), rel=1e-9)
+    assert st == pytest.approx(chaospy.Sens_t(model, joint), rel=1e-9)
+
+
+@pytest.mark.slow  # a degree-8 expansion in chaospy
 def test_the_polynomial_chaos_surrogate_recovers_ishigami_s_indices() -> None:
     from biped_sim.studies.uncertainty.checks import ISHIGAMI, ishigami
     from biped_sim.studies.uncertainty.distributions import Distribution

@@ -21,7 +21,9 @@ from biped_sim.studies.uncertainty.mfpt import height_walk_config
 from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
-from .conftest import CONFIGS, child_env, invoke
+from .conftest import CONFIGS, ROOT, child_env, invoke
+from .record_golden import read_golden
+from .test_space_compliant import GAIT
 
 # modules whose compiled code a planar run with an explicit method must neither compile nor load
 OTHER_GROUPS = (
@@ -30,6 +32,10 @@ OTHER_GROUPS = (
     "biped_sim.multibody.euler_parameters",
     "biped_sim.integrate.stiff",
 )
+
+# bundled configs whose group the warm-up leaves to their first run: the 3D kneed walker's (Euler parameters with joint
+# stops), which only the slow tier and a user who asks for it run
+NOT_WARMED = {"kneed_walker_3d.yaml"}
 
 # the profile geometry and the profile implementations of the ground's functions: a flat run compiles none
 PROFILE_CODE = ("biped_sim.contact.ground.", "biped_sim.contact.response._profile_")
@@ -98,17 +104,18 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
     short_run: RunResult, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile, or of a rigid walker, or
-    a rigid walker's walks from many starts (a basin's), loads its code."""
+    a rigid walker's walks from many starts (a basin's), or with a stiff method, or of another rigid walker in space,
+    loads its code."""
     monkeypatch.setattr(warmup, "_WARMED", set())
     result = invoke("warmup")
     assert result.exit_code == 0, result.output
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
-        "rigid step map", "spatial explicit (dopri5)", "planar explicit (dopri5, on a profile)",
-        "minimal explicit (dopri5, on a profile)",
+        "rigid step map", "spatial explicit (dopri5)", "rigid step map in space",
+        "planar explicit (dopri5, on a profile)", "minimal explicit (dopri5, on a profile)",
         "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5, with joint stops)",
         "minimal explicit (dopri5)", "minimal explicit (dopri5, with joint elements)",
-        "planar explicit (dopri5, with joint elements)", "planar explicit (dopri5)",
+        "planar explicit (dopri5, with joint elements)", "planar stiff (radau)", "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
@@ -117,16 +124,24 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
         simulate(simplest)  # another rigid walker
         walker = rigid_walker(simplest)
         walk_starts(walker, np.array([initial_state(simplest, walker)] * 2), 1)  # a basin's walks of its starts
+        simulate(default_walker("integrator.method=radau", t_end=0.05))
+        simulate(load_config(CONFIGS / "space" / "tinkertoy.yaml", [f"simulation.initial={json.dumps(GAIT)}",
+                                                                     "simulation.max_steps=1"]))  # fmt: skip
     assert compiled == []
 
 
-def test_the_bundled_configs_and_sweeps_run_in_the_warmed_groups() -> None:
-    """Every compliant run of configs/ and configs/sweeps/ is in a group ``biped-sim warmup`` warms."""
-    configs = [load_config(path) for path in sorted(CONFIGS.glob("*.yaml"))]
+def test_the_bundled_configs_sweeps_and_golden_cases_run_in_the_warmed_groups() -> None:
+    """Every run of configs/, configs/space/ and configs/sweeps/, and every golden case (tests/test_golden.py), is in
+    a group ``biped-sim warmup`` warms (the fast tier would compile it otherwise, each test process its own copy)."""
+    paths = [path for pattern in ("*.yaml", "space/*.yaml") for path in sorted(CONFIGS.glob(pattern))]
+    configs = [load_config(path) for path in paths if path.name not in NOT_WARMED]
     configs += [run.config for path in sorted((CONFIGS / "sweeps").glob("*.yaml")) for run in load_sweep(path).runs]
+    configs += [load_config(ROOT / case["config"], case["overrides"]) for case in read_golden()["cases"].values()]
     groups = {warmup.group_of(config) for config in configs}
     assert groups <= set(warmup.BUNDLED_GROUPS)
     assert {("planar", "explicit", "flat"), ("spatial", "explicit", "flat"), (*warmup.RIGID, "flat")} <= groups
+    assert (*warmup.RIGID_SPACE, "flat") in groups  # the rigid walkers in space's flow
+    assert ("planar", "stiff", "flat") in groups  # the golden case radau_short's
     assert ("planar", "explicit", "flat" + warmup.JOINT_STOPS) in groups  # the compliant kneed walker's knees
     assert ("planar", "explicit", "flat" + warmup.JOINT_ELEMENTS) in groups  # the torso walker's springs
 

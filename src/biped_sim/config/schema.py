@@ -114,11 +114,22 @@ class FrictionConfig(Strict):
     sigma0: float = Field(1e4, gt=0, description="LuGre bristle stiffness per unit normal load sigma0 [1/m].")
     sigma1: float = Field(20.0, ge=0, description="LuGre bristle damping per unit normal load sigma1 [s/m].")
     sigma2: float = Field(0.0, ge=0, description="LuGre viscous coefficient sigma2 [N s/m].")
+    spin_radius: float = Field(
+        0.0,
+        ge=0,
+        description="Effective spin radius r_s [m] of the spin (drilling) friction torque about the contact normal, "
+        "the law applied to the speed r_s omega_n (3 pi a / 16 for a Hertzian patch of radius a); 0 = none. "
+        "Compliant spatial formulation only.",
+    )
 
     @model_validator(mode="after")
     def _thresholds_ordered(self) -> FrictionConfig:
         if self.model == "ambrosio" and self.v1 <= self.v0:
             raise ValueError("v1: must be greater than friction.v0")
+        if self.spin_radius > 0.0 and self.model in ("none", "lugre"):
+            raise ValueError(
+                f"spin_radius: needs a stateless friction law with friction (friction.model: {self.model})"
+            )
         return self
 
 
@@ -267,6 +278,10 @@ class Config(Strict):
                 "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
                 "(formulation.kind: spatial, or walker.kind: description3d)"
             )
+        if self.friction.spin_radius > 0.0 and not (
+            self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        ):
+            raise ValueError("friction.spin_radius: only in space (dynamics: compliant, formulation.kind: spatial)")
         if reason := profile_support_error(self.ground, self.dynamics, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
         hertz = self.contact.materials is not None or self.dynamics == "compliant"

@@ -7,7 +7,9 @@ opposes the slip. LuGre carries a bristle deflection ``z`` per contact in the OD
 its own pair of functions.
 
 To add a law: one ``@kernel`` function and one line in ``FRICTION_LAWS`` (a law with state goes last):
-:func:`friction_force` dispatches over the registry (:mod:`~biped_sim.contact.registry`).
+:func:`friction_force` dispatches over the registry (:mod:`~biped_sim.contact.registry`). In space a contact
+patch also resists spinning about its normal: :func:`spin_friction_torque`, any stateless law applied to the
+spin velocity of an effective radius (off unless ``spin_radius`` > 0).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from numba import literal_unroll
 from biped_sim.contact.registry import registered_functions
 from biped_sim.kernel import kernel
 
-MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2 = range(10)
+MU_K, MU_S, V0, V1, VS, XI, VISC, SIGMA0, SIGMA1, SIGMA2, SPIN_RADIUS = range(11)
 
 
 @kernel
@@ -149,6 +151,25 @@ def friction_force(model: int, v: float, f_n: float, p: np.ndarray) -> float:
     return f
 
 
+@kernel
+def spin_friction_torque(model: int, w_n: float, f_n: float, p: np.ndarray) -> float:
+    """Spin (drilling) friction torque about the contact normal: M_n = r_s F_T(r_s w_n, F_N).
+
+    ``w_n`` is the foot's angular velocity about the normal [rad/s] (the ground's is 0) and r_s = ``p[SPIN_RADIUS]``
+    the patch's effective spin radius [m]; F_T is the stateless law numbered ``model`` (:func:`friction_force`)
+    taken at the speed r_s w_n of a point r_s from the patch's centre, so it opposes the spin with the law's own
+    dry limit and regularisation; 0 when r_s = 0. Dry (Coulomb) friction spread over a Hertzian patch of radius
+    a, whose pressure is p0 sqrt(1 - r^2/a^2), gives |M_n| = mu F_N 3 pi a / 16 in full sliding, i.e.
+    r_s = 3 pi a / 16 (K. L. Johnson, Contact Mechanics, Cambridge 1985, ch. 7; V. L. Popov, Contact Mechanics
+    and Friction, Springer 2010, sec. 8.2.4). The torque is independent of the slip of the patch's centre: the
+    Contensou coupling, which lowers both the force and the torque when slip and spin combine (R. I. Leine,
+    C. Glocker, Eur. J. Mech. A/Solids 22 (2003) 193-216), is left out, so a foot that both slips and spins
+    dissipates a little more than a dry patch would.
+    """
+    r_s = p[SPIN_RADIUS]
+    return r_s * friction_force(model, r_s * w_n, f_n, p)
+
+
 def friction_parameters(
     mu_kinetic: float,
     mu_static: float,
@@ -160,8 +181,9 @@ def friction_parameters(
     sigma0: float,
     sigma1: float,
     sigma2: float,
+    spin_radius: float = 0.0,
 ) -> np.ndarray:
-    """Parameter vector for the compiled laws (index constants at the top of this module)."""
-    return np.array(
-        [mu_kinetic, mu_static, v0, v1, v_stribeck, stribeck_decay, viscous, sigma0, sigma1, sigma2], dtype=np.float64
-    )
+    """Parameter vector for the compiled laws (index constants at the top of this module); ``spin_radius`` r_s [m]
+    of :func:`spin_friction_torque` (0: no spin friction)."""
+    values = [mu_kinetic, mu_static, v0, v1, v_stribeck, stribeck_decay, viscous, sigma0, sigma1, sigma2, spin_radius]
+    return np.array(values, dtype=np.float64)

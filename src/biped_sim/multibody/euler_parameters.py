@@ -130,6 +130,14 @@ def e_mul(p: tuple, x: tuple) -> tuple[float, float, float]:
 
 
 @kernel
+def e_tmul(p: tuple, n: tuple) -> tuple[float, float, float, float]:
+    """E(p)^T n = (-e.n, e0 n - e x n), G^T n of the conjugate parameters with its first entry negated: the
+    generalized force 2 E^T n of a torque n (slope frame) on p."""
+    g = g_tmul((p[0], -p[1], -p[2], -p[3]), n)
+    return -g[0], g[1], g[2], g[3]
+
+
+@kernel
 def position(y: np.ndarray, b: int) -> tuple[float, float, float]:
     """r of body b (rdot at index nb + b): its first three state entries."""
     return y[7 * b], y[7 * b + 1], y[7 * b + 2]

@@ -28,7 +28,14 @@ import math
 
 import numpy as np
 
-from biped_sim.contact.friction import LUGRE, friction_force, lugre_bristle_rate, lugre_friction
+from biped_sim.contact.friction import (
+    LUGRE,
+    SPIN_RADIUS,
+    friction_force,
+    lugre_bristle_rate,
+    lugre_friction,
+    spin_friction_torque,
+)
 from biped_sim.contact.ground import FlatGround, ProfileGround, ground_contact, ground_contacts, ground_window
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import (
@@ -45,6 +52,8 @@ from biped_sim.multibody.euler_parameters import (
     b_mul,
     b_tmul,
     dot3,
+    e_mul,
+    e_tmul,
     inertia_mul,
     parameters,
     position,
@@ -213,10 +222,23 @@ def foot_kinematics(y: np.ndarray, system: SpatialSystem, i: int) -> tuple[float
     return foot_geometry(y, system, i, system.ground)
 
 
+@kernel
+def spin_load(p: tuple, pd: tuple, n: tuple, model: int, f_n: float, fpar: np.ndarray) -> tuple[float, ...]:
+    """(Q_0, Q_1, Q_2, Q_3, P): the spin friction torque M_n n about the unit contact normal n as the generalized
+    force 2 E(p)^T (M_n n) on the Euler parameters, and its dissipation rate P = -M_n w_n >= 0, with w_n = n.omega,
+    omega = 2 E(p) pdot, M_n = :func:`~biped_sim.contact.friction.spin_friction_torque` (Q.pdot = M_n w_n exactly,
+    so the energy audit closes with P)."""
+    w_n = 2.0 * dot3(n, e_mul(p, pd))
+    m_n = spin_friction_torque(model, w_n, f_n, fpar)
+    q = e_tmul(p, n)
+    return 2.0 * m_n * q[0], 2.0 * m_n * q[1], 2.0 * m_n * q[2], 2.0 * m_n * q[3], -m_n * w_n
+
+
 @kernel(reference_counts=False)
 def _flat_load(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int, ground: FlatGround) -> tuple:
     delta, delta_dot, vx, vz, _, _, s0, s1, s2 = _flat_kinematics(y, system, i, ground)
     f_n = f_x = f_z = zdx = zdz = p_normal = p_friction = 0.0  # one return: numba then elides reference counting
+    spin = (0.0, 0.0, 0.0, 0.0, 0.0)
     if is_loaded(modes, i, delta):
         npar, floor = system.normal_params, system.limits[IMPACT_FLOOR]
         f_n, p_normal = normal_response(system.switches[NORMAL_MODEL], npar, floor, modes, i, delta, delta_dot)
@@ -234,14 +256,21 @@ def _flat_load(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int, 
             f_x = f_t * (vx / speed)
             f_z = f_t * (vz / speed)
         p_friction = -(f_x * vx + f_z * vz)
+        if fpar[SPIN_RADIUS] > 0.0:
+            b = system.foot_body[i]
+            nb = system.body_mass.shape[0]
+            spin = spin_load(parameters(y, b), parameters(y, nb + b), EY, system.switches[FRICTION_MODEL], f_n, fpar)
+            p_friction += spin[4]
     q = b_tmul(parameters(y, system.foot_body[i]), (s0, s1, s2), (f_x, f_n, f_z))
-    return f_x, f_n, f_z, q[0], q[1], q[2], q[3], zdx, zdz, p_normal, p_friction, f_n, f_x, f_z
+    q0, q1, q2, q3 = q[0] + spin[0], q[1] + spin[1], q[2] + spin[2], q[3] + spin[3]
+    return f_x, f_n, f_z, q0, q1, q2, q3, zdx, zdz, p_normal, p_friction, f_n, f_x, f_z
 
 
 @kernel(reference_counts=False)
 def _profile_load(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: int, ground: ProfileGround) -> tuple:
     cx, cy, rho, pz = outline_circle(y, system, i, ground)
     p = parameters(y, system.foot_body[i])
+    pd = parameters(y, system.body_mass.shape[0] + system.foot_body[i])
     f_x = f_y = f_z = q0 = q1 = q2 = q3 = p_normal = p_friction = f_normal = f_tangent = 0.0
     first, count = ground_window(cx, rho, ground.vertices)
     for f in range(count):
@@ -254,6 +283,10 @@ def _profile_load(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, i: in
         )
         speed = math.sqrt(v_t * v_t + v_z * v_z)
         f_t = friction_force(system.switches[FRICTION_MODEL], speed, f_n, system.friction_params) / max(speed, 1e-300)
+        if system.friction_params[SPIN_RADIUS] > 0.0:
+            spin = spin_load(p, pd, (nx, ny, 0.0), system.switches[FRICTION_MODEL], f_n, system.friction_params)
+            q0, q1, q2, q3 = q0 + sign * spin[0], q1 + sign * spin[1], q2 + sign * spin[2], q3 + sign * spin[3]
+            p_friction += sign * spin[4]
         f_n, f_t, p_n = sign * f_n, sign * f_t, sign * p_n  # a valley's corner term is subtracted
         force = (f_n * nx + f_t * v_t * ny, f_n * ny - f_t * v_t * nx, f_t * v_z)
         q = b_tmul(p, (s0, s1, s2), force)
@@ -271,11 +304,12 @@ foot_load.__doc__ = """Contact forces on foot i against ``ground`` and their dis
 
 Returns (F_x, F_y, F_z, Q_0, Q_1, Q_2, Q_3, zdot_x, zdot_z, P_normal, P_friction, F_N, F_T, F_lateral): the force
 in the slope frame and the generalized force B(p, s')^T F of the body's Euler parameters, summed over the contact
-features (one on the flat ground, the lowest point's), the LuGre bristle rates (flat ground only: profiles refuse
+features (one on the flat ground, the lowest point's) with the spin friction torque about each feature's normal
+when ``friction.spin_radius`` > 0 (:func:`spin_load`), the LuGre bristle rates (flat ground only: profiles refuse
 LuGre), the powers lost in the normal damping (:func:`~biped_sim.contact.response.normal_response`) and in
-friction -F_T.v_t, and the summed normal force and friction force along the slope's tangent and across it. The
-friction laws act along the slip direction, F_T = F(|v|) v / |v|, exactly 0 at |v| = 0 (every law is odd in v
-and vanishes at 0, so this is continuous); LuGre carries a 2-vector bristle state per foot,
+friction -F_T.v_t (and -M_n w_n), and the summed normal force and friction force along the slope's tangent and
+across it. The friction laws act along the slip direction, F_T = F(|v|) v / |v|, exactly 0 at |v| = 0 (every law
+is odd in v and vanishes at 0, so this is continuous); LuGre carries a 2-vector bristle state per foot,
 zdot = v - sigma0 |v| z / g(|v|), written with the scalar law as zdot_k = rate(|v|, z_k) - |v| + v_k,
 F_k = lugre_friction(v_k, z_k, zdot_k, F_N).
 """

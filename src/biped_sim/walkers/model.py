@@ -69,7 +69,17 @@ def contact_arrays(
     c, f = config.contact, config.friction
     normal = normal_parameters(c.model, stiffness, c.exponent, c.restitution, c.damping, effective_mass)
     friction = friction_parameters(
-        f.mu_kinetic, f.mu_static, f.v0, f.v1, f.v_stribeck, f.stribeck_decay, f.viscous, f.sigma0, f.sigma1, f.sigma2
+        f.mu_kinetic,
+        f.mu_static,
+        f.v0,
+        f.v1,
+        f.v_stribeck,
+        f.stribeck_decay,
+        f.viscous,
+        f.sigma0,
+        f.sigma1,
+        f.sigma2,
+        spin_radius=f.spin_radius,
     )
     switches = np.array(
         [NORMAL_LAWS[c.model].index, FRICTION_LAWS[f.model].index, 1 if c.scuffing_guard else 0], dtype=np.int64

@@ -67,7 +67,7 @@ def surrogate_indices(
     import chaospy  # the surrogate only: an optional estimate
 
     joint = chaospy.J(*[chaos_distribution(d) for d in distributions])
-    expansion = chaospy.generate_expansion(order, joint)
+    expansion, norms = chaospy.generate_expansion(order, joint, retall=True)
     terms = len(expansion)
     have = np.isfinite(y)
     x, f = values[have].T, y[have]
@@ -77,7 +77,20 @@ def surrogate_indices(
     held = np.arange(f.size) % HOLDOUT_EVERY == 0
     trial = chaospy.fit_regression(expansion, x[:, ~held], f[~held])
     error = float(np.sqrt(np.mean((trial(*x[:, held]) - f[held]) ** 2)) / max(np.std(f), 1e-300))
-    model = chaospy.fit_regression(expansion, x, f)
-    s1 = np.asarray(chaospy.Sens_m(model, joint), dtype=float)
-    st = np.asarray(chaospy.Sens_t(model, joint), dtype=float)
+    _, coefficients = chaospy.fit_regression(expansion, x, f, retall=1)
+    s1, st = coefficient_indices(expansion, np.asarray(norms) * np.asarray(coefficients) ** 2)
     return SurrogateIndices(name, order, terms, int(f.size), error, s1, st)
+
+
+def coefficient_indices(expansion: Any, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first-order and total indices of an orthogonal expansion from its terms' ``variances`` (coefficient
+    squared times the term's norm), as Sudret reads them: a key's first-order share is that of the terms in it
+    alone, its total share that of every term it appears in.
+
+    The same numbers as chaospy's ``Sens_m`` and ``Sens_t`` on the fitted polynomial, which integrate its
+    conditional expectations symbolically: far slower, and at a high degree slower than the study's runs.
+    """
+    uses = np.array([np.asarray(term.exponents).max(axis=0) > 0 for term in expansion])  # terms x keys
+    alone = uses & (uses.sum(axis=1) == 1)[:, None]
+    total = variances[uses.any(axis=1)].sum()
+    return variances @ alone / total, variances @ uses / total
