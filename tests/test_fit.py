@@ -138,7 +138,7 @@ def test_bayesian_mode_writes_a_posterior_that_read_posterior_reads(reference_fi
     out = tmp_path / "bayes"
     sets = [f"--set={s}" for s in FAST]
     args = ["fit", str(DEFAULT_CONFIG), "--reference", str(reference_file), "--param", BOUNDS, *sets]
-    result = invoke(*args, "--posterior", "160", "--walkers", "8", "--out", str(out), "--json")
+    result = invoke(*args, "--posterior", "80", "--walkers", "8", "--out", str(out), "--json")
     assert result.exit_code == 0, result.stderr
     doc = json.loads(result.stdout)["posterior"]
     low, high = doc["intervals_90"]["walker.leg_inertia"]["low"], doc["intervals_90"]["walker.leg_inertia"]["high"]
