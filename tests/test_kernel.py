@@ -132,6 +132,14 @@ def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> Non
     assert _weighted_sum(values, 1.0) == 10.0 and _weighted_sum.python_entry is entry  # compiled once
 
 
+def test_a_kernels_entry_for_argument_types_is_its_twins_compiled_code() -> None:
+    """``entry_for``: the twin's compiled code for those types, called without numba's typing of the arguments."""
+    values = np.arange(5.0)
+    entry = _weighted_sum.entry_for(values, 2.0)
+    assert entry(values, 2.0) == _weighted_sum(values, 2.0) == 20.0
+    assert _weighted_sum.entry_for(values, 2.0) is entry  # compiled once: the same code for the same types
+
+
 @kernel(literal_arguments=False)
 def _halved(x: float, half: bool) -> float:
     return 0.5 * x if half else x

@@ -116,7 +116,9 @@ def test_a_body_takes_its_radius_of_gyration_or_its_inertia_not_both(tmp_path: P
     inertia = tmp_path / "inertia.yaml"
     inertia.write_text(gyration.replace("radius_of_gyration: 0.1,", "inertia: 0.005,"))  # m r^2 = 0.5 x 0.01
     by_radius, by_inertia = load_config(path), load_config(inertia)
-    np.testing.assert_allclose(rigid_walker(by_radius).params, rigid_walker(by_inertia).params, rtol=1e-14, atol=0)
+    rigid = [rigid_walker(c).params for c in (by_radius, by_inertia)]
+    np.testing.assert_allclose(rigid[0].rows["inertia"], rigid[1].rows["inertia"], rtol=1e-14, atol=0)
+    assert np.array_equal(rigid[0].w, rigid[1].w) and np.array_equal(rigid[0].rows["mass"], rigid[1].rows["mass"])
     trees = [resolve_tree(c.walker.description) for c in (by_radius, by_inertia)]  # the compliant model's bodies
     np.testing.assert_allclose(trees[0].inertia, trees[1].inertia, rtol=1e-15, atol=0)
     assert trees[0].inertia.max() > 0.005

@@ -27,12 +27,7 @@ from biped_sim.rigid.tree_kernels import (
     tree_impact,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import (
-    T_NPTS,
-    point,
-    point_velocity,
-    row_offset,
-)
+from biped_sim.rigid.tree_layout import point
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.continuation import continue_cycle, flip_margin
 from biped_sim.studies.robustness import gait_start, largest_disturbance, trial
@@ -132,17 +127,7 @@ def test_energy_is_conserved_in_both_swing_phases() -> None:
 
 def _momentum(walker: RigidWalker, x: np.ndarray, about: tuple[float, float], coordinates: set[int] | None) -> float:
     """Angular momentum of the points whose inertia turns with ``coordinates`` (None: all) about a point."""
-    n, p = walker.n_q, walker.params
-    total = 0.0
-    for i in range(int(p[T_NPTS])):
-        o = row_offset(p, 0, i)
-        mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
-        if coordinates is not None and own not in coordinates:
-            continue
-        rx, ry = np.array(point(p, i, x[:n])) - about
-        vx, vy = point_velocity(p, 0, i, x[:n], x[n:])
-        total += mass * (rx * vy - ry * vx) + inertia * x[n + own]
-    return total
+    return walker.angular_momentum(x, np.asarray(about), coordinates)
 
 
 def test_the_strikes_conserve_the_angular_momenta_they_should() -> None:

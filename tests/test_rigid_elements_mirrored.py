@@ -86,7 +86,9 @@ def test_the_bundled_torso_walkers_are_taken_unchanged() -> None:
     data = _torso_walker([])
     held_in_the_world(data, 30.0, 0.5, rest_angle=0.1)
     held = rigid_walker(config_from_dict(data))
-    assert bundled.n_q == held.n_q == 3 and np.all(np.isfinite(bundled.params)) and np.all(np.isfinite(held.params))
+    assert bundled.n_q == held.n_q == 3
+    for walker in (bundled, held):
+        assert len(walker.params.elements) > 0 and np.all(np.isfinite(walker.params.element_params))
 
 
 def test_a_rigid_run_of_a_torso_spring_with_a_rest_angle_on_one_side_is_one_line_exit_2(tmp_path: Path) -> None:

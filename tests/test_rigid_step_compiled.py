@@ -153,6 +153,22 @@ def test_the_compiled_step_is_its_plain_python_run_bit_for_bit(monkeypatch: pyte
     assert fast.pushes == plain.pushes and fast.stop_strikes == plain.stop_strikes
 
 
+def test_a_plain_step_through_its_entry_is_the_dispatched_step_bit_for_bit(case) -> None:  # type: ignore[no-untyped-def]
+    """A plain step with the caller's buffers runs step_kernel's entry found once for them (no typing per call)."""
+    _, walker, x0 = case
+    cw = compiled.compile_walker(walker)
+    first, again = compiled.rigid_step(walker, x0, cw=cw), compiled.rigid_step(walker, list(x0), cw=cw)
+    assert id(cw) in compiled._ENTRIES
+    x_minus, x_plus, counters = np.zeros_like(x0), np.zeros_like(x0), np.zeros(2, dtype=np.int64)
+    code, period = compiled.step_kernel(cw, x0.copy(), x_minus, x_plus, counters)  # the dispatcher's call
+    assert compiled.STATUS_NAMES[code] == first.status == again.status == "strike"
+    assert period == first.period == again.period and x_plus.tobytes() == first.x_plus.tobytes()
+    assert again.x_plus.tobytes() == first.x_plus.tobytes() and counters.tolist() == [
+        first.rhs_evals,
+        first.accepted_steps,
+    ]
+
+
 def test_a_run_with_a_push_and_steps_closes_its_energy_balance() -> None:
     overrides = [
         "simulation.t_end=2.5",

@@ -103,23 +103,26 @@ def test_profiling_compilations_charges_each_function_its_own_compile() -> None:
 def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles_nothing(
     short_run: RunResult, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile, or of a rigid walker, or
-    a rigid walker's walks from many starts (a basin's), or with a stiff method, or of another rigid walker in space,
-    loads its code."""
+    """After ``biped-sim warmup`` (what make setup ends with) a first run on a ground profile (in the plane, in space),
+    or of a rigid walker, or a rigid walker's walks from many starts (a basin's), or with a stiff method, or of another
+    rigid walker in space, loads its code."""
     monkeypatch.setattr(warmup, "_WARMED", set())
     result = invoke("warmup")
     assert result.exit_code == 0, result.output
     lines = result.output.strip().splitlines()
     assert [line.split(":")[0] for line in lines] == [
         "rigid step map", "spatial explicit (dopri5)", "rigid step map in space",
-        "planar explicit (dopri5, on a profile)", "minimal explicit (dopri5, on a profile)",
+        "spatial explicit (dopri5, on a profile)", "planar explicit (dopri5, on a profile)",
+        "minimal explicit (dopri5, on a profile)",
         "planar explicit (dopri5, with joint stops)", "minimal explicit (dopri5, with joint stops)",
         "minimal explicit (dopri5)", "minimal explicit (dopri5, with joint elements)",
         "planar explicit (dopri5, with joint elements)", "planar stiff (radau)", "planar explicit (dopri5)",
     ]  # fmt: skip
     assert invoke("warmup").output == ""  # once per process and group
     with recording_compilations() as compiled:
-        simulate(default_walker("ground.profile={kind: random, seed: 3, roughness: 0.002}", t_end=0.05))
+        rough = "ground.profile={kind: random, seed: 3, roughness: 0.002}"
+        simulate(default_walker(rough, t_end=0.05))
+        simulate(default_walker(rough, "formulation.kind=spatial", t_end=0.05))
         simplest = load_config(CONFIGS / "simplest_walker.yaml", ["simulation.max_steps=1"])
         simulate(simplest)  # another rigid walker
         walker = rigid_walker(simplest)

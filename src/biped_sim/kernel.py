@@ -73,9 +73,19 @@ class Kernel(CPUDispatcher):
         return self._python_entry
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self._twin()(*args, **kwargs)
+
+    def _twin(self) -> CPUDispatcher:
         if self._python_entry is None:
             self._python_entry = _python_twin(self.py_func, self.targetoptions)
-        return self._python_entry(*args, **kwargs)
+        return self._python_entry
+
+    def entry_for(self, *args: Any) -> Callable[..., Any]:
+        """The Python-callable compiled code for the types of ``args`` (compiled or loaded now), called without
+        numba's typing of its arguments: the dispatcher types a NamedTuple argument in Python at every call, a
+        cost that grows with the arrays it holds. Only for arguments of exactly these types (numba's unboxing checks an
+        array's item size, not its dtype, dimensions or layout): a caller that holds them, calling often."""
+        return self._twin().compile(tuple(numba.typeof(arg) for arg in args))
 
 
 def _python_twin(function: FunctionType, options: dict[str, Any]) -> CPUDispatcher:

@@ -15,7 +15,7 @@ import numpy as np
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import system_attitude, system_contact, system_energy, system_hip, system_violation
 from biped_sim.rigid.tree_kernels import tree_energy
-from biped_sim.rigid.tree_layout import coords, point
+from biped_sim.rigid.tree_layout import RigidTree, point
 
 
 @kernel
@@ -63,10 +63,10 @@ def attitude_loop(ys: np.ndarray, system: tuple, out: np.ndarray) -> None:
 
 
 @kernel(reference_counts=False)
-def rigid_loop(params: np.ndarray, states: np.ndarray, hip_row: int, energy: np.ndarray, hip: np.ndarray) -> None:
+def rigid_loop(params: RigidTree, states: np.ndarray, hip_row: int, energy: np.ndarray, hip: np.ndarray) -> None:
     """energy[i]: (kinetic, potential) energy, and hip[i]: the hip's position (row ``hip_row`` of the tree) of a
     rigid walker (its tree's ``params``) at sample i, in the frame of its step (the caller moves it to the run's)."""
-    n = coords(params)
+    n = params.n
     for i in range(states.shape[0]):
         _store(energy[i], tree_energy(params, states[i]))
         _store(hip[i], point(params, hip_row, states[i, :n]))

@@ -17,7 +17,6 @@ from biped_sim.measure.loops import rigid_loop
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.start import RigidStart, touchdown_legs
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.rigid.tree_layout import rolling
 
 
 @dataclass
@@ -94,7 +93,7 @@ def rigid_energy_and_hip(
     axis or not) moved by O_k.
     """
     R = walker.foot_radius
-    step_start = np.vstack([start.state, *trace.strike_post])[:, rolling(walker.params, 0)]
+    step_start = np.vstack([start.state, *trace.strike_post])[:, walker.params.rolling[0]]
     origin = np.zeros(len(step_start))
     origin[0] = R * step_start[0]
     for k, length in enumerate(trace.step_lengths):

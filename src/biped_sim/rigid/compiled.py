@@ -42,15 +42,16 @@ are inlined into the integration loop for the same reason.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from typing import NamedTuple
+from collections import OrderedDict
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from biped_sim.integrate.stepper import make_scratch
 from biped_sim.integrate.tableaus import tableau
-from biped_sim.kernel import kernel
+from biped_sim.kernel import Kernel, kernel
 from biped_sim.rigid.ground import RISER_TOLERANCE, ProfileStrike, riser_hit, tree_swing_foot
 from biped_sim.rigid.integration import (
     APPLIED,
@@ -80,17 +81,16 @@ from biped_sim.rigid.step import MAX_STEP_TIME, RigidStep
 from biped_sim.rigid.tree import RigidWalker
 from biped_sim.rigid.tree_kernels import STOP as STOP_PHASE
 from biped_sim.rigid.tree_kernels import after_phase, begin_step, skip_phase, tree_energy, tree_impact, tree_push
-from biped_sim.rigid.tree_layout import P_GX, P_GY, P_L, gravity_vector, phase_offset
+from biped_sim.rigid.tree_layout import gravity_vector
 
 DEGENERATE_STEP = 1e-9  # a walk's step shorter than this fraction of the step time limit is no step (a stall)
 
 
 def with_slope(cw: CompiledWalker, slope: float) -> CompiledWalker:
-    """``cw`` on a ground of another slope (a copy of the parameters; the buffers are shared): the step of a
-    walk on ground whose slope changes from step to step."""
-    params = cw.params.copy()
-    params[P_GX], params[P_GY] = gravity_vector(math.hypot(params[P_GX], params[P_GY]), slope)
-    return cw._replace(params=params)
+    """``cw`` on a ground of another slope (the buffers are shared): the step of a walk on ground whose slope
+    changes from step to step."""
+    gx, gy = gravity_vector(math.hypot(cw.params.gx, cw.params.gy), slope)
+    return cw._replace(params=cw.params._replace(gx=gx, gy=gy))
 
 
 def _empty_plan() -> StepPlan:
@@ -101,17 +101,17 @@ def _empty_plan() -> StepPlan:
 def _record(ny: int, n_pushes: int, n_samples: int, n_stops: int) -> StepRecord:
     return StepRecord(
         np.zeros(3, dtype=np.int64), np.zeros((n_pushes, 3)), np.zeros(n_samples), np.zeros((n_samples, ny)),
-        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1),
+        np.zeros(n_samples), np.zeros((n_stops, 2)), np.zeros(1), np.zeros(1),
     )  # fmt: skip
 
 
 def compile_walker(walker: RigidWalker) -> CompiledWalker:
     """The kernels' view of ``walker`` and fresh buffers (one per thread of work), with the plain step's plan."""
-    params = walker.params.copy()  # a copy: the kernels keep their workspace in it
+    params = walker.params.copy()  # a copy: the kernels keep their workspace and the locks' state in it
     ny = 2 * walker.n_q
     t_limit = MAX_STEP_TIME * math.sqrt(walker.leg_length / walker.gravity)
     scratch = make_scratch(ny, 1, N_EVENTS)
-    record = _record(ny, 0, 0, int(n_phases(params)))
+    record = _record(ny, 0, 0, len(params.phases))
     return CompiledWalker(params, tableau("dop853"), scratch, t_limit, _empty_plan(), record)
 
 
@@ -149,7 +149,7 @@ def _phase(cw: CompiledWalker, phase: int, mode: int, t: float, y: np.ndarray, c
 def _end_phase(cw: CompiledWalker, phase: int, t: float, x: np.ndarray, scratch: np.ndarray) -> None:
     """After a phase's guard: a stop strike (x in place), booked with its loss when there is room."""
     p, rec = cw.params, cw.record
-    struck = int(p[phase_offset(p, phase)]) == STOP_PHASE
+    struck = p.phases[phase].kind == STOP_PHASE
     n = rec.counts[STOPS]
     if not struck or n >= rec.stops.shape[0]:
         after_phase(p, phase, x, scratch)
@@ -166,7 +166,7 @@ def _tripped(cw: CompiledWalker, x: np.ndarray) -> bool:
     """The swing foot's lowest point at a riser's x, below its top (the profile's strike located there)."""
     plan = cw.plan
     foot_x, foot_y = tree_swing_foot(cw.params, x, plan.footing[0], plan.footing[1])
-    return riser_hit(foot_x, foot_y, plan.vertices, RISER_TOLERANCE * cw.params[P_L])
+    return riser_hit(foot_x, foot_y, plan.vertices, RISER_TOLERANCE * cw.params.leg_length)
 
 
 @kernel(reference_counts=False)
@@ -194,7 +194,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             continue
         if mode == OUT and phase_guard(cw, own, mode, x_minus) <= 0.0:
             continue  # the swing foot is already past its mid-stance scuff
-        if mode == ON_PROFILE and phase_guard(cw, own, mode, x_minus) < -RISER_TOLERANCE * p[P_L]:
+        if mode == ON_PROFILE and phase_guard(cw, own, mode, x_minus) < -RISER_TOLERANCE * p.leg_length:
             return TRIPPED, t  # below the profile: in a riser
         status, t = _phase(cw, own, mode, t, x_minus, counters)
         if status != STRIKE:
@@ -203,6 +203,8 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
             return TRIPPED, t
         t = polish(cw, own, mode, t, x_minus, counters)
         _end_phase(cw, own, t, x_minus, x_plus)
+    landing_x, _ = tree_swing_foot(p, x_minus, 0.0, 0.0)
+    cw.record.length[0] = landing_x - (-p.radius * x_start[p.rolling[0]])  # walker.step_length's, read without a call
     tree_impact(p, x_minus, True, x_plus)
     return STRIKE, t
 
@@ -272,6 +274,25 @@ def with_plan(
     return cw._replace(plan=plan, record=_record(cw.sc.y_new.shape[0], n, n_samples, n_phases))
 
 
+_ENTRIES: OrderedDict[int, tuple[CompiledWalker, Callable[..., Any]]] = OrderedDict()  # id(cw): cw, its entry
+_KEPT_ENTRIES = 16  # the walkers whose plain step's entry is kept (a study's threads, each with its own buffers)
+
+
+def _step_entry(cw: CompiledWalker, x0: np.ndarray, counters: np.ndarray) -> Callable[..., Any]:
+    """:func:`step_kernel`'s compiled entry for ``cw``'s types, found once per ``cw`` (held here, so that its id is
+    not reused): a plain step called with the same buffers again and again (limit cycles, basins, the bench) skips
+    numba's typing of the walker's and the buffers' arrays at every call. The states are 1-d, contiguous, writable."""
+    if not isinstance(step_kernel, Kernel):  # run as plain Python (a reference test)
+        return step_kernel
+    found = _ENTRIES.get(id(cw))
+    if found is None:
+        found = cw, step_kernel.entry_for(cw, x0, x0, x0, counters)
+        _ENTRIES[id(cw)] = found
+        while len(_ENTRIES) > _KEPT_ENTRIES:
+            _ENTRIES.popitem(last=False)
+    return found[1]
+
+
 def rigid_step(
     walker: RigidWalker,
     x_start: np.ndarray,
@@ -288,20 +309,21 @@ def rigid_step(
     profile. A strike in no time (the start on the guard: legs together) is a stall, as in walks.
     """
     cw = cw or compile_walker(walker)
-    if sample_rate is not None or pushes or profile is not None:
+    planned = sample_rate is not None or pushes or profile is not None
+    if planned:
         cw = with_plan(cw, sample_rate, pushes, profile)
-    x0 = np.asarray(x_start, dtype=float)
+    x0 = np.array(x_start, dtype=float)  # a copy: C-contiguous and writable, as the step kernel's entry takes it
     x_minus, x_plus = np.zeros_like(x0), np.zeros_like(x0)
     counters = np.zeros(2, dtype=np.int64)
-    code, period = step_kernel(cw, x0, x_minus, x_plus, counters)
+    run = step_kernel if planned or x0.ndim != 1 else _step_entry(cw, x0, counters)
+    code, period = run(cw, x0, x_minus, x_plus, counters)
     if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
         code = STALLED
-    strike = code == STRIKE
-    length = walker.step_length(x0, x_minus) if strike else math.nan
+    strike, rec = code == STRIKE, cw.record
+    length = float(rec.length[0]) if strike else math.nan
     evals, accepted = counters.tolist()
     step = RigidStep(STATUS_NAMES[code], x0, x_minus, x_plus if strike else None, period, length, evals,
                      accepted_steps=accepted)  # fmt: skip
-    rec = cw.record
     applied, sampled, stops = rec.counts.tolist()
     if applied:  # the record read only where it holds something: a plain step costs no more than before
         step.pushes = [tuple(row) for row in rec.pushes[:applied].tolist()]

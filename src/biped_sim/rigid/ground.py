@@ -40,16 +40,16 @@ from biped_sim.contact.ground import ground_height
 from biped_sim.contact.profile import FlatProfile, profile_arrays
 from biped_sim.kernel import kernel
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.rigid.tree_layout import T_NPTS, T_RSW, point
+from biped_sim.rigid.tree_layout import RigidTree, landing, point
 
 RISER_TOLERANCE = 1e-9  # a strike this close to a riser's x and below its top is a trip [leg lengths]
 
 
 @kernel
-def tree_swing_foot(p: np.ndarray, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
+def tree_swing_foot(tree: RigidTree, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
     """(x, height) of the swing foot's lowest point, the stance contact at (origin - R theta, level)."""
-    foot_x, foot_y = point(p, int(p[T_NPTS]) + 1, x)
-    return origin + foot_x, level + foot_y - p[T_RSW]
+    foot_x, foot_y = point(tree, landing(tree), x)
+    return origin + foot_x, level + foot_y - tree.landing_radius
 
 
 @kernel

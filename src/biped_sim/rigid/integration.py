@@ -25,7 +25,6 @@ from numba import njit
 from biped_sim.integrate.dense import (
     dense_eval,
     dop853_coefficients,
-    dop853_extra_stage_input,
     illinois_point,
     illinois_update,
 )
@@ -34,23 +33,25 @@ from biped_sim.integrate.stepper import (
     error_norm,
     initial_step_size,
     initial_step_trial,
-    propagate,
-    stage_input,
     step_factor,
 )
 from biped_sim.integrate.tableaus import Tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.ground import clearance, tree_swing_foot
 from biped_sim.rigid.kernels import (
+    DENSE,
+    FLOW,
+    STAGES,
     element_power,
     fall_check,
+    flow_kernel,
     guard,
     guard_rate,
     has_elements,
     n_fall_checks,
-    rigid_rhs,
 )
 from biped_sim.rigid.step import ATOL, GUARD_TOLERANCE, RTOL
+from biped_sim.rigid.tree_layout import RigidTree
 
 STRIKE, FELL, STALLED, TRIPPED = 0, 1, 2, 3
 STATUS_NAMES = ("strike", "fell", "stalled", "tripped")
@@ -87,12 +88,13 @@ class StepRecord(NamedTuple):
     samples_w: np.ndarray  # (m,) the joint elements' dissipated work since the step's start
     stops: np.ndarray  # (s, 2): t, the kinetic energy lost
     work: np.ndarray  # (1,) the joint elements' dissipated work since the step's start, at its end
+    length: np.ndarray  # (1,) the step's length: the landing foot's lowest point at the strike from the stance contact
 
 
 class CompiledWalker(NamedTuple):
     """A rigid walker as the kernels read it, with the integration's buffers and a step's plan and record."""
 
-    params: np.ndarray
+    params: RigidTree
     tab: Tableau
     sc: Scratch
     t_limit: float  # a step longer than this stalls
@@ -154,19 +156,18 @@ def _crossed(j: int, g_old: float, g_new: float) -> bool:
     return down if j == 0 else down or (g_old <= 0.0 and g_new >= 0.0)
 
 
-@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
-def _initial_step(p: np.ndarray, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would pass the tree's arrays once more
+def _initial_step(p: RigidTree, tab: Tableau, sc: Scratch, y: np.ndarray, span: float) -> float:
     """Hairer, Norsett & Wanner's starting step (as scipy's select_initial_step); uses k[0] = f(y)."""
     h0, d1 = initial_step_trial(y, sc, RTOL, ATOL, span)
-    rigid_rhs(p, sc.y_stage, sc.k[1])
+    flow_kernel(p, tab, sc, 0.0, sc.y_stage, FLOW, 1, False)
     return initial_step_size(tab, sc, h0, d1, span)
 
 
-@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
-def _prepare_dense(p: np.ndarray, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would pass the tree's arrays once more
+def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scratch) -> None:
     """DOP853's dense-output coefficients of the last step (three extra stages of the rigid flow)."""
-    for e in range(3):
-        rigid_rhs(p, sc.y_stage, sc.k[dop853_extra_stage_input(tab, h, y, sc, e)])
+    flow_kernel(p, tab, sc, h, y, DENSE, 0, False)
     dop853_coefficients(tab, h, y, sc)
 
 
@@ -247,7 +248,7 @@ def stretch(
     rate, work = cw.plan.sample_rate, cw.record.work
     elements = has_elements(p)
     k_next = first_sample(rate, t)
-    rigid_rhs(p, y, sc.k[0])
+    flow_kernel(p, tab, sc, 0.0, y, FLOW, 0, False)
     h = _initial_step(p, tab, sc, y, t_stop - t)
     counters[0] += 2
     n_ev = _events(cw, phase, mode, y, sc.g_old)
@@ -257,14 +258,7 @@ def stretch(
         h = min(h, t_stop - t)
         if h < MIN_STEP:  # a push's time within MIN_STEP is reached; anything else cannot be integrated
             return (REACHED if clipped and t_stop < cw.t_limit else STALLED), t
-        stage_work = tab.b[0] * element_power(p, y) if elements else 0.0  # the step's quadrature, weights b
-        for s in range(1, tab.stages):
-            stage_input(tab.a, s, h, y, sc.k, sc.y_stage)
-            rigid_rhs(p, sc.y_stage, sc.k[s])
-            if elements:
-                stage_work += tab.b[s] * element_power(p, sc.y_stage)
-        finite = propagate(tab.b, tab.stages, h, y, sc.k, sc.y_new)
-        rigid_rhs(p, sc.y_new, sc.k[tab.stages])
+        finite, stage_power = flow_kernel(p, tab, sc, h, y, STAGES, 0, elements)  # the work: the step's quadrature
         counters[0] += tab.stages
         err = error_norm(tab, h, y, sc, RTOL, ATOL) if finite else math.inf
         accepted, factor = step_factor(err, tab.error_order, rejected)
@@ -296,7 +290,7 @@ def stretch(
             dense_eval(tab, best, h, y, sc, sc.y_dense)
             copy_into(sc.y_dense, y)
             return (STRIKE if first == 0 else FELL), t_end
-        work[0] += h * stage_work
+        work[0] += h * stage_power
         t = t_end
         copy_into(sc.y_new, y)
         copy_into(sc.k[tab.stages], sc.k[0])
@@ -309,20 +303,20 @@ def stretch(
 def polish(cw: CompiledWalker, phase: int, mode: int, t: float, x: np.ndarray, counters: np.ndarray) -> float:
     """Newton on the guard along the flow: dt = -g / (dg/dt), x += dt f(x + dt f / 2), the elements' work by the
     same midpoint rule; returns the new t."""
-    p, sc = cw.params, cw.sc
+    p, tab, sc = cw.params, cw.tab, cw.sc
     f, f_mid = sc.k[1], sc.k[2]
     for _ in range(4):
         g = phase_guard(cw, phase, mode, x)
         if abs(g) <= GUARD_TOLERANCE:
             break
-        rigid_rhs(p, x, f)
+        flow_kernel(p, tab, sc, 0.0, x, FLOW, 1, False)
         rate = _guard_rate(cw, phase, mode, x, f)
         if rate == 0.0:
             break
         dt = -g / rate
         for i in range(x.shape[0]):
             sc.y_stage[i] = x[i] + 0.5 * dt * f[i]
-        rigid_rhs(p, sc.y_stage, f_mid)
+        flow_kernel(p, tab, sc, 0.0, sc.y_stage, FLOW, 2, False)
         counters[0] += 2
         for i in range(x.shape[0]):
             x[i] += dt * f_mid[i]

@@ -23,16 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.rigid.tree import RigidWalker
-from biped_sim.rigid.tree_layout import (
-    T_NLOCK,
-    T_NPTS,
-    T_RSW,
-    lock_offset,
-    point_velocity,
-    rolling,
-    row_offset,
-    w_offset,
-)
+from biped_sim.rigid.tree_layout import RigidTree, point_velocity
 
 
 @dataclass(frozen=True)
@@ -59,16 +50,16 @@ class StrikeCheck:
         return out
 
 
-def _free_jacobian(p: np.ndarray, base: int | None, q: np.ndarray) -> np.ndarray:
+def _free_jacobian(p: RigidTree, point: int | None, q: np.ndarray) -> np.ndarray:
     """Velocity Jacobian of a point of the walker lifted off the ground, coordinates (hip x, hip y, angles): the
-    point's w vectors at p[base] (None: the stance foot's centre, w = 0) taken from the hip's."""
+    w vectors of table 0's ``point`` (None: the stance foot's centre, w = 0) taken from the hip's."""
     n = len(q)
-    hip = w_offset(p, 0, int(p[T_NPTS]))
+    hip = p.w[0, p.n_points]
     jac = np.zeros((2, 2 + n))
     jac[:, :2] = np.eye(2)
     for k in range(n):
-        wx = (p[base + 2 * k] if base is not None else 0.0) - p[hip + 2 * k]
-        wy = (p[base + 2 * k + 1] if base is not None else 0.0) - p[hip + 2 * k + 1]
+        wx = (p.w[0, point, k, 0] if point is not None else 0.0) - hip[k, 0]
+        wy = (p.w[0, point, k, 1] if point is not None else 0.0) - hip[k, 1]
         s, c = math.sin(q[k]), math.cos(q[k])
         jac[:, 2 + k] = (-s * wx - c * wy, c * wx - s * wy)
     return jac
@@ -80,15 +71,14 @@ def _free_inverse_inertia(walker: RigidWalker, q: np.ndarray) -> np.ndarray:
     p, n = walker.params, walker.n_q
     mass = np.zeros((2 + n, 2 + n))
     for i in range(walker.n_points):
-        o = row_offset(p, 0, i)
-        jac = _free_jacobian(p, o + 3, q)
-        mass += p[o] * jac.T @ jac
-        mass[2 + int(p[o + 2]), 2 + int(p[o + 2])] += p[o + 1]
+        row = p.rows[0, i]
+        jac = _free_jacobian(p, i, q)
+        mass += row["mass"] * jac.T @ jac
+        mass[2 + row["own"], 2 + row["own"]] += row["inertia"]
     inverse = np.linalg.inv(mass)
-    locks = np.zeros((int(p[T_NLOCK]), 2 + n))
-    for j in range(len(locks)):
-        o = lock_offset(p, j)
-        locks[j, 2 + int(p[o])], locks[j, 2 + int(p[o + 1])] = -1.0, 1.0
+    locks = np.zeros((len(p.locks), 2 + n))
+    for j, lock in enumerate(p.locks):
+        locks[j, 2 + lock["parent"]], locks[j, 2 + lock["child"]] = -1.0, 1.0
     if len(locks):
         projected = inverse @ locks.T
         inverse -= projected @ np.linalg.solve(locks @ projected, projected.T)
@@ -98,10 +88,9 @@ def _free_inverse_inertia(walker: RigidWalker, q: np.ndarray) -> np.ndarray:
 def _contact_jacobian(walker: RigidWalker, q: np.ndarray, landing: bool) -> np.ndarray:
     """Velocity of the material point at the bottom of the stance (or landing) foot's arc, free coordinates."""
     p = walker.params
-    base = w_offset(p, 0, walker.n_points + 1) if landing else None
-    jac = _free_jacobian(p, base, q)
-    foot_body = rolling(p, 1 if landing else 0)
-    radius = float(p[T_RSW]) if landing else walker.foot_radius
+    jac = _free_jacobian(p, walker.n_points + 1 if landing else None, q)
+    foot_body = p.rolling[1 if landing else 0]
+    radius = p.landing_radius if landing else walker.foot_radius
     jac[0, 2 + foot_body] += radius  # the arc turning about its centre R above the point
     return jac
 

@@ -39,18 +39,7 @@ from biped_sim.rigid.tree_kernels import (
     tree_push,
     tree_rhs,
 )
-from biped_sim.rigid.tree_layout import (
-    T_NPHASE,
-    T_NPTS,
-    T_RSW,
-    fall_angle,
-    perm_offset,
-    phase_offset,
-    point,
-    point_velocity,
-    rolling,
-    row_offset,
-)
+from biped_sim.rigid.tree_layout import point, point_velocity
 
 
 class RigidWalker:
@@ -65,15 +54,15 @@ class RigidWalker:
     def __init__(self, config: Config, description: WalkerDescription, name: str, gravity: float) -> None:
         self.name, self.description, self.config, self.gravity = name, description, config, gravity
         self.params = tree_params(config, description, gravity)
-        self.n_q = int(self.params[0])
+        self.n_q = self.params.n
         self.state_names = angles_then_rates(description.state_keys())
         self.slope, self.fall_leg_angle = config.ground.slope, config.simulation.fall_leg_angle
-        self.fall_angles = np.array([fall_angle(self.params, k) for k in range(self.n_q)])  # a torso's its own
-        self.leg_length, self.foot_radius = float(self.params[1]), float(self.params[2])
-        self.reference_mass = float(sum(self.params[self._row(0, i)] for i in range(self.n_points)))
+        self.fall_angles = self.params.coords["fall_angle"].copy()  # a torso's its own
+        self.leg_length, self.foot_radius = self.params.leg_length, self.params.radius
+        self.reference_mass = float(sum(self.params.rows["mass"][0, : self.n_points]))
         tree = Tree(description)
         locks = tree_locks(tree, description)
-        self.shift, self.lean = tree.shift, float(self.params[3])
+        self.shift, self.lean = tree.shift, self.params.lean
         self.n_feet = len(description.feet) if len(description.legs) == 1 else 2
         self.leg_offsets = np.zeros(self.n_q)  # each body's angle from its leg's hip body with the stops locked
         for parent, child, limit, *_ in locks:
@@ -91,7 +80,7 @@ class RigidWalker:
         if self.shift:
             self.section_indices = [1]
         else:  # the stance angle and rate, the swing leg's free rates (none when light), each off-leg angle and rate
-            swing_light = self.params[perm_offset(self.params) + 2 * n + half] != 0.0
+            swing_light = bool(self.params.coords["stance_light"][half])
             swing = [] if swing_light else [n + k for k in self.free_swing]
             self.section_indices = [0, n, *swing, *self.off_legs, *(n + k for k in self.off_legs)]
             self._check_alike()
@@ -99,10 +88,7 @@ class RigidWalker:
 
     @property
     def n_points(self) -> int:
-        return int(self.params[T_NPTS])
-
-    def _row(self, table: int, i: int) -> int:
-        return int(row_offset(self.params, table, i))
+        return self.params.n_points
 
     def _check_alike(self) -> None:
         """The next step reuses the stance table after the roles swap: the legs must be alike (same flow)."""
@@ -130,7 +116,7 @@ class RigidWalker:
     def skip_phase(self, index: int, x: np.ndarray) -> bool:
         """Whether phase ``index`` has nothing to wait for at x (the hip already past the stance foot); a phase
         after the walker's own (a ground profile's) is never skipped here."""
-        if index >= int(self.params[T_NPHASE]):
+        if index >= len(self.params.phases):
             return False
         return bool(skip_phase(self.params, index, np.asarray(x, dtype=float)))
 
@@ -143,7 +129,7 @@ class RigidWalker:
     def phases(self) -> list[tuple[int, str]]:
         """(kind, name) of each phase, in order."""
         names = {STOP: "stop_strike", PAST: "stance_past_normal", STRIKE: "heel_strike"}
-        kinds = [int(self.params[phase_offset(self.params, k)]) for k in range(int(self.params[T_NPHASE]))]
+        kinds = [int(kind) for kind in self.params.phases["kind"]]
         return [(kind, names[kind]) for kind in kinds]
 
     def guard_phases(self) -> list[tuple[str, object]]:
@@ -173,7 +159,7 @@ class RigidWalker:
     @property
     def landing_index(self) -> int:
         """The coordinate of the landing leg's hip body (the wheel's one angle)."""
-        return int(self.params[perm_offset(self.params)])
+        return int(self.params.coords["perm"][0])
 
     def next_stance_angle(self, x_minus: np.ndarray) -> float:
         """Angle of the leg (spoke) about to touch down, just before the strike."""
@@ -182,11 +168,11 @@ class RigidWalker:
     def swing_foot(self, x: np.ndarray, origin: float, level: float) -> tuple[float, float]:
         """(x, height) of the landing foot's lowest point, the stance contact at (origin - R theta, level)."""
         fx, fy = point(self.params, self.n_points + 1, np.asarray(x[: self.n_q], dtype=float))
-        return origin + fx, level + fy - float(self.params[T_RSW])
+        return origin + fx, level + fy - self.params.landing_radius
 
     def contact_point(self, q: np.ndarray) -> np.ndarray:
         """The stance contact point (the frame of :func:`~.tree_kernels.point`)."""
-        return np.array([-self.foot_radius * q[rolling(self.params, 0)], 0.0])
+        return np.array([-self.foot_radius * q[self.params.rolling[0]], 0.0])
 
     def leg_lines(self, x: np.ndarray) -> dict[str, float]:
         """The angle of each leg's line from the hip to its foot (the point, or the arc's centre) from the slope normal
@@ -226,8 +212,8 @@ class RigidWalker:
         """The walker's linear momentum (its heavy rows')."""
         n, p = self.n_q, self.params
         q, qd = np.asarray(x[:n], dtype=float), np.asarray(x[n:], dtype=float)
-        rows = [self._row(0, i) for i in range(self.n_points)]
-        return sum((p[o] * np.array(point_velocity(p, 0, i, q, qd)) for i, o in enumerate(rows)), np.zeros(2))
+        masses = p.rows["mass"][0]
+        return sum((masses[i] * np.array(point_velocity(p, 0, i, q, qd)) for i in range(self.n_points)), np.zeros(2))
 
     def angular_momentum(self, x: np.ndarray, about: np.ndarray, coordinates: set[int] | None = None) -> float:
         """Angular momentum (z) about a fixed point of the rows whose inertia turns with ``coordinates`` (None:
@@ -236,8 +222,7 @@ class RigidWalker:
         q, qd = np.asarray(x[:n], dtype=float), np.asarray(x[n:], dtype=float)
         total = 0.0
         for i in range(self.n_points):
-            o = self._row(0, i)
-            mass, inertia, own = p[o], p[o + 1], int(p[o + 2])
+            mass, inertia, own = p.rows[0, i]
             if coordinates is None or own in coordinates:
                 rx, ry = np.array(point(p, i, q)) - about
                 vx, vy = point_velocity(p, 0, i, q, qd)
@@ -287,9 +272,9 @@ class RigidWalker:
     def relabelled(self, x_minus: np.ndarray) -> np.ndarray:
         """A pre-impact state in the roles after the heel strike (the landing leg's bodies first), rates unchanged:
         the strike's relabelling without its impulse (coordinate k is coordinate perm[k] before plus shift[k])."""
-        n, o = self.n_q, perm_offset(self.params)
-        perm = self.params[o : o + n].astype(int)
-        return np.concatenate([x_minus[:n][perm] + self.params[o + n : o + 2 * n], x_minus[n:][perm]])
+        n, coords = self.n_q, self.params.coords
+        perm = coords["perm"]
+        return np.concatenate([x_minus[:n][perm] + coords["shift"], x_minus[n:][perm]])
 
     def guess_state(self, guess: dict[str, float]) -> np.ndarray:
         """The post-impact state of a guess: its section coordinates (:attr:`section_names`) or its initial-state

@@ -1,4 +1,4 @@
-"""A walker's description laid out as the parameter vector of the compiled rigid kernels (:mod:`.tree_layout`).
+"""A walker's description laid out as the records of the compiled rigid kernels (:class:`.tree_layout.RigidTree`).
 
 Coordinates in role order (the stance leg's bodies from the hip down, then the swing leg's); every point the
 equations need is the pinned foot's contact plus sum_k Rot(theta_k) w_k, and this module computes the w_k from the
@@ -14,10 +14,10 @@ from collections import Counter
 import numpy as np
 
 from biped_sim.config import Config, FootSpec, WalkerDescription
-from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, element_parameters
+from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, N_ELEMENT_PARAMS, element_parameters
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.tree_kernels import PAST, RELEASED, STOP, STRIKE
-from biped_sim.rigid.tree_layout import T_ROWS, T_TABLES, T_TRIG, T_WORK, gravity_vector, layout_offsets
+from biped_sim.rigid.tree_layout import COORD, ELEMENT, LOCK, PHASE, ROW, RigidTree, gravity_vector, workspace_size
 
 Vec = np.ndarray
 SPACING_TOLERANCE = 1e-9  # a wheel's feet: equal radii and spacing to this relative tolerance
@@ -241,8 +241,24 @@ def _leg_lean(tree: Tree, n: int, locks: list) -> tuple[float, float]:
     return -foot[1], math.atan2(foot[0], -foot[1])
 
 
-def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndarray:
-    """The parameter vector of the kernels (the header, the tables, locks, phases, relabelling, workspace)."""
+def _table(items: list, dtype: np.dtype) -> np.ndarray:
+    """The record array of ``items`` (tuples of the dtype's fields), its fields read as attributes."""
+    return np.array(items, dtype=dtype).view(np.recarray)
+
+
+def _points(tree: Tree, rows: list, light: list, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, w) of both tables: each table's rows, then the hip and the landing foot (table 0's in both), then its
+    light rows (:class:`~biped_sim.rigid.tree_layout.RigidTree`)."""
+    marks = [(0.0, 0.0, 0, tree.origin(tree.root, tree.feet[0])),
+             (0.0, 0.0, 0, tree.at(tree.feet[1].body, tree.feet[1].centre, tree.feet[0]))]  # fmt: skip
+    tables = [rows[t] + marks + light[t] for t in (0, 1)]
+    records = _table([[row[:3] for row in table] for table in tables], ROW).reshape(2, -1)
+    w = np.array([[np.reshape(_flat(row[3], n), (n, 2)) for row in table] for table in tables]).reshape(2, -1, n, 2)
+    return records, w
+
+
+def tree_params(config: Config, d: WalkerDescription, gravity: float) -> RigidTree:
+    """The records of the kernels (the tables, locks, phases, relabelling, elements) and their workspace."""
     tree = Tree(d)
     n = len(tree.order)
     locks = tree_locks(tree, d)
@@ -256,24 +272,22 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> np.ndar
     depth, lean = _leg_lean(tree, n, locks)
     radius = tree.feet[0].radius
     gx, gy = gravity_vector(gravity, config.ground.slope)
-    header = [n, depth + radius, radius, lean, gx, gy, config.simulation.fall_leg_angle]
     elements = tree_elements(tree, d)
     check_elements_mirrored(d, elements, perm)
-    offsets = layout_offsets(n, len(rows[0]), len(light[0]), len(locks), len(phases), len(elements))
-    counts = [len(locks), len(phases), len(rows[0]), tree.feet[1].radius, len(light[0]), len(tree.off_legs)]
-    p = [*header, *counts, len(elements)]
-    p += [offsets[k] for k in range(T_ROWS, T_TABLES)]
-    for t in (0, 1):
-        p.append(rolling[t])
-        for mass, inertia, own, w in rows[t] + light[t]:
-            p += [mass, inertia, own, *_flat(w, n)]
-    p += _flat(tree.origin(tree.root, tree.feet[0]), n)
-    p += _flat(tree.at(tree.feet[1].body, tree.feet[1].centre, tree.feet[0]), n)
-    p += [v for lock in locks for v in lock[:5]] + [v for phase in phases for v in phase]
-    p += perm + shift + flags[0] + flags[1] + _fall_angles(tree, d, config)
-    p += [v for element in elements for v in element]
-    assert len(p) == offsets[T_WORK], (len(p), offsets)
-    return np.array(p + [0.0] * (offsets[T_TRIG] + 2 * n - len(p)), dtype=float)
+    records, w = _points(tree, rows, light, n)
+    coords = list(zip(perm, shift, *(map(bool, f) for f in flags), _fall_angles(tree, d, config), strict=True))
+    return RigidTree(
+        n=n, leg_length=float(depth + radius), radius=float(radius), landing_radius=float(tree.feet[1].radius),
+        lean=float(lean), gx=float(gx), gy=float(gy), fall=float(config.simulation.fall_leg_angle),
+        n_points=len(rows[0]), n_light=len(light[0]), n_off=len(tree.off_legs), rolling=(rolling[0], rolling[1]),
+        rows=records, w=np.ascontiguousarray(w, dtype=float),
+        locks=_table([lock[:5] for lock in locks], LOCK), phases=_table(phases, PHASE),
+        coords=_table(coords, COORD), elements=_table([tuple(e[:3]) for e in elements], ELEMENT),
+        element_params=np.array([e[3:] for e in elements], dtype=float).reshape(len(elements), N_ELEMENT_PARAMS),
+        matrix=np.zeros((n + len(locks), n + len(locks))),
+        work=np.zeros(workspace_size(n, len(rows[0]), len(light[0]), len(locks))), jacobian=np.zeros((n, 2)),
+        trig=np.zeros((n, 2)),
+    )  # fmt: skip
 
 
 def point_of(tree: Tree, w: dict[int, Vec], n: int, locks: list) -> Vec:  # type: ignore[type-arg]

@@ -11,8 +11,9 @@ basin's walks); a rigid walker in space has its
 own (its flow, ``rigid.space_kernels``).
 :func:`warm_up` runs a config for a millisecond once per process and group; ``biped-sim warmup`` (and
 ``make setup``) warms ``BUNDLED_GROUPS``, the groups of the bundled configs (walkers in space too) and sweeps, of
-a run on a ground profile, of the bundled configs' fits and uncertainty samples, of the default walker's MFPT (its
-walks in minimal coordinates on a profile) and of its run with a stiff method (tests keep the list true), ``--all``
+a run on a ground profile (in the plane and in space), of the bundled configs' fits and uncertainty samples, of the
+default walker's MFPT (its walks in minimal coordinates on a profile) and of its run with a stiff method (tests keep
+the list true), ``--all``
 every formulation, integrator family and ground the package has, each group in a process of its own, one per
 core at a time (:func:`warm_up_in_processes`); a sweep's workers warm each group before its first timed run,
 and a Dask worker can warm itself at start (:mod:`biped_sim.sweep.preload`).
@@ -60,12 +61,12 @@ SPACE_WALKER = {
 }  # fmt: skip
 SPACE_START = dict.fromkeys(SPACE_STATE_KEYS, 0.0) | {"pitch": -0.2, "swing_angle": 0.4, "omega_y": 1.0}
 # (formulation, integrator family, ground) of the bundled configs (configs/ and configs/space/) and sweeps, of a run
-# on a profile, of the bundled configs' studies (fit and uncertainty run a planar walker in minimal coordinates; the
-# default walker's MFPT, on a profile) and of the default walker with a stiff method (a golden case's) (the
-# costliest first: the parallel warm-up ends sooner)
+# on a profile (in the plane and in space), of the bundled configs' studies (fit and uncertainty run a planar walker
+# in minimal coordinates; the default walker's MFPT, on a profile) and of the default walker with a stiff method (a
+# golden case's) (the costliest first: the parallel warm-up ends sooner)
 BUNDLED_GROUPS = (
-    (*RIGID, "flat"), ("spatial", "explicit", "flat"), (*RIGID_SPACE, "flat"), ("planar", "explicit", "profile"),
-    ("minimal", "explicit", "profile"),
+    (*RIGID, "flat"), ("spatial", "explicit", "flat"), (*RIGID_SPACE, "flat"), ("spatial", "explicit", "profile"),
+    ("planar", "explicit", "profile"), ("minimal", "explicit", "profile"),
     ("planar", "explicit", "flat" + JOINT_STOPS), ("minimal", "explicit", "flat" + JOINT_STOPS),
     ("minimal", "explicit", "flat"), ("minimal", "explicit", "flat" + JOINT_ELEMENTS),
     ("planar", "explicit", "flat" + JOINT_ELEMENTS), ("planar", "stiff", "flat"), ("planar", "explicit", "flat"),
