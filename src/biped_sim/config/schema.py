@@ -278,10 +278,6 @@ class Config(Strict):
                 "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
                 "(formulation.kind: spatial, or walker.kind: description3d)"
             )
-        if self.friction.spin_radius > 0.0 and not (
-            self.dynamics == "compliant" and self.formulation.kind == "spatial"
-        ):
-            raise ValueError("friction.spin_radius: only in space (dynamics: compliant, formulation.kind: spatial)")
         if reason := profile_support_error(self.ground, self.dynamics, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
         hertz = self.contact.materials is not None or self.dynamics == "compliant"
@@ -295,6 +291,10 @@ class Config(Strict):
                 "ground.slope: steeper than the friction cone (tan(slope) > friction coefficient), "
                 "the stance foot cannot hold"
             )
+        if self.friction.spin_radius > 0.0 and not (
+            self.dynamics == "compliant" and self.formulation.kind == "spatial"
+        ):
+            raise ValueError("friction.spin_radius: only in space (dynamics: compliant, formulation.kind: spatial)")
         return self
 
     def _described_walker_checks(self) -> None:
