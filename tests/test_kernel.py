@@ -40,6 +40,16 @@ def _weighted_sum(values: np.ndarray, weight: float) -> float:
     return total
 
 
+@kernel
+def _entry_sum(values: np.ndarray, weight: float) -> float:
+    """:func:`_weighted_sum`'s arithmetic in a kernel of its own, for ``entry_for``'s test: a test that calls a kernel
+    from Python compiles its twin, which another test checks is not there before its first such call."""
+    total = 0.0
+    for v in values:
+        total += weight * v
+    return total
+
+
 @njit(cache=True)
 def _calls_the_kernel(values: np.ndarray) -> float:
     return _weighted_sum(values, 2.0)
@@ -135,9 +145,9 @@ def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> Non
 def test_a_kernels_entry_for_argument_types_is_its_twins_compiled_code() -> None:
     """``entry_for``: the twin's compiled code for those types, called without numba's typing of the arguments."""
     values = np.arange(5.0)
-    entry = _weighted_sum.entry_for(values, 2.0)
-    assert entry(values, 2.0) == _weighted_sum(values, 2.0) == 20.0
-    assert _weighted_sum.entry_for(values, 2.0) is entry  # compiled once: the same code for the same types
+    entry = _entry_sum.entry_for(values, 2.0)
+    assert entry(values, 2.0) == _entry_sum(values, 2.0) == 20.0
+    assert _entry_sum.entry_for(values, 2.0) is entry  # compiled once: the same code for the same types
 
 
 @kernel(literal_arguments=False)
