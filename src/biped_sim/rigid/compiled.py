@@ -204,7 +204,7 @@ def step_kernel(cw: CompiledWalker, x_start: np.ndarray, x_minus: np.ndarray, x_
         t = polish(cw, own, mode, t, x_minus, counters)
         _end_phase(cw, own, t, x_minus, x_plus)
     landing_x, _ = tree_swing_foot(p, x_minus, 0.0, 0.0)
-    cw.record.length[0] = landing_x - (-p.radius * x_start[p.rolling[0]])  # walker.step_length's, read without a call
+    cw.record.length[0] = landing_x - (-p.radius * x_start[p.rolling[0]])  # from the stance contact (contact_point)
     tree_impact(p, x_minus, True, x_plus)
     return STRIKE, t
 

@@ -191,10 +191,6 @@ class RigidWalker:
             "inter_leg_angle": stance_line - swing_line,
         }
 
-    def step_length(self, x_start: np.ndarray, x_minus: np.ndarray) -> float:
-        """Advance of the contact point over a step: from the stance contact at the start to the landing foot's."""
-        return float(self.swing_foot(x_minus, 0.0, 0.0)[0] - self.contact_point(np.asarray(x_start))[0])
-
     def hip_height(self, x: np.ndarray) -> float:
         """The hip's height above the stance foot's ground line."""
         return float(point(self.params, self.n_points, np.asarray(x[: self.n_q], dtype=float))[1])
