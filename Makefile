@@ -7,6 +7,11 @@ CONFIG ?= configs/round_foot_walker.yaml
 # pytest-xdist processes for the fast tier (auto: one per core) and for the slow tier's parallel-safe tests
 TEST_WORKERS ?= auto
 SLOW_WORKERS ?= 2
+# pytest with bytecode writing allowed whatever the environment says (PYTHONDONTWRITEBYTECODE=1, common in
+# containers): pytest then caches each test module's assertion rewrite in __pycache__ instead of redoing it in
+# every process (some 2.5 CPU s a process: each xdist worker collects every module), and the test's own
+# subprocesses load the package's bytecode rather than compiling it
+PYTEST := env -u PYTHONDONTWRITEBYTECODE $(BIN)/python -m pytest
 
 .PHONY: setup setup-bench run test test-older-cpu test-slow validate bench lint format sweep-demo golden docs clean
 
@@ -35,20 +40,21 @@ run: $(STAMP)              ## simulate the default walker (compiling only its ow
 	$(BIN)/biped-sim run $(CONFIG)
 
 test: $(WARMED)            ## the fast test tier (pytest's default: -m 'not slow'; about a minute on 2 cores)
-	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
+	$(PYTEST) -q -n $(TEST_WORKERS)
 
 # numpy's SIMD dispatch limited to AVX2 (numpy >= 2.4's feature names) and OpenBLAS's kernels to Haswell: the
 # arithmetic of an older x86 CPU, for the scipy/BLAS/LAPACK paths (tests must pass on any x86 CPU)
 OLDER_CPU := NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" OPENBLAS_CORETYPE=Haswell
 
 test-older-cpu: $(WARMED)  ## the fast tier as on an older (AVX2) CPU
-	$(OLDER_CPU) $(BIN)/python -m pytest -q -n $(TEST_WORKERS)
+	$(OLDER_CPU) $(PYTEST) -q -n $(TEST_WORKERS)
 
-# the slow tier in SLOW_WORKERS processes (by module, as the fast tier), then its serial tests alone: those that
-# time themselves or kill processes on deadlines (marked serial)
+# the slow tier in SLOW_WORKERS processes, then its serial tests alone: those that time themselves or kill processes
+# on deadlines (marked serial); tests/conftest.py's UnitScheduling hands out the same units as in the fast tier
+# (a module, a group of modules sharing a session fixture, or a test of its own), LONGEST_FIRST's costliest first
 test-slow: $(WARMED)       ## the slow test tier (-m slow; CI's, where tests/test_validation.py runs biped-sim validate)
-	$(BIN)/python -m pytest -q -n $(SLOW_WORKERS) -m 'slow and not serial'
-	$(BIN)/python -m pytest -q -m 'slow and serial'
+	$(PYTEST) -q -n $(SLOW_WORKERS) -m 'slow and not serial'
+	$(PYTEST) -q -m 'slow and serial'
 
 validate: $(WARMED)        ## long physics checks: the validation report (results/validation), then the slow test tier
 	$(BIN)/biped-sim validate
