@@ -23,7 +23,7 @@ KNEED = ROOT / "tests" / "data" / "kneed_round_feet.yaml"
 
 
 def config(name: str | Path, *overrides: str) -> Config:
-    path = name if isinstance(name, Path) else ROOT / "configs" / name
+    path = name if isinstance(name, Path) else ROOT / ("tests/data" if name.startswith("space/") else "configs") / name
     return load_config(path, list(overrides))
 
 

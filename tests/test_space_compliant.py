@@ -17,9 +17,10 @@ from biped_sim.simulate import prepare_model, simulate
 from biped_sim.simulate.compliant import summarize
 from biped_sim.walkers import build_model
 from biped_sim.walkers.space_geometry import leg_geometry, rolling_states, with_point_mass
+from tests.conftest import SPACE_FIXTURES
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-TINKERTOY = CONFIGS / "space" / "tinkertoy_compliant.yaml"
+TINKERTOY = SPACE_FIXTURES / "tinkertoy_compliant.yaml"
 # the tinkertoy's rigid gait (tests/test_space_walker.py: test_the_tinkertoy_walks_stably), to 8 digits
 GAIT = {"heading": 0.09866766, "bank": -0.00924861, "pitch": -0.16016583, "swing_angle": 0.29424124,
         "omega_x": -0.06623178, "omega_y": 0.46696908, "omega_z": -0.13656793, "swing_rate": -0.39255917}  # fmt: skip
@@ -90,7 +91,7 @@ def test_the_compliant_tinkertoy_walks_near_its_rigid_gait_and_its_energy_balanc
     assert summary["constraint_violation_max"]["position"] < 1e-8
 
 
-KUO = CONFIGS / "space" / "kuo_compass_3d_compliant.yaml"
+KUO = SPACE_FIXTURES / "kuo_compass_3d_compliant.yaml"
 # its rigid gait: KUO_GAIT (biped-sim limit-cycle configs/space/kuo_compass_3d.yaml with these feet), unstable
 KUO_RIGID_PERIOD = 0.72270728
 

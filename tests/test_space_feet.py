@@ -14,7 +14,7 @@ from biped_sim.config import Config, load_config
 from biped_sim.rigid.space_cycle import space_branch
 from tests.conftest import invoke
 
-SPACE = Path(__file__).resolve().parents[1] / "configs" / "space"
+SPACE = Path(__file__).resolve().parent / "data" / "space"
 TINKERTOY_SPHERE = SPACE / "tinkertoy_sphere.yaml"
 RING_RADIUS = 0.1236  # the toy's ring: its radius in the leg's x-z plane (the sagittal radius kept below)
 TUBES = (0.04, 0.08, 0.12)  # tori between the ring (tube 0) and the sphere (tube = RING_RADIUS)

@@ -82,7 +82,7 @@ def test_a_lateral_push_gives_the_walker_in_space_its_impulse_sideways() -> None
 
 @pytest.mark.parametrize(
     ("config", "override"),
-    [(None, ""), (KUO.parents[1] / "round_foot_walker.yaml", "dynamics=rigid")],
+    [(None, ""), (KUO.parents[3] / "configs" / "round_foot_walker.yaml", "dynamics=rigid")],
 )
 def test_a_lateral_push_on_a_planar_walker_is_a_one_line_error_naming_the_field(
     config: Path | None, override: str

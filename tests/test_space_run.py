@@ -25,11 +25,11 @@ from biped_sim.studies.fit.problem import FitProblem
 from biped_sim.studies.fit.stats import summarize
 from biped_sim.studies.fit.synthetic import synthetic_reference_data
 from biped_sim.walkers.space_walker import BODY_NAMES
-from tests.conftest import invoke, one_line_error
+from tests.conftest import SPACE_FIXTURES, invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
+TINKERTOY = SPACE_FIXTURES / "tinkertoy.yaml"
 RIGID_LENGTH = 0.46483907  # docs/guide/rigid.md, the toy's gait
 STARTED = "simulation.initial=" + repr(GAIT).replace("'", '"')
 

@@ -11,7 +11,7 @@ import pytest
 from biped_sim.config import Config, load_config
 from biped_sim.rigid.space_cycle import space_branch
 
-TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
+TINKERTOY = Path(__file__).resolve().parents[1] / "tests" / "data" / "space" / "tinkertoy.yaml"
 # the toy's parameters (share 0) and the Kuo-type compass's made dimensionless (share 1: leg length 1, g = 1, the
 # walker's mass 2: legs of 0.5 and 1 at the hip; a ring of 1 mm for its 1 mm spheres)
 TOY = {"slope": 0.0702, "hip_width": 0.3624, "hip_mass": 0.0, "mass": 1.0, "com_y": 0.6969, "com_z": -0.6863,

@@ -17,10 +17,10 @@ from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.space_cycle import SpaceSection, space_branch, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_flow, space_params
 from biped_sim.rigid.space_model import MIRROR, foot_bottom, swing_clearance
-from tests.conftest import invoke, one_line_error
+from tests.conftest import SPACE_FIXTURES, invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
+TINKERTOY = SPACE_FIXTURES / "tinkertoy.yaml"
 KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one branch of gaits
 KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
 KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
@@ -83,7 +83,7 @@ def test_a_bad_walker_in_space_is_one_line_naming_its_field(override: str, messa
 def test_a_walker_in_space_refuses_the_planar_paths() -> None:
     from biped_sim.rigid.build import rigid_walker
 
-    with pytest.raises(ConfigError, match=r"walker\.kind: a walker in space"):
+    with pytest.raises(ConfigError, match=r"^walker: a walker in space"):
         rigid_walker(load_config(TINKERTOY))
 
 
@@ -225,7 +225,7 @@ def test_the_tinkertoy_walks_stably() -> None:
 def kuo_compass(radius: float) -> Config:
     """configs/space/kuo_compass_3d.yaml with sphere feet of ``radius``, their bottom 1 m below the hip."""
     foot = [f"walker.space.leg.foot.radius={radius}", f"walker.space.leg.foot.centre=[0, 0, {radius - 1.0}]"]
-    return load_config(CONFIGS / "space" / "kuo_compass_3d.yaml", foot)
+    return load_config(SPACE_FIXTURES / "kuo_compass_3d.yaml", foot)
 
 
 @pytest.mark.slow

@@ -40,7 +40,6 @@ from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config, WalkerDescription
 from biped_sim.config.description import GROUND
 from biped_sim.config.space_description import SpaceDescription
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import Tree, resolve_tree
@@ -86,7 +85,7 @@ def document(name: str, options: str, world: str, extra: str = "") -> str:
 
 def walker_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the walker of ``config`` on its slope: a planar description's tree or a walker in space."""
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return space_mjcf(config, timestep, integrator)
     return planar_mjcf(config, timestep, integrator)
 

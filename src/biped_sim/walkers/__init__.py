@@ -9,7 +9,6 @@ coordinates, or lifted into the spatial formulation by :func:`spatial_described`
 from __future__ import annotations
 
 from biped_sim.config import Config, InitialState
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described
 from biped_sim.walkers.model import BuiltModel, minimal_model
@@ -28,7 +27,7 @@ def build_model(config: Config, initial: InitialState | dict[str, float] | None 
         if config.simulation.initial == "rigid_limit_cycle":
             raise ValueError("build_model: simulation.initial is rigid_limit_cycle; use simulate.prepare_model")
         initial = config.simulation.initial
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return build_space_walker(config, initial)
     if config.formulation.kind == "spatial":
         return spatial_described(config, initial)

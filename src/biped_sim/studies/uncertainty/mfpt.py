@@ -32,7 +32,7 @@ import pandas as pd
 from scipy import optimize, stats
 
 from biped_sim.config import Config, derive
-from biped_sim.config.walker_registry import capabilities, profile_refusal
+from biped_sim.config.walker_registry import profile_refusal
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.simulate import study_formulation
 from biped_sim.simulate.budget import check_run_count
@@ -183,7 +183,7 @@ def mfpt_curve(
     """The MFPT at each roughness level over ``seeds`` walks capped at ``cap`` strikes."""
     check_mfpt_input(config, ground, roughness, seeds, cap)
     levels = [float(h) for h in roughness]
-    if ground == "slope" and capabilities(config.walker.kind).space:
+    if ground == "slope" and config.in_space:
         estimates = [mfpt_estimate(*space_slope_walks(config, h, range(seeds), cap)) for h in levels]
         notes = ["slope of each step ~ N(slope, roughness^2), a kink at each new contact point; the step map in space"]
         return MfptCurve(ground, levels, estimates, None, seeds, cap, notes)

@@ -31,7 +31,6 @@ import numpy as np
 from scipy import stats
 
 from biped_sim.config import Config
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_entry, with_slope
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -46,7 +45,7 @@ def walks_random_slopes(config: Config) -> bool:
     walker in space (its step map, :mod:`.space_slopes`)."""
     if config.dynamics != "rigid":
         return False
-    return capabilities(config.walker.kind).space or bool(rigid_walker(config).shift)
+    return config.in_space or bool(rigid_walker(config).shift)
 
 
 @dataclass(frozen=True)
