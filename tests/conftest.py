@@ -38,9 +38,6 @@ from biped_sim.testing import default_walker, write_tiny_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"
-SPACE_FIXTURES = (
-    ROOT / "tests" / "data" / "space"
-)  # walkers in space as walker.kind: description3d (configs/space: the same as descriptions)
 DEFAULT_CONFIG = CONFIGS / "round_foot_walker.yaml"
 CLI = [sys.executable, "-m", "biped_sim.cli"]
 T = TypeVar("T")

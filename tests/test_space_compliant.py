@@ -1,4 +1,4 @@
-"""The walker in space with compliant contact (walker.kind: description3d, formulation.kind: spatial): its model
+"""The walker in space with compliant contact (a described walker in space, formulation.kind: spatial): its model
 built from the description and the rigid gait's state, its refusals, and its walk."""
 
 from __future__ import annotations
@@ -17,10 +17,9 @@ from biped_sim.simulate import prepare_model, simulate
 from biped_sim.simulate.compliant import summarize
 from biped_sim.walkers import build_model
 from biped_sim.walkers.space_geometry import leg_geometry, rolling_states, with_point_mass
-from tests.conftest import SPACE_FIXTURES
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-TINKERTOY = SPACE_FIXTURES / "tinkertoy_compliant.yaml"
+TINKERTOY = CONFIGS / "space" / "tinkertoy_compliant.yaml"
 # the tinkertoy's rigid gait (tests/test_space_walker.py: test_the_tinkertoy_walks_stably), to 8 digits
 GAIT = {"heading": 0.09866766, "bank": -0.00924861, "pitch": -0.16016583, "swing_angle": 0.29424124,
         "omega_x": -0.06623178, "omega_y": 0.46696908, "omega_z": -0.13656793, "swing_rate": -0.39255917}  # fmt: skip
@@ -55,7 +54,7 @@ def test_the_start_is_the_rigid_gait_sunk_by_the_static_penetration() -> None:
 
 
 def test_a_hip_mass_on_the_hinge_axis_keeps_the_walkers_centre_of_mass_and_inertia() -> None:
-    config = tinkertoy("walker.space.hip_mass=0.5")
+    config = tinkertoy()
     leg = leg_geometry(config.walker.space, 0)
     loaded = with_point_mass(leg, 0.5)
     assert loaded.mass == 1.5 and loaded.com == pytest.approx(leg.com / 1.5)
@@ -67,14 +66,17 @@ def test_a_hip_mass_on_the_hinge_axis_keeps_the_walkers_centre_of_mass_and_inert
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ('simulation.initial={"pitch": 0.1}', "simulation.initial: expected the keys heading, bank, pitch"),
-        ("formulation.kind=planar", "walker.kind: 'description3d' needs formulation.kind: spatial"),
+        ('simulation.initial={"pitch": 0.1}', "simulation.initial: expected the keys stance_angle, stance_rate, swing"),
+        (
+            'simulation.initial={"pitch": 0.1}',
+            "or the rigid gait in space's heading, bank, pitch, swing_angle",
+        ),
     ],
 )
 def test_a_walker_in_space_refuses_a_start_or_formulation_it_has_no_model_for(override: str, message: str) -> None:
     with pytest.raises(ConfigError) as caught:
         load_config(TINKERTOY, [override])
-    assert str(caught.value).startswith(message)
+    assert message in str(caught.value)
 
 
 @pytest.mark.slow
@@ -91,7 +93,7 @@ def test_the_compliant_tinkertoy_walks_near_its_rigid_gait_and_its_energy_balanc
     assert summary["constraint_violation_max"]["position"] < 1e-8
 
 
-KUO = SPACE_FIXTURES / "kuo_compass_3d_compliant.yaml"
+KUO = CONFIGS / "space" / "kuo_compass_3d_compliant.yaml"
 # its rigid gait: KUO_GAIT (biped-sim limit-cycle configs/space/kuo_compass_3d.yaml with these feet), unstable
 KUO_RIGID_PERIOD = 0.72270728
 
@@ -138,7 +140,7 @@ def test_the_mujoco_walker_in_space_takes_sphere_feet_only() -> None:
 
     with pytest.raises(ConfigError) as caught:
         MujocoSpaceWalker(tinkertoy(), GAIT)
-    assert str(caught.value).startswith("walker.space.leg.foot.shape: the MuJoCo walker in space takes sphere feet")
+    assert str(caught.value).startswith("walker.description.feet: the MuJoCo walker in space takes sphere feet")
 
 
 @pytest.mark.slow

@@ -1,6 +1,7 @@
 """A described walker of the rigid model's form in space (config.space_form): the one builder from
-walker.description to the rigid model's data, its one-line refusals, and the bundled walkers in space written as
-descriptions (configs/space) giving their description3d twins' results (tests/data/space)."""
+walker.description to the rigid model's data, its one-line refusals, and the bundled walkers in space
+(configs/space) giving the published walkers' numbers exactly (those walker.kind: description3d held; the runs
+were compared bit for bit while it existed, at febce45)."""
 
 from __future__ import annotations
 
@@ -8,27 +9,35 @@ import copy
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 import yaml
 
-from biped_sim import config_from_dict, simulate
+from biped_sim import config_from_dict
 from biped_sim.config import load_config
+from biped_sim.config.space_description import InertiaSpec, SpaceDescription, SpaceFoot, SpaceLeg
 from biped_sim.errors import ConfigError
-from biped_sim.rigid.space_cycle import space_cycle_from, space_walker_model
-from tests.conftest import CONFIGS, SPACE_FIXTURES, invoke, one_line_error
-from tests.test_space_compliant import GAIT
+from biped_sim.rigid.space_cycle import space_cycle_from
+from tests.conftest import CONFIGS, invoke, one_line_error
+from tests.test_space_compliant import GAIT, RIGID_PERIOD
 
-BUNDLED = [
-    "tinkertoy",
-    "tinkertoy_compliant",
-    "tinkertoy_sphere",
-    "tinkertoy_sphere_compliant",
-    "kuo_compass_3d",
-    "kuo_compass_3d_compliant",
-]
 TOY = CONFIGS / "space" / "tinkertoy.yaml"
 STARTED = "simulation.initial=" + repr(GAIT).replace("'", '"')
+# Coleman et al.'s leg (x forward, y along the hinge away from the other leg, z up) and the Kuo-type compass's
+TOY_LEG = {"mass": 1.0, "com": (0.0, 0.6969, -0.6863), "inertia": InertiaSpec(
+    xx=0.1982, yy=0.0186, zz=0.1802, xy=0.0071, xz=-0.0023, yz=0.0573)}  # fmt: skip
+KUO_LEG = {"mass": 5.0, "com": (0.0, 0.0, -0.5), "inertia": InertiaSpec(xx=0.1, yy=0.0, zz=0.1)}
+RING = SpaceFoot(shape="ring", radius=0.1236, centre=(0.0, 0.0, -0.8764))
+SPHERE = SpaceFoot(shape="sphere", radius=0.1236, centre=(0.0, 0.0, -0.8764))
+PUBLISHED = {
+    "tinkertoy": SpaceDescription(hip_width=0.3624, leg=SpaceLeg(**TOY_LEG, foot=RING)),
+    "tinkertoy_compliant": SpaceDescription(hip_width=0.3624, leg=SpaceLeg(**TOY_LEG, foot=RING)),
+    "tinkertoy_sphere": SpaceDescription(hip_width=0.3624, leg=SpaceLeg(**TOY_LEG, foot=SPHERE)),
+    "tinkertoy_sphere_compliant": SpaceDescription(hip_width=0.3624, leg=SpaceLeg(**TOY_LEG, foot=SPHERE)),
+    "kuo_compass_3d": SpaceDescription(hip_width=0.1, hip_mass=10.0, leg=SpaceLeg(
+        **KUO_LEG, foot=SpaceFoot(shape="sphere", radius=0.001, centre=(0.0, 0.0, -0.999)))),
+    "kuo_compass_3d_compliant": SpaceDescription(hip_width=0.1, hip_mass=10.0, leg=SpaceLeg(
+        **KUO_LEG, foot=SpaceFoot(shape="sphere", radius=0.3, centre=(0.0, 0.0, -0.7)))),
+}  # fmt: skip
 
 
 def toy() -> dict[str, Any]:
@@ -36,37 +45,22 @@ def toy() -> dict[str, Any]:
     return yaml.safe_load(TOY.read_text())
 
 
-@pytest.mark.parametrize("name", BUNDLED)
-def test_a_bundled_walker_in_space_is_its_description3d_twin_to_the_bit(name: str) -> None:
-    """The description's rigid form equals description3d's walker field by field (floats compared exactly), so the
-    rigid model's parts and feet are the same numbers."""
-    described, twin = load_config(CONFIGS / "space" / f"{name}.yaml"), load_config(SPACE_FIXTURES / f"{name}.yaml")
+@pytest.mark.parametrize("name", list(PUBLISHED))
+def test_a_bundled_walker_in_space_is_the_published_walker_to_the_bit(name: str) -> None:
+    """The description's rigid form equals the published numbers field by field (floats compared exactly, the
+    signs of the zeros too: the rigid model's arrays are the same bits)."""
+    described = load_config(CONFIGS / "space" / f"{name}.yaml")
     assert described.walker.kind == "description" and described.in_space
-    assert described.walker.space == twin.walker.space
-    assert described.walker.leg_length == twin.walker.leg_length
-    ours, theirs = space_walker_model(described), space_walker_model(twin)
-    for a, b in zip(ours.parts + ours.feet, theirs.parts + theirs.feet, strict=True):
-        for field in a.__dataclass_fields__:
-            assert np.array_equal(getattr(a, field), getattr(b, field)), field
+    assert repr(described.walker.space) == repr(PUBLISHED[name])
+    assert described.walker.leg_length == described.walker.space.leg_length()
 
 
-def test_the_described_toy_finds_description3d_s_gait() -> None:
-    """Newton from the gait's keys: the same fixed point and multipliers (to 1e-9 and 1e-6: the same bits)."""
-    ours, theirs = (space_cycle_from(load_config(p), GAIT) for p in (TOY, SPACE_FIXTURES / "tinkertoy.yaml"))
-    assert ours is not None and theirs is not None and ours.walker == "description"
-    np.testing.assert_allclose(ours.section_point, theirs.section_point, rtol=0.0, atol=1e-9)
-    np.testing.assert_allclose(np.sort_complex(ours.multipliers), np.sort_complex(theirs.multipliers), atol=1e-6)
-    assert ours.step_period == theirs.step_period
-
-
-def test_the_described_toys_compliant_run_is_description3d_s_bit_for_bit() -> None:
-    """The compliant toy on spheres, started on the rigid gait from its keys: the same run, every sample."""
-    overrides = [STARTED, "simulation.t_end=1.2"]
-    ours, theirs = (
-        simulate(load_config(p / "tinkertoy_sphere_compliant.yaml", overrides)) for p in (TOY.parent, SPACE_FIXTURES)
-    )
-    assert len(ours.heel_strike_times) >= 1 and np.array_equal(ours.heel_strike_times, theirs.heel_strike_times)
-    assert np.array_equal(ours.run.t, theirs.run.t) and np.array_equal(ours.run.y, theirs.run.y)
+def test_the_described_toy_has_its_published_gait() -> None:
+    """Newton from the gait's 8-digit keys: the fixed point and period to 1e-8 (the README's digits)."""
+    cycle = space_cycle_from(load_config(TOY), GAIT)
+    assert cycle is not None and cycle.walker == "description"
+    assert cycle.fixed_point == pytest.approx(GAIT, abs=1e-8)
+    assert cycle.step_period == pytest.approx(RIGID_PERIOD, abs=1e-8)
 
 
 def test_a_described_walker_in_space_starts_on_its_bodies_angles_when_given_them() -> None:

@@ -22,7 +22,7 @@ from biped_sim.rigid.space_step import space_step
 from biped_sim.rigid.space_walk import walk_step
 from biped_sim.rigid.step import ATOL, RTOL
 
-TINKERTOY = Path(__file__).resolve().parents[1] / "tests" / "data" / "space" / "tinkertoy.yaml"
+TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
 # docs/guide/rigid.md's fixed point (heading, bank, pitch, omega x y z, hinge rate), polished by Newton here
 TINKERTOY_POINT = (0.09866766, -0.00924861, -0.16016583, -0.06623178, 0.46696908, -0.13656793, -0.39255917)
 TINKERTOY_LARGEST = 0.83915586  # the modulus of its largest multipliers, a complex pair

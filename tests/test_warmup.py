@@ -21,7 +21,7 @@ from biped_sim.studies.uncertainty.mfpt import height_walk_config
 from biped_sim.sweep import load_sweep
 from biped_sim.testing import default_walker
 
-from .conftest import CONFIGS, ROOT, SPACE_FIXTURES, child_env, invoke
+from .conftest import CONFIGS, ROOT, child_env, invoke
 from .record_golden import read_golden
 from .test_space_compliant import GAIT
 
@@ -128,7 +128,7 @@ def test_warmup_command_warms_the_bundled_groups_and_a_profile_run_then_compiles
         walker = rigid_walker(simplest)
         walk_starts(walker, np.array([initial_state(simplest, walker)] * 2), 1)  # a basin's walks of its starts
         simulate(default_walker("integrator.method=radau", t_end=0.05))
-        simulate(load_config(SPACE_FIXTURES / "tinkertoy.yaml", [f"simulation.initial={json.dumps(GAIT)}",
+        simulate(load_config(CONFIGS / "space" / "tinkertoy.yaml", [f"simulation.initial={json.dumps(GAIT)}",
                                                                      "simulation.max_steps=1"]))  # fmt: skip
     assert compiled == []
 

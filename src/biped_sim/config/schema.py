@@ -269,7 +269,7 @@ class Config(Strict):
         caps = capabilities(self.walker.kind)
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
-        if self.ground.profile.kind != "flat" and (reason := profile_refusal(self.walker.kind, self.dynamics)):
+        if self.ground.profile.kind != "flat" and (reason := self.profile_refusal()):
             raise ValueError(f"ground.profile: {reason}")
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
@@ -328,7 +328,23 @@ class Config(Strict):
         required = set(expected) - set(optional)
         if not required <= set(initial) <= set(expected) or set(initial) == set(LEG_KEYS):
             also = f" (optional: {', '.join(optional)}; not given: 0)" if optional else ""
+            if self._space_form_started() and not self.in_space:
+                also += f"; or the rigid gait in space's {', '.join(SPACE_STATE_KEYS)}"
             raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}{also}")
+
+    def profile_refusal(self) -> str | None:
+        """Why the walker walks no ground profile other than flat (a one-line reason), or None: the registry's rule
+        of its kind; a walker in space's rigid model reads the plane."""
+        if self.dynamics == "rigid" and self.in_space:
+            return "a walker in space walks on flat ground only with dynamics: rigid (profiles: dynamics: compliant)"
+        return profile_refusal(self.walker.kind, self.dynamics)
+
+    def _space_form_started(self) -> bool:
+        """Whether a described walker with a feature of space runs compliant in the spatial formulation (started on
+        the rigid gait in space by its keys or rigid_limit_cycle, else from its bodies' angles)."""
+        described = self.walker.description
+        in_space = described is not None and described_in_space(described)
+        return in_space and self.dynamics == "compliant" and self.formulation.kind == "spatial"
 
     @property
     def in_space(self) -> bool:
@@ -338,16 +354,12 @@ class Config(Strict):
         walker is in space when it has a feature only a model in space represents (a hip width, parts off the
         sagittal plane, a full inertia tensor, round feet other than arcs), in rigid dynamics or so started in the
         spatial formulation; the other trees in space start from their bodies' angles."""
-        if capabilities(self.walker.kind).space:
-            return True
         described = self.walker.description
-        if described is None or not described_in_space(described):
-            return False
         if self.dynamics == "rigid":
-            return True
+            return described is not None and described_in_space(described)
         initial = self.simulation.initial
-        on_gait = isinstance(initial, dict) and set(initial) == set(SPACE_STATE_KEYS)
-        return self.formulation.kind == "spatial" and (initial == "rigid_limit_cycle" or on_gait)
+        keys = isinstance(initial, dict) and set(initial) == set(SPACE_STATE_KEYS)
+        return self._space_form_started() and (initial == "rigid_limit_cycle" or keys)
 
     def initial_keys(self) -> tuple[str, ...]:
         """The keys of ``simulation.initial``: a walker in space's gait keys, a described walker's own, else the

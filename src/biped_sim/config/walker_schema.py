@@ -28,7 +28,7 @@ from pydantic import (
 from biped_sim.config.base import Strict
 from biped_sim.config.description import JointSpec, WalkerDescription
 from biped_sim.config.parameters import ParameterSpec, mirror_legs, parameter_values, resolve_numbers
-from biped_sim.config.space_description import SpaceDescription, SpaceWalker
+from biped_sim.config.space_description import SpaceDescription
 from biped_sim.config.space_form import space_form
 from biped_sim.errors import quote
 
@@ -250,7 +250,6 @@ _WALKER_TAGS = {
     "simplest": "SimplestWalker",
     "rimless_wheel": "RimlessWheelWalker",
     "description": "DescribedWalker",
-    "description3d": "SpaceWalker",
 }  # the union's tags: class names, which the one-line error drops from a field's key
 
 
@@ -273,8 +272,7 @@ WalkerConfig = Annotated[
     | Annotated[FourLeggedWalker, Tag("FourLeggedWalker")]
     | Annotated[SimplestWalker, Tag("SimplestWalker")]
     | Annotated[RimlessWheelWalker, Tag("RimlessWheelWalker")]
-    | Annotated[DescribedWalker, Tag("DescribedWalker")]
-    | Annotated[SpaceWalker, Tag("SpaceWalker")],
+    | Annotated[DescribedWalker, Tag("DescribedWalker")],
     Discriminator(_walker_tag),
     BeforeValidator(_walker_kind),
 ]

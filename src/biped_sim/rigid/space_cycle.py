@@ -89,7 +89,7 @@ class SpaceSection:
 
 
 def space_walker_model(config: Config) -> SpaceModel:
-    """The rigid model of a ``walker.kind: description3d`` config."""
+    """The rigid model of a walker in space (``Config.in_space``)."""
     return space_model(config.walker.space, config.gravity, config.ground.slope)  # type: ignore[union-attr]
 
 

@@ -1,4 +1,4 @@
-"""The cells of a basin of a rigid walker in space (``walker.kind: description3d``): each start walked by the step
+"""The cells of a basin of a rigid walker in space (``Config.in_space``): each start walked by the step
 map on its Poincare section (:mod:`biped_sim.rigid.space_cycle`).
 
 A cell's start is its section point: the grid's two keys (section coordinates: bank, pitch, the angular velocity,

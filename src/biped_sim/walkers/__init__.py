@@ -3,7 +3,8 @@
 The engine knows nothing of walkers. Every walker is built from its description (a described walker's own, a
 bundled kind's expansion by :func:`describe`): planar by :func:`build_described`, converted to minimal
 coordinates, or lifted into the spatial formulation by :func:`spatial_described`; a walker in space
-(``walker.kind: description3d``, the registry's ``space`` capability) by its own spatial builder.
+(``Config.in_space``: a described walker of the rigid model's form started on its gait in space) by its own
+spatial builder.
 """
 
 from __future__ import annotations
