@@ -89,7 +89,7 @@ def test_point_feet_are_small_spheres_whose_bottom_is_the_point() -> None:
     point = config(
         "space/kuo_compass_3d.yaml",
         "contact.stiffness=1e7",
-        'walker.space.leg.foot={"shape": "point", "centre": [0, 0, -1]}',
+        'walker.description.leg.feet.foot={"name": "foot", "body": "leg", "centre": [0, -1]}',
     )
     foot = feet(ET.fromstring(walker_mjcf(point)))[0]
     centre = [float(v) for v in foot.get("pos").split()]
@@ -118,8 +118,8 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
         ("simplest_walker.yaml", ("contact.stiffness=1e7",), "walker.description.bodies.leg1.mass: a body needs mass"),
         (
             "space/tinkertoy.yaml",
-            ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube=0.05"),
-            "walker.space.leg.foot.shape: a torus foot is not written as MJCF (MuJoCo has no torus)",
+            ("walker.description.leg.feet.foot.shape=torus", "walker.description.leg.feet.foot.tube=0.05"),
+            "walker.description.feet: a torus foot is not written as MJCF (MuJoCo has no torus)",
         ),
     ],
 )
@@ -155,15 +155,16 @@ def test_mujocos_tendon_lengths_are_the_elements_relative_angles() -> None:
         assert data.ten_length[k] == pytest.approx(angles["torso"] - angles[other], abs=1e-15)
 
 
-ELLIPSOID = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0", "walker.space.splay=0.1",
-             "walker.space.leg.foot.axes=[0.15, 0.4, 0.3]", "contact.stiffness=1e5"]  # fmt: skip
+# semi-axes 0.15 forward, 0.3 up the leg, 0.4 sideways (the rigid model's leg frame: 0.15, 0.4, 0.3)
+ELLIPSOID = ["walker.description.leg.feet.foot.shape=ellipsoid", "walker.description.leg.feet.foot.radius=0",
+             "walker.description.leg.feet.foot.axes=[0.15, 0.3, 0.4]", "contact.stiffness=1e5"]  # fmt: skip
 
 
-def test_ellipsoid_feet_are_mujocos_ellipsoids_turned_by_the_splay() -> None:
+def test_ellipsoid_feet_are_mujocos_ellipsoids() -> None:
     cfg = config("space/tinkertoy.yaml", *ELLIPSOID)
     left, right = feet(ET.fromstring(walker_mjcf(cfg)))
     assert left.get("type") == right.get("type") == "ellipsoid" and left.get("size") == "0.15 0.4 0.3"
-    assert left.get("euler") == "0.1 0.0 0.0" and right.get("euler") == "-0.1 0.0 0.0"
+    assert [abs(float(v)) for v in left.get("euler").split() + right.get("euler").split()] == [0.0] * 6
 
 
 def test_mujocos_ellipsoid_has_its_lowest_point_where_the_rigid_model_has_it() -> None:

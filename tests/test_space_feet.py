@@ -15,6 +15,7 @@ from biped_sim.rigid.space_cycle import space_branch
 from tests.conftest import invoke
 
 SPACE = Path(__file__).resolve().parents[1] / "configs" / "space"
+FOOT = "walker.description.leg.feet.foot"
 TINKERTOY_SPHERE = SPACE / "tinkertoy_sphere.yaml"
 RING_RADIUS = 0.1236  # the toy's ring: its radius in the leg's x-z plane (the sagittal radius kept below)
 TUBES = (0.04, 0.08, 0.12)  # tori between the ring (tube 0) and the sphere (tube = RING_RADIUS)
@@ -39,8 +40,7 @@ def test_the_tinkertoy_on_spheres_walks_stably() -> None:
 def tinkertoy_torus(tube: float) -> Config:
     """The toy with its ring thickened into a torus of ``tube``, its radius in the ring's plane kept (ring radius
     minus tube, so the foot's sagittal radius stays the ring's and its lateral radius is the tube)."""
-    foot = ["walker.space.leg.foot.shape=torus", f"walker.space.leg.foot.radius={RING_RADIUS - tube}",
-            f"walker.space.leg.foot.tube={tube}"]  # fmt: skip
+    foot = [f"{FOOT}.shape=torus", f"{FOOT}.radius={RING_RADIUS - tube}", f"{FOOT}.tube={tube}"]
     return load_config(SPACE / "tinkertoy.yaml", foot)
 
 
@@ -62,9 +62,8 @@ KUO_LATERAL_LARGEST = (4.452758, 2.999402, 2.244578, 1.924145, 1.776766, 1.66971
 def kuo_torus(lateral: float, tube: float = 0.001) -> Config:
     """The Kuo-type compass on a torus in its leg's y-z plane (normal x): fore-aft radius ``tube``, sideways
     ``lateral``; its bottom 1 m below the hip."""
-    foot = ["walker.space.leg.foot.shape=torus", f"walker.space.leg.foot.radius={lateral - tube}",
-            f"walker.space.leg.foot.tube={tube}", "walker.space.leg.foot.normal=[1, 0, 0]",
-            f"walker.space.leg.foot.centre=[0, 0, {lateral - 1.0}]"]  # fmt: skip
+    foot = [f"{FOOT}.shape=torus", f"{FOOT}.radius={lateral - tube}", f"{FOOT}.tube={tube}", f"{FOOT}.plane=lateral",
+            f"{FOOT}.centre=[0, {lateral - 1.0}]"]  # fmt: skip
     return load_config(KUO, foot)
 
 
@@ -73,7 +72,7 @@ def test_rounding_the_kuo_compass_sideways_shrinks_its_unstable_mode() -> None:
     """From point feet (1 mm spheres), along one branch: the largest multiplier falls with the feet's lateral radius
     (6.59 -> 1.67 at 1.2 m, past the centre of mass's 0.75 m) but stays outside the unit circle, its eigenvector's
     largest part the roll rate (docs/guide/rigid.md's table)."""
-    point = load_config(KUO, ["walker.space.leg.foot.radius=0.001", "walker.space.leg.foot.centre=[0, 0, -0.999]"])
+    point = load_config(KUO, ["walker.parameters.foot_radius=0.001"])
     cycles = space_branch([point, *(kuo_torus(v) for v in KUO_LATERAL)])
     assert [c.converged for c in cycles] == [True] * (1 + len(KUO_LATERAL))
     largest = [c.max_multiplier_modulus for c in cycles[1:]]

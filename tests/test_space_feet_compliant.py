@@ -25,6 +25,8 @@ from biped_sim.walkers import build_model
 from biped_sim.walkers.model import standing_start
 from tests.test_space_compliant import GAIT, TINKERTOY, tinkertoy
 
+FOOT = "walker.description.leg.feet.foot"
+
 RADIUS, TUBE = 0.08, 0.03  # [m] the ring's radius and the torus's tube
 AXES = (0.12, 0.05, 0.08)  # [m] the ellipsoid's semi-axes along the body's x', y' (up), z': resting on the shortest
 SAGITTAL = np.array([0.0, 0.0, 1.0])
@@ -162,10 +164,8 @@ def test_the_compliant_tinkertoy_stands_on_a_torus_or_ellipsoid_foot_at_its_stat
     """The builder turns the foot into the body frame: the stance foot's bottom at rest, sunk by the static
     penetration of the foot's Hertz radius, its contact point at the origin."""
     feet = {
-        "torus": ["walker.space.leg.foot.shape=torus", "walker.space.leg.foot.radius=0.0836",
-                  "walker.space.leg.foot.tube=0.04"],
-        "ellipsoid": ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
-                      "walker.space.leg.foot.axes=[0.15, 0.06, 0.1236]"],
+        "torus": [f"{FOOT}.shape=torus", f"{FOOT}.radius=0.0836", f"{FOOT}.tube=0.04"],
+        "ellipsoid": [f"{FOOT}.shape=ellipsoid", f"{FOOT}.radius=0", f"{FOOT}.axes=[0.15, 0.1236, 0.06]"],
     }  # fmt: skip
     model = build_model(tinkertoy(*feet[shape]), GAIT)
     stance = foot_kinematics(model.y0, model.system, 0)
@@ -179,14 +179,13 @@ def test_the_compliant_tinkertoy_stands_on_a_torus_or_ellipsoid_foot_at_its_stat
 # 0.891845), to 10 digits, and periods
 FEET_GAITS = {
     "torus": (
-        ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.radius=0.0836", "walker.space.leg.foot.tube=0.04"),
+        (f"{FOOT}.shape=torus", f"{FOOT}.radius=0.0836", f"{FOOT}.tube=0.04"),
         {"heading": 0.0986775523, "bank": -0.0092990084, "pitch": -0.1602524846, "swing_angle": 0.2942753680,
          "omega_x": -0.0662955525, "omega_y": 0.4670420087, "omega_z": -0.1366943630, "swing_rate": -0.3928620197},
         1.0066117993,
     ),
     "ellipsoid": (
-        ("walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
-         "walker.space.leg.foot.axes=[0.1236, 0.0703, 0.1236]"),
+        (f"{FOOT}.shape=ellipsoid", f"{FOOT}.radius=0", f"{FOOT}.axes=[0.1236, 0.1236, 0.0703]"),
         {"heading": 0.0986775491, "bank": -0.0092989917, "pitch": -0.160252456, "swing_angle": 0.2942753569,
          "omega_x": -0.0662955366, "omega_y": 0.467041976, "omega_z": -0.1366943235, "swing_rate": -0.3928619259},
         1.0066119537,

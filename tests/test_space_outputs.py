@@ -33,7 +33,7 @@ def test_a_planar_walker_written_in_space_has_no_width_sway_heading_or_bank(tmp_
     """The Kuo compass with hip width 0 started on its gait's sagittal part: both feet in one plane, two strikes;
     the lateral columns are written to steps.csv and trajectory.h5 after the planar ones."""
     sagittal = dict(KUO_GAIT, heading=0.0, bank=0.0, omega_x=0.0, omega_z=0.0)
-    overrides = ["walker.space.hip_width=0", "contact.stiffness=1e5", "simulation.t_end=1.6", started(sagittal)]
+    overrides = ["walker.parameters.hip_width=0", "contact.stiffness=1e5", "simulation.t_end=1.6", started(sagittal)]
     result = simulate(load_config(KUO, overrides))
     frame = result.to_pandas()
     assert len(frame) == 2 and list(frame.columns) == [name for name, _ in STEP_COLUMNS] + LATERAL
@@ -119,17 +119,17 @@ def test_uncertainty_runs_on_a_walker_in_space_over_a_walker_parameter(tmp_path:
     the hip mass reaches the runs (measured steady periods 1.092 at 0.020 and 1.146 at 0.038, against the massless
     gait's 1.007: the start is no longer their gait)."""
     result = invoke(
-        "uncertainty", str(TINKERTOY), "--param", "walker.space.hip_mass=uniform:0:0.05", "-n", "2", "-j", "1",
+        "uncertainty", str(TINKERTOY), "--param", "walker.parameters.hip_mass=uniform:0:0.05", "-n", "2", "-j", "1",
         "--set", started(GAIT), "--set", "simulation.t_end=4.5", "--out", str(tmp_path / "u"), "--json",
     )  # fmt: skip
     assert result.exit_code == 0, result.output
     statistics = json.loads(result.stdout)["statistics"]
     assert statistics["status_counts"] == {"walking": 2} and statistics["outputs"]["steady_period"]["n"] == 2
-    samples = pd.read_csv(tmp_path / "u" / "samples.csv").sort_values("walker.space.hip_mass")
+    samples = pd.read_csv(tmp_path / "u" / "samples.csv").sort_values("walker.parameters.hip_mass")
     assert (np.diff(samples["steady_period"]) > 0).all() and samples["steady_period"].min() > RIGID_PERIOD
 
 
-FLAT_ONLY = "the description3d walker walks on flat ground only with dynamics: rigid (profiles: dynamics: compliant)"
+FLAT_ONLY = "a walker in space walks on flat ground only with dynamics: rigid (profiles: dynamics: compliant)"
 RIGID_TOY = TINKERTOY.with_name("tinkertoy.yaml")
 
 

@@ -1,4 +1,4 @@
-"""A rigid run of a walker in space (walker.kind: description3d, dynamics: rigid): its step map walked, measured
+"""A rigid run of a walker in space (a described walker in space, dynamics: rigid): its step map walked, measured
 and written as a planar rigid run is, pushed sideways, and its falls and bad starts."""
 
 from __future__ import annotations
@@ -176,10 +176,10 @@ def test_a_fit_recovers_the_toys_hidden_hip_width_from_its_step_periods() -> Non
     """The toy's first five step periods from its gait's start at hip width 0.34 (the config's 0.3624), rounded to
     1e-6 with the rounding's std: the fit finds 0.34 within three standard errors, converged (about 70 runs)."""
     start = load_config(TINKERTOY, [STARTED, "simulation.t_end=8"])
-    data = synthetic_reference_data(derive(start, {"walker.space.hip_width": 0.34}), 5, 0.0, 0, decimals=6)
+    data = synthetic_reference_data(derive(start, {"walker.parameters.hip_width": 0.34}), 5, 0.0, 0, decimals=6)
     data["std"] = [1e-6 / math.sqrt(12.0)] * 5
     reference = Reference(Path("synthetic"), ReferenceSpec.model_validate(data))
-    problem = FitProblem(start, reference, (parse_parameter("walker.space.hip_width=0.30:0.42", start),))
+    problem = FitProblem(start, reference, (parse_parameter("walker.parameters.hip_width=0.30:0.42", start),))
     evaluator = Evaluator(problem, None)
     (estimate,) = summarize(run_fit(evaluator), evaluator).estimates
     assert estimate.standard_error is not None and abs(estimate.value - 0.34) < 3.0 * estimate.standard_error < 1e-5

@@ -12,6 +12,7 @@ from biped_sim.config import Config, load_config
 from biped_sim.rigid.space_cycle import space_branch
 
 TINKERTOY = Path(__file__).resolve().parents[1] / "configs" / "space" / "tinkertoy.yaml"
+LEG = "walker.description.leg"
 # the toy's parameters (share 0) and the Kuo-type compass's made dimensionless (share 1: leg length 1, g = 1, the
 # walker's mass 2: legs of 0.5 and 1 at the hip; a ring of 1 mm for its 1 mm spheres)
 TOY = {"slope": 0.0702, "hip_width": 0.3624, "hip_mass": 0.0, "mass": 1.0, "com_y": 0.6969, "com_z": -0.6863,
@@ -32,14 +33,16 @@ def toy_to_kuo(share: float, lateral: float = 0.0, ring: float | None = None) ->
     ``lateral`` > 0: the ring made a torus of that tube (lateral radius), its sagittal radius (radius + tube) kept."""
     q = {key: (1.0 - share) * TOY[key] + share * KUO[key] for key in TOY}
     q["radius"] = q["radius"] if ring is None else ring
-    inertia = ", ".join(f"{key}: {q[key]}" for key in ("xx", "yy", "zz", "xy", "xz", "yz"))
-    overrides = [f"ground.slope={q['slope']}", f"walker.space.hip_width={q['hip_width']}",
-                 f"walker.space.hip_mass={q['hip_mass']}", f"walker.space.leg.mass={q['mass']}",
-                 f"walker.space.leg.com=[0, {q['com_y']}, {q['com_z']}]", f"walker.space.leg.inertia={{{inertia}}}",
-                 f"walker.space.leg.foot.radius={q['radius'] - lateral}",
-                 f"walker.space.leg.foot.centre=[0, 0, {q['radius'] - 1.0}]"]  # fmt: skip
+    # the body frame's (x', y' up, z' out) tensor of the leg frame's (x, y out, z up) entries
+    body = {"xx": "xx", "yy": "zz", "zz": "yy", "xy": "xz", "xz": "xy", "yz": "yz"}
+    inertia = ", ".join(f"{key}: {q[leg]}" for key, leg in body.items())
+    overrides = [f"ground.slope={q['slope']}", f"walker.parameters.hip_width={q['hip_width']}",
+                 f"walker.parameters.hip_mass={q['hip_mass']}", f"{LEG}.bodies.leg.mass={q['mass']}",
+                 f"{LEG}.bodies.leg.com=[0, {q['com_z']}]", f"{LEG}.bodies.leg.com_lateral={q['com_y']}",
+                 f"{LEG}.bodies.leg.inertia_tensor={{{inertia}}}", f"{LEG}.feet.foot.radius={q['radius'] - lateral}",
+                 f"{LEG}.feet.foot.centre=[0, {q['radius'] - 1.0}]"]  # fmt: skip
     if lateral:
-        overrides += ["walker.space.leg.foot.shape=torus", f"walker.space.leg.foot.tube={lateral}"]
+        overrides += [f"{LEG}.feet.foot.shape=torus", f"{LEG}.feet.foot.tube={lateral}"]
     return load_config(TINKERTOY, overrides)
 
 

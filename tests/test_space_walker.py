@@ -1,4 +1,4 @@
-"""The walker in space (walker.kind: description3d): its description, its rigid flow and strike, its gait."""
+"""The walker in space (a described walker of the rigid model's form): its rigid data, flow and strike, its gait."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from biped_sim.config import Config, config_from_dict, load_config
+from biped_sim.config.space_description import SpaceFoot
 from biped_sim.errors import ConfigError
 from biped_sim.rigid import space_dynamics as dyn
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 from biped_sim.rigid.space_cycle import SpaceSection, space_branch, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import space_flow, space_params
-from biped_sim.rigid.space_model import MIRROR, foot_bottom, swing_clearance
+from biped_sim.rigid.space_model import MIRROR, SpaceModel, foot_bottom, space_model, swing_clearance
 from tests.conftest import invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -25,29 +26,39 @@ KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one 
 KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
 KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
 STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # heading .. hinge rate, contact x, y
-# the tinkertoy on a torus foot in its leg's y-z plane: curved 0.3 fore-aft, 0.5 sideways, tilted off the axes
-TORUS = ["walker.space.leg.foot.shape=torus", "walker.space.leg.foot.radius=0.2", "walker.space.leg.foot.tube=0.3",
-         "walker.space.leg.foot.normal=[1, 0.2, 0.1]", "walker.space.leg.foot.centre=[0.02, 0.01, -0.5]"]  # fmt: skip
+# the tinkertoy (the rigid model's data: a plane normal off the axes, which no description writes) on a torus foot
+# in its leg's y-z plane: curved 0.3 fore-aft, 0.5 sideways, tilted off the axes
+TORUS = {"shape": "torus", "radius": 0.2, "tube": 0.3, "normal": (1.0, 0.2, 0.1), "centre": (0.02, 0.01, -0.5)}
 # ... on an ellipsoid foot, semi-axes 0.15 forward, 0.4 sideways, 0.3 up (curved 0.075 fore-aft, 0.53 sideways)
-ELLIPSOID = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
-             "walker.space.leg.foot.axes=[0.15, 0.4, 0.3]",
-             "walker.space.leg.foot.centre=[0.02, 0.01, -0.7]"]  # fmt: skip
-FEET = {"tinkertoy_ring": [], "torus": TORUS, "ellipsoid": ELLIPSOID}
+ELLIPSOID = {"shape": "ellipsoid", "axes": (0.15, 0.4, 0.3), "centre": (0.02, 0.01, -0.7)}
+FEET: dict[str, dict[str, Any]] = {"tinkertoy_ring": {}, "torus": TORUS, "ellipsoid": ELLIPSOID}
+
+
+def toy_model(foot: dict[str, Any]) -> SpaceModel:
+    """The tinkertoy's rigid model with its foot's fields changed to ``foot`` (none: its ring)."""
+    config = load_config(TINKERTOY)
+    space = config.walker.space
+    if foot:
+        leg = space.leg.model_copy(update={"foot": SpaceFoot(**foot)})
+        space = space.model_copy(update={"leg": leg})
+    return space_model(space, config.gravity, config.ground.slope)
 
 
 def compass_in_space(hip_width: float = 0.0) -> dict[str, Any]:
     """Goswami's compass (configs/compass_goswami.yaml) as a walker in space: zero hip width, the legs' mass on
     their axes, its 1 mm round feet as spheres (a planar walker's gait is the sagittal special case)."""
-    leg = {"mass": 5.0, "com": [0.0, 0.0, -0.5], "inertia": {"xx": 0.1, "yy": 0.0, "zz": 0.1},
-           "foot": {"shape": "sphere", "radius": 0.001, "centre": [0.0, 0.0, -0.999]}}  # fmt: skip
-    space = {"hip_width": hip_width, "hip_mass": 10.0, "leg": leg}
+    body = {"name": "leg", "mass": 5.0, "com": [0.0, -0.5], "inertia_tensor": {"xx": 0.1, "yy": 0.1, "zz": 0.0}}
+    foot = {"name": "foot", "body": "leg", "shape": "sphere", "radius": 0.001, "centre": [0.0, -0.999]}
+    leg = {"bodies": [body], "feet": [foot]}
+    hip = {"name": "hip", "body": "leg_1", "mass": 10.0, "lateral": -0.5 * hip_width}
+    description = {"leg": leg, "hip": {"lateral": -hip_width}, "point_masses": [hip]}
     return {"dynamics": "rigid", "gravity": 9.81, "ground": {"slope": 0.0523598775598},
-            "walker": {"kind": "description3d", "space": space}}  # fmt: skip
+            "walker": {"kind": "description", "description": description}}  # fmt: skip
 
 
 def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
     config = load_config(TINKERTOY)
-    assert config.walker.kind == "description3d" and config.walker.description is None
+    assert config.walker.kind == "description" and config.in_space
     assert config.walker.leg_length == pytest.approx(1.0)
     model = space_walker_model(config)
     stance, swing = model.parts
@@ -59,19 +70,21 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("walker.space.leg.foot.radius=0", "walker.space.leg.foot.radius: a ring foot needs a radius > 0"),
-        ("walker.space.leg.foot.shape=point", "walker.space.leg.foot.radius: a point foot has radius 0"),
-        ("walker.space.leg.inertia.xx=0.5", "walker.space.leg.inertia.xx: not an inertia tensor"),
-        ("walker.space.leg.mass=0", "walker.space.leg.mass: Input should be greater than 0"),
-        ("walker.space.leg.foot.normal=[0, 0, 0]", "walker.space.leg.foot.normal: a ring's plane normal"),
-        ("walker.space.leg.foot.shape=torus", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
-        ("walker.space.leg.foot.tube=0.1", "walker.space.leg.foot.tube: a torus foot needs a tube radius > 0"),
-        ("walker.space.leg.foot.axes=[1, 1, 1]", "walker.space.leg.foot.axes: an ellipsoid foot needs three semi-axes"),
-        ("walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius: an ellipsoid foot has radius 0"),
-        ("walker.space.leg.foot.centre=[0, 0, 0.5]", "walker.space.leg.foot.centre: the foot's bottom must be below"),
-        ("walker.space.hip_width=-1", "walker.space.hip_width: Input should be greater than or equal to 0"),
-        ("dynamics=compliant", "walker.kind: 'description3d' needs formulation.kind: spatial with dynamics: compliant"),
-        ("walker.description={}", "walker.description: unknown key"),
+        ("walker.description.leg.feet.foot.shape=torus", "walker.description.feet.0.tube: a torus foot needs a tube"),
+        ("walker.description.leg.feet.foot.tube=0.1", "walker.description.feet.0.tube: a torus foot needs a tube"),
+        ("walker.description.leg.feet.foot.axes=[1, 1, 1]", "walker.description.feet.0.axes: an ellipsoid foot needs"),
+        ("walker.description.leg.feet.foot.shape=ellipsoid", "walker.description.feet.0.radius: an ellipsoid foot has"),
+        ("walker.description.leg.feet.foot.plane=lateral", "walker.description.feet.0.plane: only a torus's ring"),
+        (
+            "walker.description.leg.feet.foot.centre=[0, 0.5]",
+            "walker.description.feet.foot_1.centre: the foot's bottom",
+        ),
+        ("walker.description.leg.bodies.leg.mass=0", "walker.description.bodies.leg_1.mass: the rigid model in space"),
+        (
+            "walker.description.leg.bodies.leg.inertia_tensor.xx=0.5",
+            "walker.description.bodies.0.inertia_tensor.xx: not",
+        ),
+        ("walker.space={}", "walker.space: unknown key"),
     ],
 )
 def test_a_bad_walker_in_space_is_one_line_naming_its_field(override: str, message: str) -> None:
@@ -83,15 +96,14 @@ def test_a_bad_walker_in_space_is_one_line_naming_its_field(override: str, messa
 def test_a_walker_in_space_refuses_the_planar_paths() -> None:
     from biped_sim.rigid.build import rigid_walker
 
-    with pytest.raises(ConfigError, match=r"walker\.kind: a walker in space"):
+    with pytest.raises(ConfigError, match=r"^walker: a walker in space"):
         rigid_walker(load_config(TINKERTOY))
 
 
 def test_a_torus_foot_rests_on_its_tube() -> None:
     """Upright, the torus's bottom is its tube's radius below its ring's, straight down; the leg 0.5 + 0.2 + 0.3."""
-    config = load_config(TINKERTOY, [*TORUS[:3], "walker.space.leg.foot.centre=[0, 0, -0.5]"])
-    assert config.walker.leg_length == pytest.approx(1.0)
-    model = space_walker_model(config)
+    model = toy_model({**TORUS, "normal": (0.0, 1.0, 0.0), "centre": (0.0, 0.0, -0.5)})
+    assert model.leg_length == pytest.approx(1.0)
     bottom, d = foot_bottom(model.feet[0], np.eye(3))
     np.testing.assert_allclose(bottom, model.feet[0].centre - [0.0, 0.0, 0.5], atol=1e-15)
     np.testing.assert_allclose(d, [0.0, 0.0, -1.0], atol=1e-15)
@@ -99,17 +111,17 @@ def test_a_torus_foot_rests_on_its_tube() -> None:
 
 def test_a_round_ellipsoid_rolls_as_a_sphere() -> None:
     """An ellipsoid of equal semi-axes r is the sphere of radius r: the same flow (contact point, accelerations)."""
-    sphere = ["walker.space.leg.foot.shape=sphere"]
-    ellipsoid = ["walker.space.leg.foot.shape=ellipsoid", "walker.space.leg.foot.radius=0",
-                 "walker.space.leg.foot.axes=[0.1236, 0.1236, 0.1236]"]  # fmt: skip
-    flows = [dyn.flow(space_walker_model(load_config(TINKERTOY, foot)), STATE) for foot in (sphere, ellipsoid)]
+    centre = (0.0, 0.0, -0.8764)
+    sphere = {"shape": "sphere", "radius": 0.1236, "centre": centre}
+    ellipsoid = {"shape": "ellipsoid", "axes": (0.1236, 0.1236, 0.1236), "centre": centre}
+    flows = [dyn.flow(toy_model(foot), STATE) for foot in (sphere, ellipsoid)]
     np.testing.assert_allclose(flows[1], flows[0], rtol=1e-13, atol=1e-14)
 
 
 @pytest.mark.parametrize("feet", list(FEET))
 def test_the_velocities_are_the_positions_rates(feet: str) -> None:
     """Every part's velocity (Kane's A u) is the time derivative of its position, the contact point rolling."""
-    model = space_walker_model(load_config(TINKERTOY, FEET[feet]))
+    model = toy_model(FEET[feet])
     rate, h = dyn.flow(model, STATE), 1e-6
 
     def positions(x: np.ndarray) -> np.ndarray:
@@ -156,7 +168,7 @@ def test_the_strike_keeps_the_angular_momenta() -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("feet", list(FEET))
 def test_the_compiled_flow_is_the_reference_flow(feet: str) -> None:
-    model = space_walker_model(load_config(TINKERTOY, FEET[feet]))
+    model = toy_model(FEET[feet])
     np.testing.assert_allclose(space_flow(space_params(model), STATE), dyn.flow(model, STATE), rtol=1e-13, atol=1e-14)
 
 
@@ -165,7 +177,7 @@ def test_the_compiled_flow_is_the_reference_flow(feet: str) -> None:
 def test_the_swing_keeps_its_energy(walker: str) -> None:
     """Energy through 2 natural periods of the stance phase (the rolling foot's contact point moving) to 1e-10."""
     compass = config_from_dict(compass_in_space(0.2)) if walker == "compass_sphere" else None
-    model = space_walker_model(compass or load_config(TINKERTOY, FEET[walker]))
+    model = space_walker_model(compass) if compass else toy_model(FEET[walker])
     params = space_params(model)
     sol = solve_ivp(lambda t, x: space_flow(params, x), (0.0, 0.6), STATE, method="DOP853", rtol=1e-13, atol=1e-13)
     energies = [dyn.energy(model, x) for x in sol.y.T]
@@ -209,7 +221,7 @@ def test_the_tinkertoy_walks_stably() -> None:
     result = invoke("limit-cycle", str(TINKERTOY), "--json")
     assert result.exit_code == 0, result.output
     cycle = json.loads(result.stdout)
-    assert cycle["stable"] and cycle["walker"] == "description3d"
+    assert cycle["stable"] and cycle["walker"] == "description"
     assert cycle["step_period"] == pytest.approx(1.00711404, abs=1e-8)
     assert cycle["step_length"] == pytest.approx(0.46483907, abs=1e-8)
     point = cycle["fixed_point"]
@@ -224,8 +236,7 @@ def test_the_tinkertoy_walks_stably() -> None:
 
 def kuo_compass(radius: float) -> Config:
     """configs/space/kuo_compass_3d.yaml with sphere feet of ``radius``, their bottom 1 m below the hip."""
-    foot = [f"walker.space.leg.foot.radius={radius}", f"walker.space.leg.foot.centre=[0, 0, {radius - 1.0}]"]
-    return load_config(CONFIGS / "space" / "kuo_compass_3d.yaml", foot)
+    return load_config(CONFIGS / "space" / "kuo_compass_3d.yaml", [f"walker.parameters.foot_radius={radius}"])
 
 
 @pytest.mark.slow

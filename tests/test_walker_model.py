@@ -98,7 +98,7 @@ def test_a_resolved_config_carries_its_kinds_fields_only() -> None:
 # --- no walker-kind branch outside the registry -----------------------------------------------------------------
 
 PACKAGE = Path(biped_sim.__file__).parent
-KINDS = "compass|simplest|rimless_wheel|four_legged|description|description3d"
+KINDS = "compass|simplest|rimless_wheel|four_legged|description"
 BRANCH = re.compile(
     rf"""(kind|name)\s*(==|!=)\s*["']({KINDS})["']|["']({KINDS})["']\s*(==|!=)|(walker\.(kind|name)|walker_kind)\s+(not\s+)?in\b"""
 )

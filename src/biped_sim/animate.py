@@ -23,7 +23,6 @@ from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ArgumentError
 from biped_sim.io.output import check_writable_dir
 from biped_sim.io.trajectory import RunData
@@ -175,7 +174,7 @@ def animate_run(
     check_playback(fps, speed, t_start, t_end)
     frames = frame_indices(run.time, fps, speed, t_start, t_end)
     with figure_style():
-        space = capabilities(run.config.walker.kind).space
+        space = run.config.in_space
         fig = Figure(figsize=(8.0, 3.2) if space else (4.0, 3.2))
         FigureCanvasAgg(fig)
         fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=0.99)

@@ -23,7 +23,6 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.io.atomic import write_with
 from biped_sim.io.output import OutputKind, staged_directory
 from biped_sim.io.trajectory import RunData
@@ -304,7 +303,7 @@ def walker_figure(run: RunData) -> Figure:
     t0, t1 = (strikes[k], strikes[k + 1]) if k is not None and k + 1 < len(strikes) else (run.time[0], run.time[-1])
     samples = np.unique(np.searchsorted(run.time, np.linspace(t0, t1, WALKER_POSES)).clip(0, len(run.time) - 1))
     fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.2), layout="constrained")
-    if capabilities(run.config.walker.kind).space:  # a walker in space: its sagittal and 3D views
+    if run.config.in_space:  # a walker in space: its sagittal and 3D views
         draw_space_walker(fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2, projection="3d"), run, samples)
         return fig
     poses = run_poses(run)

@@ -16,7 +16,7 @@ What is written, and how:
   (the other side 1000 rad away) with MuJoCo's default softness, not our stop's law; a spring or damper is a fixed
   tendon over the hinges between its two bodies (its length their relative angle, its spring length the rest angle;
   both negated for a negative rest angle).
-* A walker in space (``walker.kind: description3d``): the left leg on a free joint (its body frame the walker
+* A walker in space (``Config.in_space``): the left leg on a free joint (its body frame the walker
   frame: origin at the hinge's midpoint, x forward, y along the hinge, z up the leg), the right leg on a hinge about
   y; full inertia tensors (each principal moment floored as in the compliant builder); a sphere foot a sphere, a
   point foot a sphere of ``POINT_FOOT`` l above the point, a ring a flat cylinder (half-thickness ``RING_HALF_WIDTH``
@@ -40,7 +40,6 @@ from biped_sim.bench.mujoco_contact import IMPEDANCE, matched_solref
 from biped_sim.config import Config, WalkerDescription
 from biped_sim.config.description import GROUND
 from biped_sim.config.space_description import SpaceDescription
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import Tree, resolve_tree
@@ -86,7 +85,7 @@ def document(name: str, options: str, world: str, extra: str = "") -> str:
 
 def walker_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the walker of ``config`` on its slope: a planar description's tree or a walker in space."""
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return space_mjcf(config, timestep, integrator)
     return planar_mjcf(config, timestep, integrator)
 
@@ -200,7 +199,7 @@ def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
     if space.leg.foot.shape == "torus":
-        raise ConfigError("walker.space.leg.foot.shape", "a torus foot is not written as MJCF (MuJoCo has no torus)")
+        raise ConfigError("walker.description.feet", "a torus foot is not written as MJCF (MuJoCo has no torus)")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
     shapes = [_foot_shape(space, leg, side) for leg, side in zip(legs, (1.0, -1.0), strict=True)]
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())

@@ -1,4 +1,4 @@
-"""A walker in space (``walker.kind: description3d``) in MuJoCo: its description as MJCF, started on our start.
+"""A walker in space (``Config.in_space``) in MuJoCo: its description as MJCF, started on our start.
 
 The MJCF is :func:`~biped_sim.bench.mjcf.space_mjcf`'s (the left leg on a free joint, the right on the hinge, full
 inertias, the contact matched to ours); this walker takes sphere feet, whose bottom it follows. Our start (the rigid
@@ -39,7 +39,7 @@ def space_legs(config: Config) -> tuple[LegGeometry, LegGeometry]:
     """The two legs as the compliant builder has them (hip mass on the left leg)."""
     space = config.walker.space  # type: ignore[union-attr]
     if space.leg.foot.shape != "sphere":
-        raise ConfigError("walker.space.leg.foot.shape", "the MuJoCo walker in space takes sphere feet only")
+        raise ConfigError("walker.description.feet", "the MuJoCo walker in space takes sphere feet only")
     return with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1)
 
 

@@ -28,7 +28,7 @@ CONFIGS = Path(__file__).resolve().parents[3] / "configs" / "space"
 KUO_GAIT = {"heading": 0.33925448, "bank": -0.02289237, "pitch": -0.39046787, "swing_angle": 0.77225037,
             "omega_x": -0.3251506, "omega_y": 1.35243853, "omega_z": -0.20618886,
             "swing_rate": -0.94712293}  # fmt: skip
-KUO_SPHERES = ("walker.space.leg.foot.radius=0.3", "walker.space.leg.foot.centre=[0,0,-0.7]")
+KUO_SPHERES = ("walker.parameters.foot_radius=0.3",)  # the foot's centre follows: its bottom stays 1 m below the hip
 # Coleman et al.'s toy's fixed point (docs/guide/rigid.md), the section's order (swing angle not among them)
 TINKERTOY_POINT = (0.09866766, -0.00924861, -0.16016583, -0.06623178, 0.46696908, -0.13656793, -0.39255917)
 RIGID_CASES = {  # walker -> (config, overrides, section point)

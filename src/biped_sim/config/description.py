@@ -102,6 +102,7 @@ class PointMassSpec(Strict):
     name: str = Field(..., min_length=1, description="Unique name.")
     body: str = Field(..., description="The body carrying it.")
     at: Vector2 = Field((0.0, 0.0), description="Where, in the body frame [m].")
+    lateral: float = Field(0.0, description="In space: its place along z' [m] (the mirrored leg's negated).")
     mass: float = Field(..., ge=0, description="Mass [kg].")
 
 
@@ -261,14 +262,15 @@ class FootSpec(Strict):
         self.in_space()  # SpaceFoot's checks of radius, tube and axes
         return self
 
-    def in_space(self) -> SpaceFoot:
-        """The foot as description3d's foot, in its leg frame (x forward, y left, z up: x', -z', y')."""
+    def in_space(self, side: float = -1.0) -> SpaceFoot:
+        """The foot in the rigid model's leg frame (x', side z', y'; y by default the walker's left): an arc a ring
+        in the leg's x-z plane (a point at radius 0), a torus's ring in its plane, an ellipsoid's axes (x', z', y')."""
         shape = {"arc": "point" if self.radius == 0.0 else "ring"}.get(self.shape, self.shape)
         axes = None if self.axes is None else (self.axes[0], self.axes[2], self.axes[1])
         normal = (0.0, 1.0, 0.0) if self.plane == "sagittal" else (1.0, 0.0, 0.0)
         return SpaceFoot(
-            shape=shape, centre=(self.centre[0], -self.lateral, self.centre[1]), radius=self.radius, tube=self.tube,
-            axes=axes, normal=normal,
+            shape=shape, centre=(self.centre[0], side * self.lateral, self.centre[1]), radius=self.radius,
+            tube=self.tube, axes=axes, normal=normal,
         )  # fmt: skip
 
     def sagittal_arc(self) -> tuple[tuple[float, float], float]:

@@ -209,13 +209,14 @@ MIRRORED = {  # what the mirror across the sagittal plane (z' -> -z') negates: p
     "joints": (("lateral", None), ("axis", (0, 1))),  # an axis is a turn's: its in-plane components flip
     "feet": (("lateral", None),),
     "bodies": (("com_lateral", None),),
+    "point_masses": (("lateral", None),),
 }
 
 
 def _mirror_lateral(leg: dict[str, Any]) -> None:
-    """The second leg is the first's mirror image across its sagittal plane: its joints' and feet's ``lateral``
-    places, its bodies' ``com_lateral``, its joints' axes (x' and y' components: z' -> -z' turns a rotation's
-    sense) and its bodies' tensors' xz and yz products negated (numbers by now: the parameters are evaluated
+    """The second leg is the first's mirror image across its sagittal plane: its joints', feet's and point masses'
+    ``lateral`` places, its bodies' ``com_lateral``, its joints' axes (x' and y' components: z' -> -z' turns a
+    rotation's sense) and its bodies' tensors' xz and yz products negated (numbers by now: the parameters are evaluated
     before the mirror)."""
     for part, keys in MIRRORED.items():
         for item in (i for i in leg.get(part, []) if isinstance(i, dict)):

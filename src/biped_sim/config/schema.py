@@ -17,6 +17,8 @@ from pydantic import (
 from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
 from biped_sim.config.description import IN_SPACE, LEG_KEYS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.config.space_form import in_space as described_in_space
+from biped_sim.config.space_form import space_form
 from biped_sim.config.walker_registry import capabilities, profile_refusal, refusal
 from biped_sim.config.walker_schema import CompassWalker, WalkerConfig
 from biped_sim.contact.profile import FlatProfile, GroundProfile, profile_support_error
@@ -267,16 +269,16 @@ class Config(Strict):
         caps = capabilities(self.walker.kind)
         if self.simulation.pushes and not caps.pushes:
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
-        if self.ground.profile.kind != "flat" and (reason := profile_refusal(self.walker.kind, self.dynamics)):
+        if self.ground.profile.kind != "flat" and (reason := self.profile_refusal()):
             raise ValueError(f"ground.profile: {reason}")
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
-        in_space = (self.dynamics == "compliant" and self.formulation.kind == "spatial") or caps.space
+        in_space = (self.dynamics == "compliant" and self.formulation.kind == "spatial") or self.in_space
         if any(push.lateral for push in self.simulation.pushes) and not in_space:
             raise ValueError(
                 "simulation.pushes: a lateral impulse (pz, the third component) needs a walker in space "
-                "(formulation.kind: spatial, or walker.kind: description3d)"
+                "(formulation.kind: spatial, or rigid dynamics of a described walker in space)"
             )
         if reason := profile_support_error(self.ground, self.dynamics, self.friction.model):
             raise ValueError(f"ground.profile: {reason}")
@@ -302,6 +304,9 @@ class Config(Strict):
         described = self.walker.description
         if described is None:
             return
+        if self.in_space:  # the rigid model's form in space (its one-line refusal naming the field)
+            space_form(described)
+            return
         in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
         if not in_space and (features := described.features_in_space()):
             raise ValueError(f"{features[0]}: only in space ({IN_SPACE}); a planar or rigid model has it not")
@@ -323,12 +328,44 @@ class Config(Strict):
         required = set(expected) - set(optional)
         if not required <= set(initial) <= set(expected) or set(initial) == set(LEG_KEYS):
             also = f" (optional: {', '.join(optional)}; not given: 0)" if optional else ""
+            if self._space_form_started() and not self.in_space:
+                also += f"; or the rigid gait in space's {', '.join(SPACE_STATE_KEYS)}"
             raise ValueError(f"simulation.initial: expected the keys {', '.join(expected)}{also}")
 
-    def initial_keys(self) -> tuple[str, ...]:
-        """The keys of ``simulation.initial``: a described walker's own, else the README's four."""
+    def profile_refusal(self) -> str | None:
+        """Why the walker walks no ground profile other than flat (a one-line reason), or None: the registry's rule
+        of its kind; a walker in space's rigid model reads the plane."""
+        if self.dynamics == "rigid" and self.in_space:
+            return "a walker in space walks on flat ground only with dynamics: rigid (profiles: dynamics: compliant)"
+        return profile_refusal(self.walker.kind, self.dynamics)
+
+    def _space_form_started(self) -> bool:
+        """Whether a described walker with a feature of space runs compliant in the spatial formulation (started on
+        the rigid gait in space by its keys or rigid_limit_cycle, else from its bodies' angles)."""
         described = self.walker.description
-        if capabilities(self.walker.kind).space:
+        in_space = described is not None and described_in_space(described)
+        return in_space and self.dynamics == "compliant" and self.formulation.kind == "spatial"
+
+    @property
+    def in_space(self) -> bool:
+        """Whether the walker is a walker in space of the rigid model's form (:mod:`.space_form`): its rigid
+        dynamics the rigid model in space, its compliant run started on that model's gait (``simulation.initial``:
+        ``rigid_limit_cycle`` or the gait's keys, ``SPACE_STATE_KEYS``) and built from that form. A described
+        walker is in space when it has a feature only a model in space represents (a hip width, parts off the
+        sagittal plane, a full inertia tensor, round feet other than arcs), in rigid dynamics or so started in the
+        spatial formulation; the other trees in space start from their bodies' angles."""
+        described = self.walker.description
+        if self.dynamics == "rigid":
+            return described is not None and described_in_space(described)
+        initial = self.simulation.initial
+        keys = isinstance(initial, dict) and set(initial) == set(SPACE_STATE_KEYS)
+        return self._space_form_started() and (initial == "rigid_limit_cycle" or keys)
+
+    def initial_keys(self) -> tuple[str, ...]:
+        """The keys of ``simulation.initial``: a walker in space's gait keys, a described walker's own, else the
+        README's four."""
+        described = self.walker.description
+        if self.in_space:
             return SPACE_STATE_KEYS
         return described.state_keys() if described is not None else LEG_KEYS
 

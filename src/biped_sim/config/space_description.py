@@ -1,5 +1,6 @@
-"""The description in space: a two-legged walker whose legs are rigid bodies in three dimensions, joined by a
-lateral hinge (``walker.kind: description3d``, its description under ``walker.space``).
+"""The rigid model's data of a walker in space: two legs, rigid bodies in three dimensions, joined by a lateral hinge
+(built from a described walker of that form by :func:`~biped_sim.config.space_form.space_form`; ``walker.space``
+of a described walker).
 
 The leg is written once, as the left leg in its own frame (x forward, y along the hinge axis pointing away from
 the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
@@ -148,35 +149,10 @@ class SpaceDescription(Strict):
     def _foot_below_hip(self) -> SpaceDescription:
         if self.leg_length() <= 0.0:
             raise ValueError(
-                "walker.space.leg.foot.centre: the foot's bottom must be below the hip (z of centre minus radius and "
-                "tube < 0)"
+                "leg.foot.centre: the foot's bottom must be below the hip (z of centre minus radius and tube < 0)"
             )
         return self
 
     def leg_length(self) -> float:
         """The hip point to the foot's bottom with the leg upright and no splay [m]: the walker's length scale."""
         return -(self.leg.foot.centre[2] - self.leg.foot.reach)
-
-
-class SpaceWalker(Strict):
-    """A walker in three dimensions (``walker.kind: description3d``): rigid dynamics, its period-1 gait."""
-
-    kind: Literal["description3d"] = Field(
-        "description3d", description="Two rigid legs in space joined by a lateral hinge (walker.space)."
-    )
-    space: SpaceDescription = Field(..., description="The walker in space (SpaceDescription).")
-
-    @property
-    def description(self) -> None:
-        """No planar description: the planar paths (compliant builders, planar rigid model) never see it."""
-        return None
-
-    @property
-    def leg_length(self) -> float:
-        """Hip point to the foot's bottom [m]."""
-        return self.space.leg_length()
-
-    @property
-    def point_feet(self) -> bool:
-        """Whether the foot is a point."""
-        return self.space.leg.foot.shape == "point"

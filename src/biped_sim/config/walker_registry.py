@@ -33,7 +33,6 @@ class WalkerCapabilities:
     light_legs: bool = False  # legs of no mass: a strike sets the swing leg from the stance leg (Garcia's relations)
     energy_per_kg: bool = False  # its mass is no parameter (the wheel's hub): energies per kg of it
     strike_check: bool = False  # the plastic strike's stiff-contact check covers it (studies.convergence)
-    space: bool = False  # a walker in three dimensions (walker.space): its own rigid model, rigid.space_cycle
 
     @property
     def dynamics(self) -> tuple[str, ...]:
@@ -60,11 +59,6 @@ WALKERS: dict[str, WalkerCapabilities] = {
         DYNAMICS,
         True,
         (*RIGID_STUDIES, "converge"),
-    ),
-    # a walker in space: its rigid period-1 gait (formulation.kind is not read by rigid dynamics), compliant runs (on
-    # ground profiles too: its rigid step map reads the plane)
-    "description3d": WalkerCapabilities(
-        {"rigid": ("planar",), "compliant": ("spatial",)}, ("compliant",), True, ("limit_cycle", "basin"), space=True
     ),
 }
 

@@ -28,7 +28,8 @@ from pydantic import (
 from biped_sim.config.base import Strict
 from biped_sim.config.description import JointSpec, WalkerDescription
 from biped_sim.config.parameters import ParameterSpec, mirror_legs, parameter_values, resolve_numbers
-from biped_sim.config.space_description import SpaceWalker
+from biped_sim.config.space_description import SpaceDescription
+from biped_sim.config.space_form import space_form
 from biped_sim.errors import quote
 
 
@@ -179,6 +180,7 @@ class DescribedWalker(Strict):
     )
     description: WalkerDescription = Field(..., description="The walker as a tree of bodies (WalkerDescription).")
     _written: dict[str, Any] | None = PrivateAttr(None)  # the description as written, when it differs
+    _space: SpaceDescription | None = PrivateAttr(None)  # its rigid form in space, once built
 
     @model_validator(mode="before")
     @classmethod
@@ -233,6 +235,14 @@ class DescribedWalker(Strict):
         """Whether every foot is a point (radius 0): Hertz takes the largest foot's radius, and none has one."""
         return all(foot.radius == 0.0 for foot in self.description.feet)
 
+    @property
+    def space(self) -> SpaceDescription:
+        """The description as the rigid model in space takes it (:func:`~biped_sim.config.space_form.space_form`;
+        the config's ``in_space`` has checked that it does)."""
+        if self._space is None:
+            self._space = space_form(self.description)
+        return self._space
+
 
 _WALKER_TAGS = {
     "compass": "CompassWalker",
@@ -240,7 +250,6 @@ _WALKER_TAGS = {
     "simplest": "SimplestWalker",
     "rimless_wheel": "RimlessWheelWalker",
     "description": "DescribedWalker",
-    "description3d": "SpaceWalker",
 }  # the union's tags: class names, which the one-line error drops from a field's key
 
 
@@ -263,8 +272,7 @@ WalkerConfig = Annotated[
     | Annotated[FourLeggedWalker, Tag("FourLeggedWalker")]
     | Annotated[SimplestWalker, Tag("SimplestWalker")]
     | Annotated[RimlessWheelWalker, Tag("RimlessWheelWalker")]
-    | Annotated[DescribedWalker, Tag("DescribedWalker")]
-    | Annotated[SpaceWalker, Tag("SpaceWalker")],
+    | Annotated[DescribedWalker, Tag("DescribedWalker")],
     Discriminator(_walker_tag),
     BeforeValidator(_walker_kind),
 ]

@@ -1,4 +1,4 @@
-"""Where a walker in space (``walker.kind: description3d``) is over a run, compliant or rigid: its legs' points in
+"""Where a walker in space (``Config.in_space``) is over a run, compliant or rigid: its legs' points in
 3D, for drawing it (:mod:`biped_sim.picture`).
 
 Each leg is drawn as the polyline from the hinge's midpoint to its hip point, out to its centre of mass and back,

@@ -14,10 +14,8 @@ from biped_sim.walkers.describe import describe
 def rigid_walker(config: Config) -> RigidWalker:
     """The rigid model of ``config.walker``."""
     kind = config.walker.kind
-    if capabilities(kind).space:
-        raise ConfigError(
-            "walker.kind", "a walker in space (description3d) has its rigid limit cycle only (biped-sim limit-cycle)"
-        )
+    if config.in_space:
+        raise ConfigError("walker", "a walker in space has its own rigid model (rigid.space_model), not the planar one")
     gravity = 1.0 if capabilities(kind).nondimensional else config.gravity  # Garcia's g = l = hip mass = 1
     return RigidWalker(config, describe(config), kind, gravity)
 

@@ -278,10 +278,11 @@ _ENTRIES: OrderedDict[int, tuple[CompiledWalker, Callable[..., Any]]] = OrderedD
 _KEPT_ENTRIES = 16  # the walkers whose plain step's entry is kept (a study's threads, each with its own buffers)
 
 
-def _step_entry(cw: CompiledWalker, x0: np.ndarray, counters: np.ndarray) -> Callable[..., Any]:
+def step_entry(cw: CompiledWalker, x0: np.ndarray, counters: np.ndarray) -> Callable[..., Any]:
     """:func:`step_kernel`'s compiled entry for ``cw``'s types, found once per ``cw`` (held here, so that its id is
-    not reused): a plain step called with the same buffers again and again (limit cycles, basins, the bench) skips
-    numba's typing of the walker's and the buffers' arrays at every call. The states are 1-d, contiguous, writable."""
+    not reused): a plain step called with the same buffers again and again (limit cycles, basins, the bench, walks
+    on random slopes through :func:`with_slope`'s walkers of the same types) skips numba's typing of the walker's and
+    the buffers' arrays at every call. The states are 1-d, contiguous, writable."""
     if not isinstance(step_kernel, Kernel):  # run as plain Python (a reference test)
         return step_kernel
     found = _ENTRIES.get(id(cw))
@@ -315,7 +316,7 @@ def rigid_step(
     x0 = np.array(x_start, dtype=float)  # a copy: C-contiguous and writable, as the step kernel's entry takes it
     x_minus, x_plus = np.zeros_like(x0), np.zeros_like(x0)
     counters = np.zeros(2, dtype=np.int64)
-    run = step_kernel if planned or x0.ndim != 1 else _step_entry(cw, x0, counters)
+    run = step_kernel if planned or x0.ndim != 1 else step_entry(cw, x0, counters)
     code, period = run(cw, x0, x_minus, x_plus, counters)
     if code == STRIKE and period < DEGENERATE_STEP * cw.t_limit:
         code = STALLED

@@ -89,7 +89,7 @@ class SpaceSection:
 
 
 def space_walker_model(config: Config) -> SpaceModel:
-    """The rigid model of a ``walker.kind: description3d`` config."""
+    """The rigid model of a walker in space (``Config.in_space``)."""
     return space_model(config.walker.space, config.gravity, config.ground.slope)  # type: ignore[union-attr]
 
 
@@ -196,9 +196,9 @@ def space_limit_cycle(config: Config, settle_steps: int = SETTLE_STEPS) -> Limit
     if found is None or not found[0][1]:
         found = _scan_solve(step_map, 0) or found
     if found is None:
-        raise SearchFellError("walker.space", f"no rigid limit cycle: the walker falls from {tried}")
+        raise SearchFellError("walker", f"no rigid limit cycle: the walker falls from {tried}")
     (z, converged, iterations, residual), how = found
-    return _cycle(step_map, z, converged, iterations, residual, how, tried)
+    return _cycle(step_map, z, converged, iterations, residual, how, tried, config.walker.kind)
 
 
 def space_cycle_from(config: Config, keys: dict[str, float]) -> LimitCycle | None:
@@ -212,7 +212,7 @@ def space_cycle_from(config: Config, keys: dict[str, float]) -> LimitCycle | Non
     except StepFailedError:
         return None
     how = "the configured start"
-    return _cycle(step_map, z, converged, iterations, residual, how, how) if converged else None
+    return _cycle(step_map, z, converged, iterations, residual, how, how, config.walker.kind) if converged else None
 
 
 def space_branch(configs: list[Config], settle_steps: int = SETTLE_STEPS) -> list[LimitCycle]:
@@ -230,14 +230,21 @@ def space_branch(configs: list[Config], settle_steps: int = SETTLE_STEPS) -> lis
         except StepFailedError:
             break
         how = "the previous walker's fixed point"
-        cycles.append(_cycle(step_map, z, converged, iterations, residual, how, how))
+        cycles.append(_cycle(step_map, z, converged, iterations, residual, how, how, config.walker.kind))
     return cycles
 
 
 def _cycle(
-    step_map: SpaceMap, z: np.ndarray, converged: bool, iterations: int, residual: float, how: str, tried: str
+    step_map: SpaceMap,
+    z: np.ndarray,
+    converged: bool,
+    iterations: int,
+    residual: float,
+    how: str,
+    tried: str,
+    walker: str,
 ) -> LimitCycle:
-    """The limit-cycle record at section point ``z``."""
+    """The limit-cycle record at section point ``z`` of a ``walker`` (its kind)."""
     section = step_map.section
     _, step = step_map.step(z)
     jac = map_jacobian(step_map, z)
@@ -248,7 +255,7 @@ def _cycle(
     names = STATE_NAMES[:8]
     return LimitCycle(
         dynamics="rigid",
-        walker="description3d",
+        walker=walker,
         slope=step_map.model.slope,
         converged=converged,
         iterations=iterations,

@@ -17,7 +17,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 from biped_sim.config import Config, InitialState
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle_initial
@@ -62,7 +61,7 @@ def initial_state(config: Config) -> InitialState | dict[str, float]:
     """The compliant run's initial leg state: as configured, or the rigid model's limit cycle (a walker in space:
     its own rigid model's post-strike fixed point)."""
     initial = config.simulation.initial
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return space_initial(config)  # type: ignore[return-value]
     if initial == "rigid_limit_cycle":
         return InitialState(**rigid_limit_cycle_initial(config))
@@ -72,7 +71,7 @@ def initial_state(config: Config) -> InitialState | dict[str, float]:
 def prepare_model(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
     for ``dynamics: rigid`` the rigid walker (a walker in space: its model) and its resolved initial state."""
-    if config.dynamics == "rigid" and capabilities(config.walker.kind).space:
+    if config.dynamics == "rigid" and config.in_space:
         space = space_start(config)
         check_run_size(config, 2 * len(space.state) + 8)  # state, world state, hip, energy terms
         return space

@@ -1,4 +1,4 @@
-"""A rigid run of a walker in space (``walker.kind: description3d``, ``dynamics: rigid``): its step map walked step
+"""A rigid run of a walker in space (``Config.in_space``, ``dynamics: rigid``): its step map walked step
 after step and measured, as a planar rigid run (:mod:`biped_sim.simulate.rigid`) is.
 
 The run starts just after a strike, the left leg standing with its contact point at the origin, from

@@ -34,7 +34,6 @@ import numpy as np
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config, FormulationConfig, derive
 from biped_sim.config.space_description import SPACE_STATE_KEYS
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.integrate.driver import STIFF_METHODS
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import walk_starts
@@ -52,11 +51,12 @@ RIGID = ("rigid", "step map")  # the group of every rigid run: one compiled step
 RIGID_SPACE = ("rigid", "step map in space")  # ... but a walker in space's: its own flow (rigid.space_kernels)
 # a walker in space for its group's warm-up: a compass with hip width and point feet, started leaning forward
 SPACE_WALKER = {
-    "kind": "description3d",
-    "space": {
-        "hip_width": 0.1,
-        "leg": {"mass": 1.0, "com": [0.0, 0.0, -0.5], "inertia": {"xx": 0.08, "yy": 0.08, "zz": 0.001},
-                "foot": {"shape": "point", "centre": [0.0, 0.0, -1.0]}},
+    "kind": "description",
+    "description": {
+        "leg": {"bodies": [{"name": "leg", "mass": 1.0, "com": [0.0, -0.5],
+                            "inertia_tensor": {"xx": 0.08, "yy": 0.001, "zz": 0.08}}],
+                "feet": [{"name": "foot", "body": "leg", "centre": [0.0, -1.0]}]},
+        "hip": {"lateral": -0.1},
     },
 }  # fmt: skip
 SPACE_START = dict.fromkeys(SPACE_STATE_KEYS, 0.0) | {"pitch": -0.2, "swing_angle": 0.4, "omega_y": 1.0}
@@ -121,7 +121,7 @@ def group_of(config: Config) -> tuple[str, str, str]:
     has them);
     a rigid run's is ('rigid', 'step map', ground): the step map is one for every walker."""
     if config.dynamics == "rigid":
-        return (*(RIGID_SPACE if capabilities(config.walker.kind).space else RIGID), ground_of(config))
+        return (*(RIGID_SPACE if config.in_space else RIGID), ground_of(config))
     joints = (JOINT_STOPS if has_joint_stops(config) else "") + (JOINT_ELEMENTS if has_joint_elements(config) else "")
     ground = ground_of(config) + joints
     return config.formulation.kind, integrator_family(config.integrator.method), ground

@@ -132,7 +132,7 @@ class BasinSpec:
             raise ArgumentError("y", f"the same key as the x axis ({self.x.key})")
         if self.x.is_parameter and self.y.is_parameter:
             raise ArgumentError("y", "two parameters make a sweep (biped-sim sweep): one axis is an initial-state key")
-        space = capabilities(self.config.walker.kind).space
+        space = self.config.in_space
         if space and self.config.dynamics != "rigid":
             raise ConfigError("dynamics", "a basin of a walker in space walks its rigid step map (dynamics: rigid)")
         if isinstance(self.config.simulation.initial, str) and not space:
@@ -277,7 +277,7 @@ def basin_row(task: RowTask) -> dict[str, Any]:
     row_config = spec.cell_config(spec.x.lo, y_value) if not spec.x.is_parameter else None
     cells = [(row_config or spec.cell_config(x, y_value), spec.cell_legs(x, y_value)) for x in spec.x.values]
     row = _rigid_row if spec.config.dynamics == "rigid" else _compliant_row
-    row = _space_row if capabilities(spec.config.walker.kind).space else row  # rigid (BasinSpec)
+    row = _space_row if spec.config.in_space else row  # rigid (BasinSpec)
     outcome, steps = row(task, cells)
     return {"row": task.row, "outcome": outcome, "steps": steps}
 
@@ -331,7 +331,7 @@ def find_gait(config: Config) -> LimitCycle | None:
     """The period-1 gait from the config's start (None when there is none to find); a walker in space's near its
     start when one is given (:func:`~biped_sim.studies.space_basin.space_gait`)."""
     try:
-        return space_gait(config) if capabilities(config.walker.kind).space else limit_cycle(config)
+        return space_gait(config) if config.in_space else limit_cycle(config)
     except (ConfigError, StepFailedError):
         return None
 
@@ -415,7 +415,7 @@ def map_basin(
             progress(len(done), spec.y.n)
     outcome = np.array([done[row]["outcome"] for row in range(spec.y.n)], dtype=np.int64)
     steps = np.array([done[row]["steps"] for row in range(spec.y.n)], dtype=np.int64)
-    space = capabilities(spec.config.walker.kind).space
+    space = spec.config.in_space
     notes = [
         f"each cell walked up to {spec.steps} steps; converged: walked them all and ended within "
         f"{spec.tolerance:g} of the gait (max over the {SPACE_NOTE if space else 'four leg angles and rates'})",

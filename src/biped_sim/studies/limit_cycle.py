@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import STATE_KEYS, Config, derive, parse_yaml
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.contact.response import IMPACT_SPEED, N_MODE_COLUMNS
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.integrate.driver import integrate_model
@@ -312,7 +311,7 @@ def contact_multiplier_note(multipliers: np.ndarray) -> str:
 def guess_keys(config: Config) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """The keys a guess of ``config``'s gait may take: its initial-state keys (:meth:`Config.initial_keys`) and, in
     rigid dynamics, its Poincare section's coordinates (the compliant search starts from a run: the state only)."""
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         raise ArgumentError("guess", "a walker in space finds its gait without a guess (its scan)")
     section = rigid_walker(config).section_names if config.dynamics == "rigid" else ()
     return config.initial_keys(), section
@@ -351,7 +350,7 @@ def limit_cycle(config: Config, guess: dict[str, float] | None = None, settle_st
     ``settle_steps``: steps walked from the guess before Newton (None: each model's default; 0: the cycle
     nearest the guess, stable or not).
     """
-    if capabilities(config.walker.kind).space:  # its own rigid model and search (no guess: guess_keys refuses)
+    if config.in_space:  # its own rigid model and search (no guess: guess_keys refuses)
         return space_limit_cycle(config, SETTLE_STEPS if settle_steps is None else settle_steps)
     if config.dynamics == "rigid":
         if config.ground.profile.kind != "flat":  # the rigid step map reads the plane

@@ -1,4 +1,4 @@
-"""The cells of a basin of a rigid walker in space (``walker.kind: description3d``): each start walked by the step
+"""The cells of a basin of a rigid walker in space (``Config.in_space``): each start walked by the step
 map on its Poincare section (:mod:`biped_sim.rigid.space_cycle`).
 
 A cell's start is its section point: the grid's two keys (section coordinates: bank, pitch, the angular velocity,
@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.config import Config
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.limit_cycle import LimitCycle, StepFailedError
 from biped_sim.rigid.space_cycle import SpaceMap, SpaceSection, space_cycle_from, space_limit_cycle, space_walker_model
@@ -21,7 +20,7 @@ from biped_sim.rigid.space_model import STATE_NAMES
 
 def basin_keys(config: Config) -> tuple[str, ...]:
     """The keys a basin's axes may take: a walker in space's section coordinates, else the initial-state keys."""
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return SpaceSection(space_walker_model(config)).names
     return config.initial_keys()
 

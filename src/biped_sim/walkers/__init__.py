@@ -3,13 +3,13 @@
 The engine knows nothing of walkers. Every walker is built from its description (a described walker's own, a
 bundled kind's expansion by :func:`describe`): planar by :func:`build_described`, converted to minimal
 coordinates, or lifted into the spatial formulation by :func:`spatial_described`; a walker in space
-(``walker.kind: description3d``, the registry's ``space`` capability) by its own spatial builder.
+(``Config.in_space``: a described walker of the rigid model's form started on its gait in space) by its own
+spatial builder.
 """
 
 from __future__ import annotations
 
 from biped_sim.config import Config, InitialState
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.walkers.describe import describe
 from biped_sim.walkers.described import build_described
 from biped_sim.walkers.model import BuiltModel, minimal_model
@@ -28,7 +28,7 @@ def build_model(config: Config, initial: InitialState | dict[str, float] | None 
         if config.simulation.initial == "rigid_limit_cycle":
             raise ValueError("build_model: simulation.initial is rigid_limit_cycle; use simulate.prepare_model")
         initial = config.simulation.initial
-    if capabilities(config.walker.kind).space:
+    if config.in_space:
         return build_space_walker(config, initial)
     if config.formulation.kind == "spatial":
         return spatial_described(config, initial)

@@ -97,7 +97,8 @@ def _spatial_inertia(description: WalkerDescription, name: str, com: np.ndarray,
     none given, ``inertia`` about every axis; its ``inertia_tensor`` or a centre of mass off the plane
     (:func:`_tensor_in_space`)."""
     body = next(b for b in description.bodies if b.name == name)
-    if body.inertia_tensor is not None or body.com_lateral != 0.0:
+    laterals = [body.com_lateral] + [p.lateral for p in description.point_masses if p.body == name]
+    if body.inertia_tensor is not None or any(laterals):
         return _tensor_in_space(description, name)
     if body.spatial_inertia is None:
         return np.eye(3) * inertia
@@ -111,12 +112,12 @@ def _spatial_inertia(description: WalkerDescription, name: str, com: np.ndarray,
 
 
 def _tensor_in_space(description: WalkerDescription, name: str) -> np.ndarray:
-    """Body ``name``'s inertia tensor about its folded centre of mass in space (the point masses at z' = 0): its
+    """Body ``name``'s inertia tensor about its folded centre of mass in space (the point masses at their lateral): its
     ``inertia_tensor`` (or its moment about every axis) and each part's m (|d|^2 1 - d d^T)."""
     body = next(b for b in description.bodies if b.name == name)
     own = body.inertia_tensor.matrix() if body.inertia_tensor is not None else np.eye(3) * body.moment_of_inertia
     parts = [(body.mass, np.array([*body.com, body.com_lateral]))] + [
-        (p.mass, np.array([*p.at, 0.0])) for p in description.point_masses if p.body == name
+        (p.mass, np.array([*p.at, p.lateral])) for p in description.point_masses if p.body == name
     ]
     com = sum(m * r for m, r in parts) / sum(m for m, _ in parts)
     return own + sum(m * ((r - com) @ (r - com) * np.eye(3) - np.outer(r - com, r - com)) for m, r in parts)
@@ -175,10 +176,11 @@ def foot_in_space(foot: FootSpec) -> np.ndarray:
 
 
 def _com_lateral(description: WalkerDescription, name: str) -> float:
-    """Body ``name``'s folded centre of mass along z' (its point masses at z' = 0)."""
+    """Body ``name``'s folded centre of mass along z' (its point masses at their ``lateral``)."""
     body = next(b for b in description.bodies if b.name == name)
-    mass = body.mass + sum(p.mass for p in description.point_masses if p.body == name)
-    return body.mass * body.com_lateral / mass if body.com_lateral else 0.0
+    masses = [p for p in description.point_masses if p.body == name]
+    moment = body.mass * body.com_lateral + sum(p.mass * p.lateral for p in masses)
+    return moment / (body.mass + sum(p.mass for p in masses)) if moment else 0.0
 
 
 def _axis(description: WalkerDescription, name: str) -> np.ndarray:

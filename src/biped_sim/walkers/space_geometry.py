@@ -1,4 +1,4 @@
-"""Where a walker in space (``walker.kind: description3d``) has its parts, and where its rigid gait puts them.
+"""Where a walker in space (``Config.in_space``) has its parts, and where its rigid gait puts them.
 
 Frames: the walker frame is the stance (left) leg's with the hinge at zero (origin at the hinge's midpoint, x
 forward, y along the hinge to the left, z up the leg); the rigid model's slope frame is x downhill, y left, z

@@ -1,4 +1,4 @@
-"""A walker in space (``walker.kind: description3d``) with compliant contact, in the spatial formulation.
+"""A walker in space (``Config.in_space``) with compliant contact, in the spatial formulation.
 
 Two bodies, the legs (:func:`~biped_sim.walkers.space_geometry.leg_geometry`: full inertia, the right leg the
 left's mirror image; a hip mass is a point on the left leg at the hinge's midpoint, which moves alike on either

@@ -32,7 +32,6 @@ import pandas as pd
 from scipy import optimize, stats
 
 from biped_sim.config import Config, derive
-from biped_sim.config.walker_registry import capabilities, profile_refusal
 from biped_sim.errors import ArgumentError, ConfigError
 from biped_sim.simulate import study_formulation
 from biped_sim.simulate.budget import check_run_count
@@ -164,7 +163,7 @@ def check_mfpt_input(config: Config, ground: str, roughness: Sequence[float], se
         raise ArgumentError(
             "ground", "random slopes per step are walked by the rigid rimless wheel and rigid walkers in space only"
         )
-    if ground == "height" and (reason := profile_refusal(config.walker.kind, config.dynamics)):
+    if ground == "height" and (reason := config.profile_refusal()):
         # refused here, before any worker: a worker would meet it only after resolving the walker's start
         raise ConfigError("ground.profile", reason)
     if not roughness or not all(math.isfinite(h) and h >= 0 for h in roughness):
@@ -183,7 +182,7 @@ def mfpt_curve(
     """The MFPT at each roughness level over ``seeds`` walks capped at ``cap`` strikes."""
     check_mfpt_input(config, ground, roughness, seeds, cap)
     levels = [float(h) for h in roughness]
-    if ground == "slope" and capabilities(config.walker.kind).space:
+    if ground == "slope" and config.in_space:
         estimates = [mfpt_estimate(*space_slope_walks(config, h, range(seeds), cap)) for h in levels]
         notes = ["slope of each step ~ N(slope, roughness^2), a kink at each new contact point; the step map in space"]
         return MfptCurve(ground, levels, estimates, None, seeds, cap, notes)

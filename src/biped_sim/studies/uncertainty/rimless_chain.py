@@ -31,9 +31,8 @@ import numpy as np
 from scipy import stats
 
 from biped_sim.config import Config
-from biped_sim.config.walker_registry import capabilities
 from biped_sim.rigid.build import rigid_walker
-from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_kernel, with_slope
+from biped_sim.rigid.compiled import STRIKE, CompiledWalker, compile_walker, step_entry, with_slope
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
 
 CHAIN_STATES = 800
@@ -46,7 +45,7 @@ def walks_random_slopes(config: Config) -> bool:
     walker in space (its step map, :mod:`.space_slopes`)."""
     if config.dynamics != "rigid":
         return False
-    return capabilities(config.walker.kind).space or bool(rigid_walker(config).shift)
+    return config.in_space or bool(rigid_walker(config).shift)
 
 
 @dataclass(frozen=True)
@@ -115,10 +114,11 @@ def _walk(cw: CompiledWalker, alpha: float, slope: float, start: np.ndarray, rou
     x_minus, x_plus = np.zeros(2), np.zeros(2)
     counters = np.zeros(2, dtype=np.int64)
     rng = np.random.default_rng(seed)
+    step = step_entry(cw, x, counters)  # typed once per walk: each step's walker differs only in its slope
     for k in range(cap):
         gamma = float(rng.normal(slope, roughness)) if roughness > 0 else slope
         x[0] = alpha + gamma - previous
-        code, _ = step_kernel(with_slope(cw, gamma), x, x_minus, x_plus, counters)
+        code, _ = step(with_slope(cw, gamma), x, x_minus, x_plus, counters)
         if code != STRIKE or not np.all(np.isfinite(x_plus)):
             return k, True
         x, previous = x_plus.copy(), gamma
