@@ -18,7 +18,9 @@ from numba.core.dispatcher import Dispatcher
 
 from biped_sim.config import Config, derive, load_config
 from biped_sim.measure.steps import step_table
-from biped_sim.simulate import aside, prepare_model
+from biped_sim.rigid.compiled import compile_walker, rigid_step
+from biped_sim.rigid.start import RigidStart
+from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import CompliantRunResult, integrate_config
 from tests.conftest import CONFIGS
 
@@ -69,6 +71,30 @@ def test_a_warm_cache_starts_no_process() -> None:
     assert (model.y0 == prepare_model(config).y0).all()
 
 
+def test_a_rigid_run_on_a_warm_cache_starts_no_process() -> None:
+    config = load_config(CONFIGS / "simplest_walker.yaml")  # its start given: no limit cycle, no step yet
+    start = prepare_model(config)
+    assert isinstance(start, RigidStart)
+    rigid_step(start.walker, start.state)  # the step map, compiled or loaded
+    again, process = aside.prepare_compiling_aside(config)
+    assert process is None
+    assert isinstance(again, RigidStart) and (again.state == start.state).all()
+
+
+def test_the_rigid_measure_twins_have_the_types_a_run_measures_with() -> None:
+    config = derive(load_config(CONFIGS / "simplest_walker.yaml"), {"simulation.t_end": 10.0})
+    start = prepare_model(config)
+    assert isinstance(start, RigidStart)
+    twins = aside.measure_twins(compile_walker(start.walker))
+    for twin, args in twins:
+        twin.entry_for(*args)
+    compiled = {twin.py_func.__qualname__: set(twin.python_entry.signatures) for twin, _ in twins}
+    result = simulate(config, model=start)
+    result.trajectory()
+    _ = result.summary
+    assert {twin.py_func.__qualname__: set(twin.python_entry.signatures) for twin, _ in twins} == compiled
+
+
 @pytest.mark.slow
 def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
     def build_compiling(config: Config) -> object:  # a build that compiles something: a cold cache
@@ -84,11 +110,21 @@ def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(mon
     assert process.exitcode == 0
 
 
+@pytest.mark.slow
+def test_a_cold_rigid_step_compiles_its_late_callees_in_a_second_process(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(aside, "begin_step", numba.njit(lambda tree: None))  # compiled here: a cold cache
+    monkeypatch.setattr(aside, "available_cores", lambda: 2)
+    start, process = aside.prepare_compiling_aside(load_config(CONFIGS / "simplest_walker.yaml"))
+    assert isinstance(start, RigidStart) and process is not None and process.daemon
+    aside.join(process)
+    assert process.exitcode == 0
+
+
 _LOOP_AFTER_ITS_CALLEES = """
 import json
 from biped_sim._compiled_cache import recording_compilations
 from biped_sim.config import Config, derive
-from biped_sim.simulate import aside, prepare_model
+from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import integrate_config
 config = derive(Config(), {"simulation.t_end": 0.01})
 model = prepare_model(config)
@@ -109,3 +145,34 @@ def test_the_loop_compiled_after_its_callees_finds_them_all_in_the_cache(tmp_pat
     assert "biped_sim.integrate.explicit.advance_python_entry" in compiled  # the loop was compiled here
     assert "biped_sim.multibody.planar.fall_overload" in callees  # the formulation's fall, as the loop's overload
     assert len(callees) == 9 and not set(callees) & set(compiled)  # ... but none of its callees
+
+
+_STEP_AFTER_ITS_CALLEES = """
+import json
+from biped_sim._compiled_cache import recording_compilations
+from biped_sim.config import load_config
+from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import compile_walker, rigid_step
+from biped_sim.simulate import aside
+from tests.conftest import CONFIGS
+config = load_config(CONFIGS / "simplest_walker.yaml")
+walker = rigid_walker(config)
+cw = compile_walker(walker)
+for function, args in aside.step_callees(cw):
+    aside.compile_for(function, args)
+state = walker.state_from_legs(config.simulation.initial.model_dump())
+with recording_compilations() as compiled:
+    rigid_step(walker, state, cw=cw)
+callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in aside.step_callees(cw)]
+print(json.dumps([callees, compiled]))
+"""
+
+
+@pytest.mark.slow
+def test_the_rigid_step_compiled_after_its_late_callees_finds_them_all_in_the_cache(tmp_path: Path) -> None:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # empty: the step map and its callees compile
+    out = subprocess.run([sys.executable, "-c", _STEP_AFTER_ITS_CALLEES], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    callees, compiled = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "biped_sim.rigid.compiled.step_kernel_python_entry" in compiled  # the step was compiled here
+    assert len(callees) == 6 and not set(callees) & set(compiled)  # ... but none of its late callees

@@ -20,6 +20,7 @@ from numba.core.errors import NumbaError
 from numba.core.registry import CPUDispatcher
 
 import biped_sim
+from biped_sim._compiled_cache import OPT_LEVEL
 from biped_sim.integrate.explicit import advance
 from biped_sim.kernel import (
     OVERLOAD_SUFFIX,
@@ -30,6 +31,8 @@ from biped_sim.kernel import (
     missing_numba_internals,
     overload_by_type,
 )
+
+from .conftest import child_env
 
 
 @kernel
@@ -129,6 +132,22 @@ def test_an_overload_implementation_compiled_in_one_process_is_loaded_from_the_c
     implementations = {f"tests.test_kernel.{k}{OVERLOAD_SUFFIX}" for k in ("_flat_level", "_tilted_level")}
     assert implementations <= set(first)
     assert "tests.test_kernel._levels" in second and not implementations & set(second)  # the caller, not them
+
+
+_LEVEL_IN_A_NEW_PROCESS = "import biped_sim, numba; print(int(numba.config.OPT), numba.config.CACHE_DIR)"
+
+
+@pytest.mark.slow
+def test_the_package_compiles_at_its_optimisation_level_unless_numba_opt_is_set() -> None:
+    """LLVM's level OPT_LEVEL by default, the user's NUMBA_OPT if set; the code of each level in a cache of its own."""
+    env = {k: v for k, v in child_env().items() if k not in ("NUMBA_OPT", "NUMBA_CACHE_DIR")}
+    runs = [
+        subprocess.run([sys.executable, "-c", _LEVEL_IN_A_NEW_PROCESS], env=env | user, capture_output=True, text=True)
+        for user in ({}, {"NUMBA_OPT": "3"})
+    ]
+    assert all(run.returncode == 0 for run in runs), [run.stderr for run in runs]
+    (default, default_cache), (chosen, chosen_cache) = (run.stdout.split() for run in runs)
+    assert (default, chosen) == (OPT_LEVEL, "3") and default_cache != chosen_cache
 
 
 def test_a_kernel_has_no_python_wrapper_and_python_calls_reach_its_twin() -> None:

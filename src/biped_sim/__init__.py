@@ -8,8 +8,9 @@ The public API::
 
 from __future__ import annotations
 
-from biped_sim._compiled_cache import configure_cache_dir, lock_cache_writes
+from biped_sim._compiled_cache import configure_cache_dir, configure_optimisation, lock_cache_writes
 
+configure_optimisation()  # first: numba's reload of its settings resets the cache directory
 configure_cache_dir()
 lock_cache_writes()
 

@@ -9,6 +9,9 @@ code is built from makes any such edit start a fresh cache, while an edit of pla
 reports) keeps it. Those sources are the packages of the compiled core (whose module constants are
 frozen into the kernels too) and any other module that imports numba or the kernel decorator. Must run before any
 compiled function of the package is defined; ``NUMBA_CACHE_DIR`` set by the user wins.
+
+The code is compiled at LLVM's optimisation level 1 (:func:`configure_optimisation`), not numba's default 3, and the
+cache directory's name carries the level: code compiled at one level is never loaded at another.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ LOWERING_PASS = "native_lowering"  # numba's lowering to LLVM IR, with LLVM's op
 OUTSIDE = "(typed outside any function's compile)"  # a pass no compile event encloses
 _COMPILES = re.compile(r"^\s*(from numba\b|import numba\b|from biped_sim\.kernel import)", re.M)
 LOCK_NAME = ".biped-sim.lock"  # in each of numba's cache directories
+OPT_LEVEL = "1"  # LLVM's optimisation level (numba's NUMBA_OPT, default 3): see configure_optimisation
 
 
 def compiled_sources() -> list[Path]:
@@ -56,12 +60,28 @@ def source_hash() -> str:
     return digest.hexdigest()[:12]
 
 
+def configure_optimisation() -> str:
+    """Have numba compile at LLVM's optimisation level :data:`OPT_LEVEL` unless ``NUMBA_OPT`` is set (the user's
+    level wins); the level in force. Must run before any function is compiled or jitted (numba reads it when it
+    makes its code generator) and before :func:`configure_cache_dir` (numba's reload of its settings resets the
+    cache directory).
+
+    Without fastmath LLVM may not reorder floating-point arithmetic at any level, so every result is the same bit
+    for bit (the golden tests), while a first run compiles in less time (docs/architecture.md, "Compile time"). Set
+    in the environment, so that numba's reload of its settings at each compile keeps it, and the processes this one
+    starts (the warm-up's, a sweep's workers) compile alike.
+    """
+    level = os.environ.setdefault("NUMBA_OPT", OPT_LEVEL)
+    numba.core.config.reload_config()
+    return level
+
+
 def configure_cache_dir() -> Path | None:
-    """Point numba's cache at ~/.cache/biped-sim/numba-<source hash> unless NUMBA_CACHE_DIR is set."""
+    """Point numba's cache at ~/.cache/biped-sim/numba-<source hash>-opt<level> unless NUMBA_CACHE_DIR is set."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "biped-sim"
-    cache_dir = base / f"numba-{source_hash()}"
+    cache_dir = base / f"numba-{source_hash()}-opt{os.environ.get('NUMBA_OPT', OPT_LEVEL)}"
     numba.config.CACHE_DIR = str(cache_dir)
     return cache_dir
 

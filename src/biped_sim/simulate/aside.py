@@ -1,4 +1,5 @@
-"""A first run's measures and the loop's late callees compiled in a second process, while this one compiles the loop.
+"""A first run's measures and the loop's late callees compiled in a second process, while this one compiles the loop
+(a rigid run's: the step map's late callees, while this one compiles the step map).
 
 On an empty compile cache a run compiles one function at a time (numba's compiler lock holds a process to one
 thread): the integration loop first, then, after the integration, its measures (the step table and every channel
@@ -13,11 +14,17 @@ It does so only when building the model compiled something (a cold cache for the
 may use more than one core; on a warm cache the run starts no process. A fork, not a new interpreter: the
 process starts at once, with the model and everything the build compiled, rather than some 2.5 CPU s of imports
 later.
+
+A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`) while its start's limit
+cycle is sought; the step reaches the impact solves, a push and the energy last (:func:`step_callees`), which a second
+process compiles meanwhile, and then the twins the run's measures call (:func:`measure_twins`), when the step's first
+callee had to be compiled (a cold cache).
 """
 
 from __future__ import annotations
 
 import signal
+from collections.abc import Callable
 from multiprocessing import get_context
 from multiprocessing.process import BaseProcess
 
@@ -29,12 +36,19 @@ from biped_sim.config import Config
 from biped_sim.integrate import blowup, dense, recorder, stepper
 from biped_sim.integrate.driver import STIFF_METHODS, Integration, explicit_loop, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
-from biped_sim.kernel import compile_for, overload_implementation
+from biped_sim.kernel import Kernel, compile_for, overload_implementation
 from biped_sim.measure.channels import contact_channels
+from biped_sim.measure.loops import rigid_loop
 from biped_sim.measure.steps import step_table
 from biped_sim.multibody import events
 from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.rigid.build import rigid_walker
+from biped_sim.rigid.compiled import CompiledWalker, compile_walker
+from biped_sim.rigid.ground import riser_hit
+from biped_sim.rigid.kernels import guard_rate
 from biped_sim.rigid.start import RigidStart
+from biped_sim.rigid.tree_kernels import after_phase, begin_step, tree_energy, tree_guard, tree_impact, tree_push
+from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
 from biped_sim.simulate.warmup import available_cores
@@ -94,6 +108,74 @@ def compile_loop_callees(config: Config, model: BuiltModel) -> None:
         compile_for(function, args)
 
 
+def step_callees(cw: CompiledWalker) -> tuple[tuple[Dispatcher, tuple[object, ...]], ...]:
+    """The rigid step map's callees that its compile reaches last (:func:`~biped_sim.rigid.compiled.step_kernel`'s,
+    after the phase's integration ``stretch``), with arguments of the types it calls them with, the last first: the
+    phase's end and the impact solve below it (a stop strike's, the heel strike's too), the polish's guard rate, a
+    riser's hit, a push, the energy.
+
+    Not the integration: the step's compile reaches it a few CPU s after its start, before a second process started
+    with it could have compiled it with the flow below it."""
+    p, x = cw.params, np.zeros(cw.sc.y_new.shape[0])
+    return (
+        (after_phase, (p, 0, x, x)),
+        (tree_impact, (p, x, True, x)),
+        (guard_rate, (p, 0, x, x)),
+        (riser_hit, (0.0, 0.0, cw.plan.vertices, 0.0)),
+        (tree_push, (p, x, 0.0, 0.0, x)),
+        (tree_energy, (p, x)),
+    )
+
+
+def measure_twins(cw: CompiledWalker) -> tuple[tuple[Kernel, tuple[object, ...]], ...]:
+    """The kernels a planar rigid run's measures call from Python (their twins, compiled after the walk), with
+    arguments of the types they are called with: a point (the hip, a foot), a phase's guard (the fall's reason), the
+    energy (the strikes' losses) and the loop over the samples."""
+    p, x = cw.params, np.zeros(cw.sc.y_new.shape[0])
+    samples, columns = np.zeros((STAND_IN_SAMPLES, x.shape[0])), np.zeros((STAND_IN_SAMPLES, 2))
+    return (
+        (point, (p, 0, x[: x.shape[0] // 2])),
+        (tree_guard, (p, 0, x)),
+        (tree_energy, (p, x)),
+        (rigid_loop, (p, samples, 0, columns, columns)),
+    )
+
+
+def _compile_rigid_quietly(cw: CompiledWalker) -> None:
+    """:func:`step_callees`, then :func:`measure_twins`, compiled in the second process of a rigid run, which exits
+    without a word if it fails: the run then compiles them itself (and reports any error of its own)."""
+    try:
+        for function, args in step_callees(cw):
+            compile_for(function, args)
+        for twin, args in measure_twins(cw):
+            twin.entry_for(*args)
+    except Exception:  # the run compiles them for real and reports what went wrong
+        raise SystemExit(1) from None
+
+
+def _fork(target: Callable[..., None], args: tuple[object, ...]) -> BaseProcess:
+    """A forked daemon process running ``target(*args)``, started, which ignores Ctrl-C (the run's own handling
+    reports it) and ends with this one."""
+    process = get_context("fork").Process(target=target, args=args, daemon=True)
+    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: the forked process ignores Ctrl-C
+    try:
+        process.start()
+    finally:
+        signal.signal(signal.SIGINT, interrupt)
+    return process
+
+
+def _prepare_rigid(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
+    """A planar rigid run's :func:`~biped_sim.simulate.prepare_model` (the limit cycle's Newton on the step map
+    compiles it), and the process compiling the step's late callees and the measures' twins (:func:`step_callees`,
+    :func:`measure_twins`), on a cold cache (the step map's first kernel compiled) and more than one core."""
+    cw = compile_walker(rigid_walker(config))
+    with recording_compilations() as compiled:
+        compile_for(begin_step, (cw.params,))  # the step's first callee: loaded on a warm cache
+    process = _fork(_compile_rigid_quietly, (cw,)) if compiled and available_cores() >= 2 else None
+    return prepare_model(config), process
+
+
 def measure_stand_in(config: Config, model: BuiltModel) -> None:
     """Everything a run of ``model`` measures (its file's channels and its summary), over :func:`stand_in`."""
     run = stand_in(model)
@@ -114,22 +196,19 @@ def _compile_quietly(config: Config, model: BuiltModel) -> None:
 
 
 def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
-    """:func:`~biped_sim.simulate.prepare_model` of ``config``, and the process that compiles its measures (None
-    on a warm cache, for a rigid run, or on one core); pass it to :func:`join` before the run is measured.
+    """:func:`~biped_sim.simulate.prepare_model` of ``config``, and the process that compiles what the run reaches
+    late: a compliant run's measures and its loop's late callees, a planar rigid run's step's late callees (None on a
+    warm cache, for a rigid walker in space, or on one core); pass it to :func:`join` before the run is measured.
 
     The process ignores Ctrl-C (the run's own handling reports it) and ends with this one (a daemon).
     """
+    if config.dynamics == "rigid" and not config.in_space:
+        return _prepare_rigid(config)
     with recording_compilations() as compiled:
         model = prepare_model(config)
     if not compiled or not isinstance(model, BuiltModel) or available_cores() < 2:
         return model, None
-    process = get_context("fork").Process(target=_compile_quietly, args=(config, model), daemon=True)
-    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: the forked process ignores Ctrl-C
-    try:
-        process.start()
-    finally:
-        signal.signal(signal.SIGINT, interrupt)
-    return model, process
+    return model, _fork(_compile_quietly, (config, model))
 
 
 def join(process: BaseProcess | None) -> None:
