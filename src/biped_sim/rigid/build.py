@@ -11,13 +11,15 @@ from biped_sim.rigid.tree import RigidWalker
 from biped_sim.walkers.describe import describe
 
 
-def rigid_walker(config: Config) -> RigidWalker:
-    """The rigid model of ``config.walker``."""
+def rigid_walker(config: Config, checked: bool = True) -> RigidWalker:
+    """The rigid model of ``config.walker``; ``checked``: its legs checked alike (a ConfigError if not), which
+    compiles the flow's Python twin on a cold cache; unchecked only where the kernels' argument types alone are
+    wanted (a second process compiling the step map's kernels: :mod:`biped_sim.simulate.aside`)."""
     kind = config.walker.kind
     if config.in_space:
         raise ConfigError("walker", "a walker in space has its own rigid model (rigid.space_model), not the planar one")
     gravity = 1.0 if capabilities(kind).nondimensional else config.gravity  # Garcia's g = l = hip mass = 1
-    return RigidWalker(config, describe(config), kind, gravity)
+    return RigidWalker(config, describe(config), kind, gravity, checked)
 
 
 def initial_state(config: Config, walker: RigidWalker) -> np.ndarray:

@@ -51,7 +51,9 @@ class RigidWalker:
     by the strike; the wheel's one rate, its angle being fixed by the strike).
     """
 
-    def __init__(self, config: Config, description: WalkerDescription, name: str, gravity: float) -> None:
+    def __init__(
+        self, config: Config, description: WalkerDescription, name: str, gravity: float, checked: bool = True
+    ) -> None:
         self.name, self.description, self.config, self.gravity = name, description, config, gravity
         self.params = tree_params(config, description, gravity)
         self.n_q = self.params.n
@@ -83,7 +85,8 @@ class RigidWalker:
             swing_light = bool(self.params.coords["stance_light"][half])
             swing = [] if swing_light else [n + k for k in self.free_swing]
             self.section_indices = [0, n, *swing, *self.off_legs, *(n + k for k in self.off_legs)]
-            self._check_alike()
+            if checked:  # not checked: a walker whose kernels' argument types alone are wanted (simulate.aside)
+                self._check_alike()
         self.section_names = tuple(self.state_names[i] for i in self.section_indices)
 
     @property

@@ -1,5 +1,5 @@
 """A first run's measures and the loop's late callees compiled in a second process, while this one compiles the loop
-(a rigid run's: the step map's late callees, while this one compiles the step map).
+(a rigid run's: the phase's integration, while this one compiles the step map's other callees).
 
 On an empty compile cache a run compiles one function at a time (numba's compiler lock holds a process to one
 thread): the integration loop first, then, after the integration, its measures (the step table and every channel
@@ -15,10 +15,13 @@ may use more than one core; on a warm cache the run starts no process. A fork, n
 process starts at once, with the model and everything the build compiled, rather than some 2.5 CPU s of imports
 later.
 
-A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`) while its start's limit
-cycle is sought; the step reaches the impact solves, a push and the energy last (:func:`step_callees`), which a second
-process compiles meanwhile, and then the twins the run's measures call (:func:`measure_twins`), when the step's first
-callee had to be compiled (a cold cache).
+A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`'s Python twin), whose
+compile is half the phase's integration (:func:`phase_integration`: DOP853 over the flow, its events and samples).
+When the step's first callee had to be compiled (a cold cache), a second process forked before the walker is even
+checked compiles the integration, while this one checks the walker (the flow's twin), compiles the step's other
+callees (:func:`step_callees`) and the twins the run's measures call (:func:`measure_twins`), then waits for it:
+the step, compiled last, finds every callee in the cache. The step itself cannot go aside: it is the twin Python
+calls, compiled where it is called.
 """
 
 from __future__ import annotations
@@ -44,10 +47,19 @@ from biped_sim.multibody import events
 from biped_sim.multibody.dispatch import formulation_of
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import CompiledWalker, compile_walker
-from biped_sim.rigid.ground import riser_hit
-from biped_sim.rigid.kernels import guard_rate
+from biped_sim.rigid.ground import clearance, riser_hit, tree_swing_foot
+from biped_sim.rigid.integration import stretch
+from biped_sim.rigid.kernels import guard, guard_rate, n_phases
 from biped_sim.rigid.start import RigidStart
-from biped_sim.rigid.tree_kernels import after_phase, begin_step, tree_energy, tree_guard, tree_impact, tree_push
+from biped_sim.rigid.tree_kernels import (
+    after_phase,
+    begin_step,
+    skip_phase,
+    tree_energy,
+    tree_guard,
+    tree_impact,
+    tree_push,
+)
 from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
@@ -109,22 +121,33 @@ def compile_loop_callees(config: Config, model: BuiltModel) -> None:
 
 
 def step_callees(cw: CompiledWalker) -> tuple[tuple[Dispatcher, tuple[object, ...]], ...]:
-    """The rigid step map's callees that its compile reaches last (:func:`~biped_sim.rigid.compiled.step_kernel`'s,
-    after the phase's integration ``stretch``), with arguments of the types it calls them with, the last first: the
-    phase's end and the impact solve below it (a stop strike's, the heel strike's too), the polish's guard rate, a
-    riser's hit, a push, the energy.
-
-    Not the integration: the step's compile reaches it a few CPU s after its start, before a second process started
-    with it could have compiled it with the flow below it."""
-    p, x = cw.params, np.zeros(cw.sc.y_new.shape[0])
+    """The rigid step map's callees but the phase's integration (:func:`~biped_sim.rigid.compiled.step_kernel`'s,
+    compiled in the run's process while the second compiles :func:`phase_integration`), with arguments of the types
+    it calls them with, those the integration calls too first (the second process then finds them in the cache): the
+    phase count, the guard, the swing foot and its clearance above a profile; then a phase's skip, the phase's end and
+    the impact solve below it (a stop strike's, the heel strike's too), the polish's guard rate, a riser's hit, a
+    push, the energy."""
+    p, plan, x = cw.params, cw.plan, np.zeros(cw.sc.y_new.shape[0])
     return (
+        (n_phases, (p,)),
+        (guard, (p, 0, x)),
+        (tree_swing_foot, (p, x, 0.0, 0.0)),
+        (clearance, (0.0, 0.0, plan.vertices, plan.ends)),
+        (skip_phase, (p, 0, x)),
         (after_phase, (p, 0, x, x)),
         (tree_impact, (p, x, True, x)),
         (guard_rate, (p, 0, x, x)),
-        (riser_hit, (0.0, 0.0, cw.plan.vertices, 0.0)),
+        (riser_hit, (0.0, 0.0, plan.vertices, 0.0)),
         (tree_push, (p, x, 0.0, 0.0, x)),
         (tree_energy, (p, x)),
     )
+
+
+def phase_integration(cw: CompiledWalker) -> tuple[Dispatcher, tuple[object, ...]]:
+    """The phase's integration :func:`~biped_sim.rigid.integration.stretch` (DOP853 over the flow, its events and
+    samples: half the step map's compile), with arguments of the types the step calls it with."""
+    x = np.zeros(cw.sc.y_new.shape[0])
+    return stretch, (cw, 0, 0, 0.0, 0.0, x, np.zeros(2, dtype=np.int64))
 
 
 def measure_twins(cw: CompiledWalker) -> tuple[tuple[Kernel, tuple[object, ...]], ...]:
@@ -141,15 +164,12 @@ def measure_twins(cw: CompiledWalker) -> tuple[tuple[Kernel, tuple[object, ...]]
     )
 
 
-def _compile_rigid_quietly(cw: CompiledWalker) -> None:
-    """:func:`step_callees`, then :func:`measure_twins`, compiled in the second process of a rigid run, which exits
-    without a word if it fails: the run then compiles them itself (and reports any error of its own)."""
+def _compile_phase_quietly(cw: CompiledWalker) -> None:
+    """:func:`phase_integration` compiled in the second process of a rigid run, which exits without a word if it
+    fails: the run then compiles it itself (and reports any error of its own)."""
     try:
-        for function, args in step_callees(cw):
-            compile_for(function, args)
-        for twin, args in measure_twins(cw):
-            twin.entry_for(*args)
-    except Exception:  # the run compiles them for real and reports what went wrong
+        compile_for(*phase_integration(cw))
+    except Exception:  # the run compiles it for real and reports what went wrong
         raise SystemExit(1) from None
 
 
@@ -165,15 +185,25 @@ def _fork(target: Callable[..., None], args: tuple[object, ...]) -> BaseProcess:
     return process
 
 
-def _prepare_rigid(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
+def _prepare_rigid(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """A planar rigid run's :func:`~biped_sim.simulate.prepare_model` (the limit cycle's Newton on the step map
-    compiles it), and the process compiling the step's late callees and the measures' twins (:func:`step_callees`,
-    :func:`measure_twins`), on a cold cache (the step map's first kernel compiled) and more than one core."""
-    cw = compile_walker(rigid_walker(config))
+    compiles it). On a cold cache (the step map's first kernel compiled) and more than one core, a second process
+    compiles the phase's integration (:func:`phase_integration`) while this one checks the walker (the flow's
+    Python twin) and compiles the step's other callees (:func:`step_callees`) and the measures' twins
+    (:func:`measure_twins`); the step is compiled once that process has ended (it then finds the integration in
+    the cache)."""
+    cw = compile_walker(rigid_walker(config, checked=False))  # the kernels' argument types, before any check
     with recording_compilations() as compiled:
         compile_for(begin_step, (cw.params,))  # the step's first callee: loaded on a warm cache
-    process = _fork(_compile_rigid_quietly, (cw,)) if compiled and available_cores() >= 2 else None
-    return prepare_model(config), process
+    if compiled and available_cores() >= 2:
+        process = _fork(_compile_phase_quietly, (cw,))
+        rigid_walker(config)  # its legs checked alike: a ConfigError here ends the second process with this one
+        for function, args in step_callees(cw):
+            compile_for(function, args)
+        for twin, args in measure_twins(cw):
+            twin.entry_for(*args)
+        join(process)
+    return prepare_model(config)
 
 
 def measure_stand_in(config: Config, model: BuiltModel) -> None:
@@ -197,13 +227,14 @@ def _compile_quietly(config: Config, model: BuiltModel) -> None:
 
 def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
     """:func:`~biped_sim.simulate.prepare_model` of ``config``, and the process that compiles what the run reaches
-    late: a compliant run's measures and its loop's late callees, a planar rigid run's step's late callees (None on a
-    warm cache, for a rigid walker in space, or on one core); pass it to :func:`join` before the run is measured.
+    late: a compliant run's measures and its loop's late callees (None on a warm cache, for a rigid run, or on one
+    core: a planar rigid run's process has ended when this returns); pass it to :func:`join` before the run is
+    measured.
 
     The process ignores Ctrl-C (the run's own handling reports it) and ends with this one (a daemon).
     """
     if config.dynamics == "rigid" and not config.in_space:
-        return _prepare_rigid(config)
+        return _prepare_rigid(config), None
     with recording_compilations() as compiled:
         model = prepare_model(config)
     if not compiled or not isinstance(model, BuiltModel) or available_cores() < 2:
