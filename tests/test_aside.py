@@ -17,7 +17,9 @@ import pytest
 from numba.core.dispatcher import Dispatcher
 
 from biped_sim.config import Config, derive, load_config
+from biped_sim.errors import ConfigError
 from biped_sim.measure.steps import step_table
+from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.start import RigidStart
 from biped_sim.simulate import aside, prepare_model, simulate
@@ -111,13 +113,28 @@ def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(mon
 
 
 @pytest.mark.slow
-def test_a_cold_rigid_step_compiles_its_late_callees_in_a_second_process(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_cold_rigid_run_compiles_the_phase_integration_in_a_second_process_ended_before_the_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     monkeypatch.setattr(aside, "begin_step", numba.njit(lambda tree: None))  # compiled here: a cold cache
     monkeypatch.setattr(aside, "available_cores", lambda: 2)
+    forked = []
+    fork = aside._fork
+    monkeypatch.setattr(aside, "_fork", lambda target, args: forked.append(fork(target, args)) or forked[-1])
     start, process = aside.prepare_compiling_aside(load_config(CONFIGS / "simplest_walker.yaml"))
-    assert isinstance(start, RigidStart) and process is not None and process.daemon
-    aside.join(process)
-    assert process.exitcode == 0
+    assert isinstance(start, RigidStart) and process is None  # nothing left to wait for
+    assert len(forked) == 1 and forked[0].daemon and forked[0].exitcode == 0
+
+
+def test_an_unchecked_rigid_walker_has_the_checked_one_s_kernel_types(tmp_path: Path) -> None:
+    text = (CONFIGS / "kneed_walker.yaml").read_text().replace("{name: thigh_2, mass: 0.5", "{name: thigh_2, mass: 0.6")
+    (tmp_path / "unlike.yaml").write_text(text)
+    config = load_config(tmp_path / "unlike.yaml")
+    with pytest.raises(ConfigError, match="two alike legs"):
+        rigid_walker(config)  # what the run's process checks while the second compiles
+    unchecked = rigid_walker(config, checked=False)  # the second process's walker: only its types matter
+    ours = rigid_walker(load_config(CONFIGS / "kneed_walker.yaml"))
+    assert numba.typeof(compile_walker(unchecked)) == numba.typeof(compile_walker(ours))
 
 
 _LOOP_AFTER_ITS_CALLEES = """
@@ -158,21 +175,23 @@ from tests.conftest import CONFIGS
 config = load_config(CONFIGS / "simplest_walker.yaml")
 walker = rigid_walker(config)
 cw = compile_walker(walker)
-for function, args in aside.step_callees(cw):
+callees = (*aside.step_callees(cw), aside.phase_integration(cw))
+for function, args in callees:
     aside.compile_for(function, args)
 state = walker.state_from_legs(config.simulation.initial.model_dump())
 with recording_compilations() as compiled:
-    rigid_step(walker, state, cw=cw)
-callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in aside.step_callees(cw)]
-print(json.dumps([callees, compiled]))
+    rigid_step(walker, state, sample_rate=100.0, cw=cw)  # a run's step: samples
+names = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in callees]
+print(json.dumps([names, compiled]))
 """
 
 
 @pytest.mark.slow
-def test_the_rigid_step_compiled_after_its_late_callees_finds_them_all_in_the_cache(tmp_path: Path) -> None:
+def test_the_rigid_step_compiled_after_its_callees_finds_them_all_in_the_cache(tmp_path: Path) -> None:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # empty: the step map and its callees compile
     out = subprocess.run([sys.executable, "-c", _STEP_AFTER_ITS_CALLEES], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     callees, compiled = json.loads(out.stdout.strip().splitlines()[-1])
     assert "biped_sim.rigid.compiled.step_kernel_python_entry" in compiled  # the step was compiled here
-    assert len(callees) == 6 and not set(callees) & set(compiled)  # ... but none of its late callees
+    assert "biped_sim.rigid.integration.stretch" in callees  # the second process's share
+    assert len(callees) == 12 and not set(callees) & set(compiled)  # ... but none of its callees
