@@ -102,9 +102,15 @@ class SpaceFoot(Strict):
 
     @property
     def reach(self) -> float:
-        """From the centre to the bottom with the leg upright [m]: the radius plus a torus's tube (the foot's plane
-        upright), an ellipsoid's z semi-axis."""
-        return self.axes[2] if self.axes is not None else self.radius + self.tube
+        """From the centre to the bottom with the leg upright [m]: a ring's radius times the sine of its plane's
+        tilt from the horizontal (1 for a plane through z) plus a torus's tube, a sphere's radius, an ellipsoid's
+        z semi-axis."""
+        if self.axes is not None:
+            return self.axes[2]
+        if self.shape not in ("ring", "torus"):
+            return self.radius
+        nz = self.normal[2] / math.hypot(*self.normal)
+        return self.radius * math.sqrt(1.0 - nz * nz) + self.tube
 
     @property
     def hertz_radius(self) -> float:
