@@ -14,7 +14,7 @@ from biped_sim.config import FootSpec, load_config
 from biped_sim.config.space_description import SpaceDescription
 from biped_sim.errors import ConfigError
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
-from biped_sim.rigid.space_cycle import SpaceMap
+from biped_sim.rigid.space_cycle import SpaceMap, space_limit_cycle
 from biped_sim.rigid.space_model import SpaceModel, space_model
 from tests.conftest import CONFIGS
 from tests.test_space_compliant import GAIT
@@ -27,7 +27,8 @@ FOOT = "walker.description.leg.feet.foot"
 
 def turned(space: SpaceDescription, splay: float) -> SpaceDescription:
     """The model's data of ``space`` with its leg turned outward by ``splay`` about its forward axis x through its
-    hip point, in its own frame (x forward, y away from the other leg, z up): what ``SpaceDescription.splay`` did."""
+    hip point, in its own frame (x forward, y away from the other leg, z up): the turn the rigid model's own
+    ``SpaceDescription.splay`` made (removed after 9ed9a5d, where this gave its gaits to the bit)."""
     c, s = math.cos(splay), math.sin(splay)
     turn = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])  # outward: the foot toward +y
     leg, foot = space.leg, space.leg.foot
@@ -62,7 +63,7 @@ def test_a_splay_written_as_data_is_the_model_turned_and_walks_its_gait() -> Non
     leg) is the model's leg turned in its own frame: parts and feet to rounding; the same fixed point to 1e-9 and
     multipliers to 1e-6, found by Newton from the toy's gait."""
     described = toy_model(load_config(SPLAYED).walker.space)
-    reference = toy_model(load_config(TOY).walker.space.model_copy(update={"splay": SPLAY}))
+    reference = toy_model(turned(load_config(TOY).walker.space, SPLAY))
     for ours, theirs in zip(described.parts, reference.parts, strict=True):
         np.testing.assert_allclose(ours.com, theirs.com, rtol=0, atol=1e-15)
         np.testing.assert_allclose(ours.inertia, theirs.inertia, rtol=0, atol=1e-15)
@@ -137,3 +138,15 @@ def test_a_tilted_ring_rolls_in_the_plane_on_its_osculating_arc(normal: tuple[fl
     np.testing.assert_allclose(arc_bottom(0.0), ring_bottom(0.0), rtol=0, atol=1e-14)
     errors = [abs(arc_bottom(t)[1] - ring_bottom(t)[1]) for t in (0.1, 0.05)]
     assert errors[0] < 1e-3 and (errors[0] < 1e-14 or errors[0] / errors[1] > 7.0)
+
+
+@pytest.mark.slow  # the search without a guess, about 5 CPU s
+def test_the_splayed_toy_is_found_without_a_guess_from_its_sagittal_twin() -> None:
+    """`biped-sim limit-cycle configs/space/tinkertoy_splayed.yaml`: the scan's walks fall, the sagittal twin's gait
+    (its ring's tilt scaled away with the rest of the lateral geometry) continues to the walker's, the one Newton
+    finds from the toy's gait; stable, step period 0.89878459."""
+    found = space_limit_cycle(load_config(SPLAYED))
+    assert found.converged and "sagittal twin" in found.start
+    z, _ = cycle(toy_model(load_config(SPLAYED).walker.space))
+    np.testing.assert_allclose(found.section_point, z, rtol=0, atol=1e-9)
+    assert found.step_period == pytest.approx(0.89878459, abs=1e-8) and found.stable
