@@ -16,6 +16,7 @@ from biped_sim.errors import ConfigError
 from biped_sim.rigid.limit_cycle import RIGID_TOLERANCE, map_jacobian, newton_fixed_point
 from biped_sim.rigid.space_cycle import SpaceMap, space_limit_cycle
 from biped_sim.rigid.space_model import SpaceModel, space_model
+from biped_sim.walkers.described import foot_in_space
 from tests.conftest import CONFIGS
 from tests.test_space_compliant import GAIT
 
@@ -150,3 +151,9 @@ def test_the_splayed_toy_is_found_without_a_guess_from_its_sagittal_twin() -> No
     z, _ = cycle(toy_model(load_config(SPLAYED).walker.space))
     np.testing.assert_allclose(found.section_point, z, rtol=0, atol=1e-9)
     assert found.step_period == pytest.approx(0.89878459, abs=1e-8) and found.stable
+
+
+def test_the_spatial_formulation_takes_a_ring_normal_as_its_disc_axis() -> None:
+    """A described walker off the rigid model's form (compliant, spatial) gets the unit normal as its disc's axis."""
+    foot = FootSpec(name="f", body="b", centre=(0.0, -0.9), radius=0.1, normal=(0.0, 0.3, 0.4))
+    assert tuple(foot_in_space(foot)[2:5]) == pytest.approx((0.0, 0.6, 0.8), abs=1e-15)
