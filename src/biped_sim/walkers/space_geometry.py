@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from biped_sim.config.space_description import SpaceDescription
 
@@ -144,6 +143,8 @@ def rolling_states(legs: tuple[LegGeometry, LegGeometry], x: dict[str, float]) -
 def euler_parameters(rotation: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(p, pdot) of a rotation matrix and its angular velocity (global frame): pdot = E(p)^T omega / 2, with
     E = [-e, e~ + e0 I] (Nikravesh), e0 >= 0."""
+    from scipy.spatial.transform import Rotation  # here: scipy.spatial adds 0.15 s to every command's start-up
+
     x, y, z, w = Rotation.from_matrix(rotation).as_quat()
     p = np.array([w, x, y, z]) * (1.0 if w >= 0.0 else -1.0)
     e0, e = p[0], p[1:]
