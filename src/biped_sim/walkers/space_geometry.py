@@ -69,23 +69,22 @@ class LegGeometry:
 
 def leg_geometry(space: SpaceDescription, frame: int) -> LegGeometry:
     """The left leg (frame 0) or its mirror image, the right leg (frame 1): hip points ``hip_width`` apart on the
-    hinge, each leg turned outward by ``splay`` about its forward axis through its hip point."""
+    hinge."""
     leg, foot = space.leg, space.leg.foot
     hip = np.array([0.0, 0.5 * space.hip_width, 0.0])
-    turn = rot_x(space.splay)  # outward: the foot toward +y
     mirror = MIRROR if frame == 1 else np.eye(3)
     normal = None
     if foot.shape in ("ring", "torus"):
-        normal = mirror @ turn @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
+        normal = mirror @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
     return LegGeometry(
         mass=leg.mass,
-        com=mirror @ (hip + turn @ np.array(leg.com)),
-        inertia=mirror @ turn @ leg.inertia.matrix() @ turn.T @ mirror,
-        foot_centre=mirror @ (hip + turn @ np.array(foot.centre)),
+        com=mirror @ (hip + np.array(leg.com)),
+        inertia=mirror @ leg.inertia.matrix() @ mirror,
+        foot_centre=mirror @ (hip + np.array(foot.centre)),
         foot_radius=foot.radius,
         foot_normal=normal,
         foot_tube=foot.tube,
-        foot_quadric=mirror @ turn @ foot.quadric() @ turn.T @ mirror,
+        foot_quadric=mirror @ foot.quadric() @ mirror,
     )
 
 
