@@ -26,7 +26,7 @@ KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one 
 KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
 KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
 STATE = np.array([0.05, 0.1, -0.2, 0.35, 0.1, 0.4, -0.05, -0.3, 0.3, 0.1])  # heading .. hinge rate, contact x, y
-# the tinkertoy (the rigid model's data: a plane normal off the axes, which no description writes) on a torus foot
+# the tinkertoy (the rigid model's data: a plane normal off the axes, a description's `normal`) on a torus foot
 # in its leg's y-z plane: curved 0.3 fore-aft, 0.5 sideways, tilted off the axes
 TORUS = {"shape": "torus", "radius": 0.2, "tube": 0.3, "normal": (1.0, 0.2, 0.1), "centre": (0.02, 0.01, -0.5)}
 # ... on an ellipsoid foot, semi-axes 0.15 forward, 0.4 sideways, 0.3 up (curved 0.075 fore-aft, 0.53 sideways)

@@ -21,7 +21,7 @@ What is written, and how:
   y; full inertia tensors (each principal moment floored as in the compliant builder); a sphere foot a sphere, a
   point foot a sphere of ``POINT_FOOT`` l above the point, a ring a flat cylinder (half-thickness ``RING_HALF_WIDTH``
   of its radius) whose axis is the ring's normal: its contact with a plane is its rim's lowest point, as a ring's;
-  an ellipsoid MuJoCo's ellipsoid, its axes the leg's (turned by the splay).
+  an ellipsoid MuJoCo's ellipsoid, its axes the leg's.
   The world is the rigid model's slope frame with gravity tilted by the slope.
 
 What MuJoCo cannot represent, refused in one line: a torus foot (no such geom), a latch (a joint held from both
@@ -201,7 +201,7 @@ def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK
     if space.leg.foot.shape == "torus":
         raise ConfigError("walker.description.feet", "a torus foot is not written as MJCF (MuJoCo has no torus)")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
-    shapes = [_foot_shape(space, leg, side) for leg, side in zip(legs, (1.0, -1.0), strict=True)]
+    shapes = [_foot_shape(space, leg) for leg in legs]
     contact = contact_attributes(config, legs[0].mass + legs[1].mass, space.leg.foot.radius, space.leg_length())
     g, slope, mu = config.gravity, config.ground.slope, config.friction.mu_kinetic
     world = f"""    <geom name="ground" type="plane" size="50 50 0.1" friction="{mu!r} 0 0"/>
@@ -226,14 +226,11 @@ def balanced(inertia: np.ndarray) -> np.ndarray:
     return axes @ np.diag(moments) @ axes.T
 
 
-def _foot_shape(space: SpaceDescription, leg: LegGeometry, side: float) -> str:
-    """A foot geom's type, size, place and orientation (walker frame; ``side`` -1 for the right leg, the mirror)."""
+def _foot_shape(space: SpaceDescription, leg: LegGeometry) -> str:
+    """A foot geom's type, size, place and orientation (walker frame)."""
     foot = space.leg.foot
-    if foot.axes is not None:  # an ellipsoid: its axes the leg's, turned by the splay (the mirror turns it back)
-        return (
-            f'type="ellipsoid" size="{numbers(*foot.axes)}" euler="{numbers(side * space.splay, 0.0, 0.0)}" '
-            f'pos="{numbers(*leg.foot_centre)}"'
-        )
+    if foot.axes is not None:  # an ellipsoid: its axes the leg's
+        return f'type="ellipsoid" size="{numbers(*foot.axes)}" pos="{numbers(*leg.foot_centre)}"'
     if leg.foot_normal is not None:
         return (
             f'type="cylinder" size="{leg.foot_radius!r} {RING_HALF_WIDTH * leg.foot_radius!r}" '

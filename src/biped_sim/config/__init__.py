@@ -12,12 +12,12 @@ from biped_sim.config.description import (
     LEG_KEYS,
     STATE_KEYS,
     BodySpec,
-    FootSpec,
     JointSpec,
     PointMassSpec,
     StopSpec,
     WalkerDescription,
 )
+from biped_sim.config.feet import FootSpec
 from biped_sim.config.loading import (
     apply_override,
     config_from_dict,

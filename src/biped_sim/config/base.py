@@ -16,6 +16,8 @@ from biped_sim.errors import quote
 # the law names come from the registries: a new law is one function and one registry line
 NormalModelName = Literal[tuple(NORMAL_LAWS)]  # type: ignore[valid-type]
 FrictionModelName = Literal[tuple(FRICTION_LAWS)]  # type: ignore[valid-type]
+Vector2 = tuple[float, float]  # a point in a body's plane (x', y')
+IN_SPACE = "formulation.kind: spatial with dynamics: compliant"  # where a description's features in space act
 
 
 def is_number_annotation(annotation: Any) -> bool:

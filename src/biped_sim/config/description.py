@@ -9,17 +9,16 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from biped_sim.config.base import NormalModelName, Strict
-from biped_sim.config.space_description import InertiaSpec, SpaceFoot, Vector3
+from biped_sim.config.base import IN_SPACE, NormalModelName, Strict, Vector2
+from biped_sim.config.feet import FootSpec
+from biped_sim.config.space_description import InertiaSpec, Vector3
 from biped_sim.contact.joint_element import ELEMENT_PARAMETERS, JOINT_ELEMENT_LAWS
 
-Vector2 = tuple[float, float]
 SIDES = ("stance", "swing")
 JointElementName = Literal[tuple(JOINT_ELEMENT_LAWS)]  # type: ignore[valid-type]
 GROUND = "ground"  # an element's ``against`` for the slope normal (body -1 to the kernels): it holds an absolute angle
 MAX_PARTS = 1000  # bodies, point masses, joints, feet or legs of a description: more is a generated typo, refused
 LATERAL = (0.0, 0.0, 1.0)  # the joints' default axis z' (the walker's right): a planar walker's hinges
-IN_SPACE = "formulation.kind: spatial with dynamics: compliant"  # where the description's features in space act
 
 
 def leg_keys(n_legs: int, roles: list[str]) -> tuple[str, ...]:
@@ -220,76 +219,6 @@ class JointSpec(Strict):
         return lower, upper
 
 
-class FootSpec(Strict):
-    """A foot: an arc (radius > 0) or a point (radius 0) on a body, its centre in the body frame; in space also a
-    sphere, a torus or an ellipsoid (:class:`~biped_sim.config.space_description.SpaceFoot`'s shapes, in the body's
-    sagittal plane: a torus's ring in x'-y', an ellipsoid's semi-axes along x', y', z')."""
-
-    name: str = Field(..., min_length=1, description="Unique foot name.")
-    body: str = Field(..., description="The body carrying it.")
-    centre: Vector2 = Field(..., description="Arc centre in the body frame [m].")
-    radius: float = Field(0.0, ge=0, description="Arc radius [m]; 0 = point foot.")
-    lateral: float = Field(
-        0.0,
-        description="The spatial formulation's place of the foot along the joints' axis (z') [m], its arc in that "
-        "plane; a planar model puts every foot in the sagittal plane. A walker with a foot off it stands on its "
-        "feet in roll and yaw; one without is held in its plane.",
-    )
-    shape: Literal["arc", "sphere", "torus", "ellipsoid"] = Field(
-        "arc",
-        description="'arc' (a point at radius 0; in space a disc's edge in the sagittal plane); with "
-        f"{IN_SPACE}: 'sphere', 'torus' (a ring of ``radius`` in its ``plane`` thickened by ``tube``) or "
-        "'ellipsoid' (``axes``).",
-    )
-    tube: float = Field(0.0, ge=0, description="A torus's tube radius [m] (the other shapes: 0).")
-    plane: Literal["sagittal", "lateral"] = Field(
-        "sagittal",
-        description="A torus's ring's plane: 'sagittal' (x'-y': curved radius + tube fore-aft, tube sideways) or "
-        "'lateral' (y'-z', its lowest point ``radius`` below the centre: tube fore-aft, radius + tube sideways, a "
-        "foot rounder sideways than fore-aft, which stands in roll).",
-    )
-    axes: Vector3 | None = Field(
-        None,
-        description="An ellipsoid's semi-axes along x', y', z' [m] (radius 0): curved ax^2 / ay fore-aft and az^2 / "
-        "ay sideways at its bottom, upright. It starts on the arc of its y' semi-axis, exact upright (tilted, its "
-        "bottom's height and rolling differ by (1 - ax^2 / ay^2) of the tilt's square: a short transient).",
-    )
-
-    @model_validator(mode="after")
-    def _a_shape(self) -> FootSpec:
-        if self.plane != "sagittal" and self.shape != "torus":
-            raise ValueError("plane: only a torus's ring has a plane other than the sagittal")
-        self.in_space()  # SpaceFoot's checks of radius, tube and axes
-        return self
-
-    def in_space(self, side: float = -1.0) -> SpaceFoot:
-        """The foot in the rigid model's leg frame (x', side z', y'; y by default the walker's left): an arc a ring
-        in the leg's x-z plane (a point at radius 0), a torus's ring in its plane, an ellipsoid's axes (x', z', y')."""
-        shape = {"arc": "point" if self.radius == 0.0 else "ring"}.get(self.shape, self.shape)
-        axes = None if self.axes is None else (self.axes[0], self.axes[2], self.axes[1])
-        normal = (0.0, 1.0, 0.0) if self.plane == "sagittal" else (1.0, 0.0, 0.0)
-        return SpaceFoot(
-            shape=shape, centre=(self.centre[0], side * self.lateral, self.centre[1]), radius=self.radius,
-            tube=self.tube, axes=axes, normal=normal,
-        )  # fmt: skip
-
-    def sagittal_arc(self) -> tuple[tuple[float, float], float]:
-        """(centre, radius) of the arc a planar model of the foot rolls on in its sagittal plane (an ellipsoid's:
-        its y' semi-axis, exact upright; a torus in the lateral plane: its tube's, ``radius`` below its centre)."""
-        if self.axes is not None:
-            return self.centre, self.axes[1]
-        if self.plane == "lateral":
-            return (self.centre[0], self.centre[1] - self.radius), self.tube
-        return self.centre, self.radius + self.tube
-
-    @property
-    def sagittal_radius(self) -> float:
-        """The radius of :meth:`sagittal_arc`, its centre's reach below the foot's centre added [m]: the bottom's
-        depth below the centre upright."""
-        (_, y), radius = self.sagittal_arc()
-        return radius + (self.centre[1] - y)
-
-
 class WalkerDescription(Strict):
     """A walker as data: a tree of rigid bodies joined by revolute joints, with feet, and its legs.
 
@@ -363,10 +292,11 @@ class WalkerDescription(Strict):
 
     def features_in_space(self) -> list[str]:
         """The dotted fields that only the spatial formulation represents: joints about another axis than z', feet
-        of another shape than an arc (a planar model refuses them, naming the first)."""
-        return [f"walker.description.joints.{j.name}.axis" for j in self.joints if not j.lateral_axis] + [
-            f"walker.description.feet.{f.name}.shape" for f in self.feet if f.shape != "arc"
-        ]
+        of another shape than an arc, arcs out of the sagittal plane (a planar model refuses them, naming the
+        first)."""
+        joints = [f"joints.{j.name}.axis" for j in self.joints if not j.lateral_axis]
+        feet = [f"feet.{f.name}.{'shape' if f.shape != 'arc' else 'normal'}" for f in self.feet if not f.planar]
+        return [f"walker.description.{key}" for key in joints + feet]
 
     def joint_elements(self) -> list[tuple[JointSpec, ElementSpec, str]]:
         """Every joint's passive elements with the body each acts against (its ``against``, or the joint's parent),

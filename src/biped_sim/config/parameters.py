@@ -207,7 +207,7 @@ def mirror_legs(description: dict[str, Any]) -> dict[str, Any]:
 
 MIRRORED = {  # what the mirror across the sagittal plane (z' -> -z') negates: part -> (key, entries or None)
     "joints": (("lateral", None), ("axis", (0, 1))),  # an axis is a turn's: its in-plane components flip
-    "feet": (("lateral", None),),
+    "feet": (("lateral", None), ("normal", (2,))),  # a plane's normal is a direction: its z' component flips
     "bodies": (("com_lateral", None),),
     "point_masses": (("lateral", None),),
 }
@@ -215,9 +215,9 @@ MIRRORED = {  # what the mirror across the sagittal plane (z' -> -z') negates: p
 
 def _mirror_lateral(leg: dict[str, Any]) -> None:
     """The second leg is the first's mirror image across its sagittal plane: its joints', feet's and point masses'
-    ``lateral`` places, its bodies' ``com_lateral``, its joints' axes (x' and y' components: z' -> -z' turns a
-    rotation's sense) and its bodies' tensors' xz and yz products negated (numbers by now: the parameters are evaluated
-    before the mirror)."""
+    ``lateral`` places, its bodies' ``com_lateral``, its feet's plane normals' z' component, its joints' axes (x' and y'
+    components: z' -> -z' turns a rotation's sense) and its bodies' tensors' xz and yz products negated (numbers by now:
+    the parameters are evaluated before the mirror)."""
     for part, keys in MIRRORED.items():
         for item in (i for i in leg.get(part, []) if isinstance(i, dict)):
             for key, entries in keys:

@@ -14,8 +14,8 @@ from pydantic import (
     model_validator,
 )
 
-from biped_sim.config.base import FrictionModelName, NormalModelName, Strict
-from biped_sim.config.description import IN_SPACE, LEG_KEYS
+from biped_sim.config.base import IN_SPACE, FrictionModelName, NormalModelName, Strict
+from biped_sim.config.description import LEG_KEYS
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.config.space_form import in_space as described_in_space
 from biped_sim.config.space_form import space_form

@@ -4,8 +4,8 @@ of a described walker).
 
 The leg is written once, as the left leg in its own frame (x forward, y along the hinge axis pointing away from
 the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
-(y -> -y). The two hip points lie on the hinge axis ``hip_width`` apart; ``splay`` turns each leg outward about
-its forward axis through its hip point. A foot is a point, a sphere, a ring (a thin circular edge whose plane
+(y -> -y). The two hip points lie on the hinge axis ``hip_width`` apart (a splayed leg is its numbers turned about
+x: docs/guide/rigid.md). A foot is a point, a sphere, a ring (a thin circular edge whose plane
 is normal to ``normal``), a torus (a ring of radius ``radius`` thickened by a tube of radius ``tube``: at its
 bottom it is curved with radius ``radius + tube`` in the ring's plane and ``tube`` across it, so that its two
 curvatures are set apart; e.g. its plane lateral, normal x, gives a foot rounder sideways than fore-aft) or an
@@ -102,9 +102,15 @@ class SpaceFoot(Strict):
 
     @property
     def reach(self) -> float:
-        """From the centre to the bottom with the leg upright [m]: the radius plus a torus's tube (the foot's plane
-        upright), an ellipsoid's z semi-axis."""
-        return self.axes[2] if self.axes is not None else self.radius + self.tube
+        """From the centre to the bottom with the leg upright [m]: a ring's radius times the sine of its plane's
+        tilt from the horizontal (1 for a plane through z) plus a torus's tube, a sphere's radius, an ellipsoid's
+        z semi-axis."""
+        if self.axes is not None:
+            return self.axes[2]
+        if self.shape not in ("ring", "torus"):
+            return self.radius
+        nz = self.normal[2] / math.hypot(*self.normal)
+        return self.radius * math.sqrt(1.0 - nz * nz) + self.tube
 
     @property
     def hertz_radius(self) -> float:
@@ -139,9 +145,6 @@ class SpaceDescription(Strict):
     """Two alike legs (the left written, the right its mirror) joined by one hinge along the lateral axis."""
 
     hip_width: float = Field(0.0, ge=0, description="Distance between the two hip points along the hinge [m].")
-    splay: float = Field(
-        0.0, gt=-math.pi / 4, lt=math.pi / 4, description="Each leg turned outward about its forward axis [rad]."
-    )
     hip_mass: float = Field(0.0, ge=0, description="A point mass at the hinge's midpoint [kg].")
     leg: SpaceLeg = Field(..., description="The left leg (the right leg is its mirror image).")
 
@@ -154,5 +157,5 @@ class SpaceDescription(Strict):
         return self
 
     def leg_length(self) -> float:
-        """The hip point to the foot's bottom with the leg upright and no splay [m]: the walker's length scale."""
+        """The hip point to the foot's bottom with the leg upright [m]: the walker's length scale."""
         return -(self.leg.foot.centre[2] - self.leg.foot.reach)

@@ -14,7 +14,9 @@ Frames: a body's frame is x' forward, y' up the leg, z' the walker's right; the 
 forward, y along the hinge away from the other leg, z up the leg. The first leg (the root) lies on the side away
 from the second (the hip's ``lateral`` < 0: the second to its left, so the first is the right leg and y = z';
 > 0: y = -z'); its numbers, so mapped, are the left leg's that the rigid model writes (the right leg being its
-mirror image, the permutation (x', z', y') of the right leg is the left leg's (x, y, z)).
+mirror image, the permutation (x', z', y') of the right leg is the left leg's (x, y, z)); a ring's plane normal is so
+mapped too, its sign fixed (``feet.canonical_normal``: the mirrored leg's, its z' component negated, is the same
+plane). Splay is plain geometry in the description (each leg's numbers turned about x', docs/guide/rigid.md).
 """
 
 from __future__ import annotations

@@ -127,17 +127,19 @@ def scan(model: SpaceModel, section: SpaceSection) -> list[tuple[str, np.ndarray
 
 
 def sagittal_twin(space: SpaceDescription, share: float) -> SpaceDescription:
-    """The walker with its lateral geometry scaled by ``share``: hip width, splay, the leg's lateral centre of mass
-    and foot offsets, and the products of inertia that couple y (0: its sagittal twin, a planar walker in space, whose
-    gait the sagittal scan finds; 1: the walker itself)."""
-    leg = space.leg
+    """The walker with its lateral geometry scaled by ``share``: hip width, the leg's lateral centre of mass and
+    foot offsets, the products of inertia that couple y, and a ring's plane's tilt off the planes the mirror keeps
+    (its normal's x and z components when its y outweighs its x, else its y: never a flat ring), a splayed leg's
+    alike (0: its sagittal twin, a planar walker in space, whose gait the sagittal scan finds; 1: the walker
+    itself)."""
+    leg, (nx, ny, nz) = space.leg, space.leg.foot.normal
     inertia = leg.inertia.model_copy(update={"xy": share * leg.inertia.xy, "yz": share * leg.inertia.yz})
     com = (leg.com[0], share * leg.com[1], leg.com[2])
     centre = (leg.foot.centre[0], share * leg.foot.centre[1], leg.foot.centre[2])
-    scaled = leg.model_copy(
-        update={"com": com, "inertia": inertia, "foot": leg.foot.model_copy(update={"centre": centre})}
-    )
-    return space.model_copy(update={"hip_width": share * space.hip_width, "splay": share * space.splay, "leg": scaled})
+    normal = (share * nx, ny, share * nz) if abs(ny) >= abs(nx) else (nx, share * ny, nz)
+    foot = leg.foot.model_copy(update={"centre": centre, "normal": normal})
+    scaled = leg.model_copy(update={"com": com, "inertia": inertia, "foot": foot})
+    return space.model_copy(update={"hip_width": share * space.hip_width, "leg": scaled})
 
 
 def _scan_solve(step_map: SpaceMap, settle_steps: int) -> tuple[SearchResult, str] | None:

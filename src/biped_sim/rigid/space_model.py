@@ -86,13 +86,12 @@ def _leg(space: SpaceDescription, frame: int) -> tuple[Part, Foot]:
     """The left leg (frame 0) or its mirror image, the right leg (frame 1), in the walker frame."""
     leg, foot = space.leg, space.leg.foot
     hip = np.array([0.0, 0.5 * space.hip_width, 0.0])
-    turn = rot_x(space.splay)  # outward: the foot toward +y
     mirror = MIRROR if frame == 1 else np.eye(3)
-    com = mirror @ (hip + turn @ np.array(leg.com))
-    inertia = mirror @ turn @ leg.inertia.matrix() @ turn.T @ mirror
-    normal = mirror @ turn @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
-    quadric = mirror @ turn @ foot.quadric() @ turn.T @ mirror
-    centre = mirror @ (hip + turn @ np.array(foot.centre))
+    com = mirror @ (hip + np.array(leg.com))
+    inertia = mirror @ leg.inertia.matrix() @ mirror
+    normal = mirror @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
+    quadric = mirror @ foot.quadric() @ mirror
+    centre = mirror @ (hip + np.array(foot.centre))
     shape = SHAPES[foot.shape]
     return Part(frame, leg.mass, com, inertia), Foot(shape, centre, foot.radius, normal, foot.tube, quadric)
 

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped_sim.config import Config, InitialState
-from biped_sim.config.description import LATERAL, FootSpec, WalkerDescription
+from biped_sim.config.description import LATERAL, WalkerDescription
+from biped_sim.config.feet import FootSpec
 from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, JointElements, element_parameters, make_elements
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.profile import profile_ground
@@ -167,10 +168,9 @@ def resolve_tree(description: WalkerDescription) -> Tree:
 
 
 def foot_in_space(foot: FootSpec) -> np.ndarray:
-    """(16,): the foot's centre (x', y'), disc axis (z' for an arc and a sagittal torus, x' for a lateral torus, 0
+    """(16,): the foot's centre (x', y'), disc axis (an arc's or torus's plane normal, z' unless given otherwise; 0
     for a sphere or an ellipsoid), radius, tube and quadric (an ellipsoid's diag(ax^2, ay^2, az^2), else 0)."""
-    axis = {"sphere": (0.0,) * 3, "ellipsoid": (0.0,) * 3}.get(foot.shape, LATERAL)
-    axis = (1.0, 0.0, 0.0) if foot.plane == "lateral" else axis
+    axis = (0.0,) * 3 if foot.shape in ("sphere", "ellipsoid") else foot.plane_normal
     quadric = np.diag(np.square(foot.axes)) if foot.axes is not None else np.zeros((3, 3))
     return np.array([*foot.centre, *axis, foot.radius, foot.tube, *quadric.ravel()])
 

@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from biped_sim.config.space_description import SpaceDescription
 
@@ -70,23 +69,22 @@ class LegGeometry:
 
 def leg_geometry(space: SpaceDescription, frame: int) -> LegGeometry:
     """The left leg (frame 0) or its mirror image, the right leg (frame 1): hip points ``hip_width`` apart on the
-    hinge, each leg turned outward by ``splay`` about its forward axis through its hip point."""
+    hinge."""
     leg, foot = space.leg, space.leg.foot
     hip = np.array([0.0, 0.5 * space.hip_width, 0.0])
-    turn = rot_x(space.splay)  # outward: the foot toward +y
     mirror = MIRROR if frame == 1 else np.eye(3)
     normal = None
     if foot.shape in ("ring", "torus"):
-        normal = mirror @ turn @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
+        normal = mirror @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
     return LegGeometry(
         mass=leg.mass,
-        com=mirror @ (hip + turn @ np.array(leg.com)),
-        inertia=mirror @ turn @ leg.inertia.matrix() @ turn.T @ mirror,
-        foot_centre=mirror @ (hip + turn @ np.array(foot.centre)),
+        com=mirror @ (hip + np.array(leg.com)),
+        inertia=mirror @ leg.inertia.matrix() @ mirror,
+        foot_centre=mirror @ (hip + np.array(foot.centre)),
         foot_radius=foot.radius,
         foot_normal=normal,
         foot_tube=foot.tube,
-        foot_quadric=mirror @ turn @ foot.quadric() @ turn.T @ mirror,
+        foot_quadric=mirror @ foot.quadric() @ mirror,
     )
 
 
@@ -145,6 +143,8 @@ def rolling_states(legs: tuple[LegGeometry, LegGeometry], x: dict[str, float]) -
 def euler_parameters(rotation: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(p, pdot) of a rotation matrix and its angular velocity (global frame): pdot = E(p)^T omega / 2, with
     E = [-e, e~ + e0 I] (Nikravesh), e0 >= 0."""
+    from scipy.spatial.transform import Rotation  # here: scipy.spatial adds 0.15 s to every command's start-up
+
     x, y, z, w = Rotation.from_matrix(rotation).as_quat()
     p = np.array([w, x, y, z]) * (1.0 if w >= 0.0 else -1.0)
     e0, e = p[0], p[1:]

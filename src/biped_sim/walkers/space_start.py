@@ -14,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from biped_sim.config import InitialState
 from biped_sim.errors import ConfigError
@@ -84,6 +83,8 @@ def _subtree(tree: Tree, c: int) -> list[int]:
 
 def _attitude(row: np.ndarray, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(A, omega) of a body's Euler parameters and their rates: omega = 2 E pdot."""
+    from scipy.spatial.transform import Rotation  # here: scipy.spatial adds 0.15 s to every command's start-up
+
     e0, e = row[3], row[4:7]
     tilde = np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
     big_e = np.column_stack((-e, tilde + e0 * np.eye(3)))
@@ -96,6 +97,8 @@ def _turn(
 ) -> None:  # fmt: skip
     """Turn the ``subtree``'s bodies by theta about the parent's ``axis`` through its joint ``point`` (both in the
     parent's frame from its centre of mass), their motion relative to the parent turned alike, plus the rate."""
+    from scipy.spatial.transform import Rotation  # here: scipy.spatial adds 0.15 s to every command's start-up
+
     a_p, w_p = _attitude(q[parent], qd[parent])
     n = a_p @ axis
     joint = q[parent, :3] + a_p @ point
