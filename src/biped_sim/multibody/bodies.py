@@ -1,8 +1,8 @@
 """A rigid body's share of a walker's equations, written once for the compliant tree (:mod:`.tree`) and the rigid
 step map (:mod:`biped_sim.rigid.tree_kernels`): its energy, and its terms of the mass matrix and generalized forces
 ``M = sum_b m_b J_b^T J_b + I_b e_b e_b^T`` and ``Q = sum_b J_b^T F_b`` in any generalized coordinates, given the
-Jacobian J_b of its centre of mass (each side computes J_b and the force F_b its own way: a floating hip, or a
-pinned or rolling stance foot)."""
+nonzero columns of the Jacobian J_b of its centre of mass (each side computes J_b and the force F_b its own way: a
+floating hip, or a pinned or rolling stance foot)."""
 
 from __future__ import annotations
 
@@ -22,10 +22,24 @@ def body_energy(
 
 
 @kernel
+def lever_terms(lx: float, ly: float, rate: float, bx: float, by: float) -> tuple[float, float, float, float]:
+    """One lever's share of a point's Jacobian and bias acceleration. A point of a planar tree of bodies is
+    r = c + sum_k l_k, each lever l_k = A(theta_k) w_k turning with one coordinate theta_k (w_k constant in its body):
+    its Jacobian's column k is d r / d theta_k = perp(l_k) = (-l_ky, l_kx), and the velocity products of its
+    acceleration, the bias Jdot qd = -sum_k thetadot_k^2 l_k. Returns column k and (bx, by) with lever k's term
+    added, (bx, by) - rate^2 (lx, ly): the compliant tree sums it down the tree (:mod:`.tree`), the rigid step map
+    over a point's coordinates (:mod:`biped_sim.rigid.tree_kernels`)."""
+    r2 = rate * rate
+    return -ly, lx, bx - r2 * lx, by - r2 * ly
+
+
+@kernel
 def add_body_terms(
     matrix: np.ndarray,
     forces: np.ndarray,
-    jacobian: np.ndarray,
+    levers: np.ndarray,
+    columns: np.ndarray,
+    count: int,
     mass: float,
     inertia: float,
     own: int,
@@ -33,25 +47,27 @@ def add_body_terms(
     fy: float,
     with_forces: bool,
 ) -> None:
-    """Add a body's terms to the upper triangle of ``matrix`` (M += m J^T J + I e_own e_own^T; :func:`mirror_upper`
-    fills the lower one once every body is in) and, ``with_forces``, J^T (fx, fy) to ``forces``: ``jacobian[k]``
-    is column k of the Jacobian of its centre of mass, ``own`` the coordinate its inertia turns with. A massless
-    body adds its inertia alone (its Jacobian is not read)."""
+    """Add a body's terms to the lower triangle of ``matrix`` (M += m J^T J + I e_own e_own^T; :func:`mirror_lower`
+    fills the upper one where a solve reads it) and, ``with_forces``, J^T (fx, fy) to ``forces``. The Jacobian of
+    its centre of mass is zero but in ``count`` columns, ``columns[:count]`` in descending order, column
+    ``columns[a]`` being ``levers[a]``: a body's terms touch only the pairs of its own columns (a tree's body, those
+    of its path to the root). A massless body adds its inertia alone (its Jacobian is not read). Each entry gets the
+    same terms in the same order as from the whole Jacobian, less the zero columns' zeros: the same bits."""
     matrix[own, own] += inertia
     if mass == 0.0:
         return
-    n = jacobian.shape[0]
-    for k in range(n):
-        jkx, jky = jacobian[k, 0], jacobian[k, 1]
+    for a in range(count):
+        k = columns[a]
+        jkx, jky = levers[a, 0], levers[a, 1]
         if with_forces:
             forces[k] += jkx * fx + jky * fy
-        for col in range(k, n):
-            matrix[k, col] += mass * (jkx * jacobian[col, 0] + jky * jacobian[col, 1])
+        for c in range(a, count):
+            matrix[k, columns[c]] += mass * (jkx * levers[c, 0] + jky * levers[c, 1])
 
 
 @kernel
-def mirror_upper(matrix: np.ndarray, n: int) -> None:
-    """Copy the upper triangle of the leading (n x n) block of ``matrix`` into its lower one (M is symmetric)."""
+def mirror_lower(matrix: np.ndarray, n: int) -> None:
+    """Copy the lower triangle of the leading (n x n) block of ``matrix`` into its upper one (M is symmetric)."""
     for k in range(n):
         for col in range(k + 1, n):
-            matrix[col, k] = matrix[k, col]
+            matrix[k, col] = matrix[col, k]

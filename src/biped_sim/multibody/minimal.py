@@ -111,20 +111,26 @@ N_COLUMNS = 7
 
 
 class Workspace(NamedTuple):
-    """Preallocated buffers for one right-hand-side evaluation (one array: each array costs reference counts)."""
+    """Preallocated buffers for one right-hand-side evaluation of a star (one array: each array costs reference
+    counts, and each field a word more on every call that passes it)."""
 
-    # a star: (nb + nf, N_COLUMNS), a row per body, then a row per foot; the hip's Q_h are local variables.
-    # a tree: (nb + n, max(N_TREE_COLUMNS, n + 3)), a row per body, then [M | Q | J] (n = len(q), J a body's Jacobian)
-    table: np.ndarray
+    table: np.ndarray  # (nb + nf, N_COLUMNS), a row per body, then a row per foot; the hip's Q_h are local variables
 
 
-def make_workspace(system: MinimalSystem) -> Workspace:
+class TreeWorkspace(NamedTuple):
+    """A tree's buffers (:func:`~biped_sim.multibody.tree.tree_rhs`)."""
+
+    table: np.ndarray  # (nb + n, max(N_TREE_COLUMNS, n + 3)), a row per body, then [M | Q | J] (n = len(q))
+    columns: np.ndarray  # (nb,) int64: the coordinates of J's columns, the nonzero ones of a body's Jacobian
+
+
+def make_workspace(system: MinimalSystem) -> Workspace | TreeWorkspace:
     """Allocate the buffers of ``system`` (once per simulation, not per step)."""
     nb = system.body_mass.shape[0]
     if system.star:
         return Workspace(np.zeros((nb + system.foot_body.shape[0], N_COLUMNS)))
     n = HIP + nb
-    return Workspace(np.zeros((nb + n, max(N_TREE_COLUMNS, n + 3))))
+    return TreeWorkspace(np.zeros((nb + n, max(N_TREE_COLUMNS, n + 3))), np.zeros(nb, dtype=np.int64))
 
 
 # the contact response is written once for every formulation as ordinary kernels; inlined here, the call and the
@@ -317,7 +323,9 @@ _rhs_of = by_type("rhs", "topology", {Star: star_rhs, Tree: tree_rhs})  # inline
 
 
 @kernel(reference_counts=False)
-def rhs(t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace, ydot: np.ndarray) -> None:
+def rhs(
+    t: float, y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace | TreeWorkspace, ydot: np.ndarray
+) -> None:
     """Right-hand side ydot = f(t, y) for the current contact modes (allocation-free): a star's arrow solve
     (:func:`star_rhs`) or a tree's (:func:`~biped_sim.multibody.tree.tree_rhs`), chosen by the topology's type."""
     _rhs_of(t, y, system, modes, work, ydot, system.topology)
@@ -344,7 +352,7 @@ def fall(y: np.ndarray, system: MinimalSystem) -> int:
 
 
 @kernel
-def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
+def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: tuple) -> tuple[float, float]:
     """(mechanical energy [J], 0): the coordinates hold the hip joints exactly, so there is no drift."""
     kinetic, potential, elastic = mechanical_energy(y, system, modes)
     return kinetic + potential + elastic, 0.0

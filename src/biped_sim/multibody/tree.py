@@ -26,7 +26,7 @@ from biped_sim.contact.joint_element import joint_torques, joints_energy
 from biped_sim.contact.registry import by_type
 from biped_sim.contact.response import IMPACT_FLOOR, arc_contact, arc_energy, arc_forces, is_loaded
 from biped_sim.kernel import inlined, kernel
-from biped_sim.multibody.bodies import add_body_terms, body_energy, mirror_upper
+from biped_sim.multibody.bodies import add_body_terms, body_energy, lever_terms
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.multibody.planar import PlanarSystem
 
@@ -117,7 +117,7 @@ def tree_kinematics(y: np.ndarray, system: tuple, table: np.ndarray) -> None:
             jx, jy = cp * joint[b, 0] - sp * joint[b, 1], sp * joint[b, 0] + cp * joint[b, 1]
             ox, oy = table[p, OX] + jx, table[p, OY] + jy
             vx, vy = table[p, VX] - om * jy, table[p, VY] + om * jx
-            ux, uy = table[p, UX] - om * om * jx, table[p, UY] - om * om * jy
+            _, _, ux, uy = lever_terms(jx, jy, om, table[p, UX], table[p, UY])  # the bias down the tree
         table[b, T_COS], table[b, T_SIN], table[b, OX], table[b, OY], table[b, VX], table[b, VY] = c, s, ox, oy, vx, vy
         table[b, UX], table[b, UY], table[b, JX], table[b, JY] = ux, uy, jx, jy
         table[b, T_ARM_X] = c * com[b, 0] - s * com[b, 1]
@@ -141,41 +141,54 @@ def add_generalized_force(
 
 
 @kernel
-def body_jacobian(table: np.ndarray, parent: np.ndarray, b: int, jacobian: np.ndarray) -> None:
-    """Body b's centre-of-mass Jacobian into ``jacobian`` (row k: column k of J_b): the identity on the base,
-    perp(A(phi_b) c_b) in its own angle's column, perp(A(phi_p) s_j) in each ancestor p's (s_j: the joint of p's
-    child on the path), zero elsewhere; from the body rows of ``table``."""
-    for k in range(jacobian.shape[0]):
-        jacobian[k, 0] = jacobian[k, 1] = 0.0
-    jacobian[0, 0] = jacobian[1, 1] = 1.0
-    k, kx, ky = b, table[b, T_ARM_X], table[b, T_ARM_Y]  # the levers of b's Jacobian, from b up to the root
+def body_levers(table: np.ndarray, parent: np.ndarray, b: int, levers: np.ndarray, columns: np.ndarray) -> int:
+    """Body b's centre-of-mass Jacobian but the base's columns (the identity, every body's alike): its columns
+    HIP + k, b's own angle then each ancestor's (descending), into ``columns`` and their values into ``levers``,
+    perp(A(phi_b) c_b) and perp(A(phi_p) s_j) (s_j: the joint of p's child on the path; every other angle's column
+    is zero), from the body rows of ``table``; returns their count, b's depth in the tree."""
+    count, k, kx, ky = 0, b, table[b, T_ARM_X], table[b, T_ARM_Y]  # the levers, from b up to the root
     while k >= 0:
-        jacobian[HIP + k, 0], jacobian[HIP + k, 1] = -ky, kx
+        columns[count], levers[count, 0], levers[count, 1] = HIP + k, -ky, kx
         kx, ky, k = table[k, JX], table[k, JY], parent[k]
+        count += 1
+    return count
 
 
 @kernel(reference_counts=False)
 def tree_mass_matrix(
-    y: np.ndarray, system: tuple, table: np.ndarray, mass: np.ndarray, q: np.ndarray, jacobian: np.ndarray,
-    with_forces: bool,
+    y: np.ndarray, system: tuple, table: np.ndarray, mass: np.ndarray, q: np.ndarray, levers: np.ndarray,
+    columns: np.ndarray, with_forces: bool,
 ) -> None:  # fmt: skip
-    """M(q) = sum_b m_b J_b^T J_b + J_b e_b e_b^T into ``mass`` (n x n) and, ``with_forces``, each body's gravity
-    and velocity products at its centre of mass, J_b^T m_b (g - u_b + omega_b^2 a_b), added to ``q``
-    (:func:`~biped_sim.multibody.bodies.add_body_terms`, as the rigid step map's), from the body rows of
-    ``table``; ``jacobian`` (n x 2) holds a body's Jacobian meanwhile."""
+    """The lower triangle of M(q) = sum_b m_b J_b^T J_b + J_b e_b e_b^T into ``mass`` (n x n; the Cholesky solve
+    reads no other) and, ``with_forces``, each body's gravity and velocity products at its centre of mass,
+    J_b^T m_b (g - u_b + omega_b^2 a_b), added to ``q``, from the body rows of ``table``. The base's block is the
+    total mass times the identity and its rows m_b times each body's angle columns; the angles' block is each
+    body's :func:`~biped_sim.multibody.bodies.add_body_terms` (the rigid step map's) over its path's columns
+    (:func:`body_levers`, into ``levers`` and ``columns`` meanwhile): the terms of the whole Jacobian but its zeros,
+    the same bits."""
     nb = system.body_mass.shape[0]
     n = HIP + nb
     for i in range(n):
-        for k in range(n):
+        for k in range(i + 1):
             mass[i, k] = 0.0
     gx, gy = system.gravity[0], system.gravity[1]
+    total = 0.0
     for b in range(nb):
         m, om, ax, ay = system.body_mass[b], y[n + HIP + b], table[b, T_ARM_X], table[b, T_ARM_Y]
-        fx = m * (gx - table[b, UX] + om * om * ax)
-        fy = m * (gy - table[b, UY] + om * om * ay)
-        body_jacobian(table, system.body_parent, b, jacobian)
-        add_body_terms(mass, q, jacobian, m, system.body_inertia[b], HIP + b, fx, fy, with_forces)
-    mirror_upper(mass, n)
+        _, _, bx, by = lever_terms(ax, ay, om, table[b, UX] - gx, table[b, UY] - gy)  # Jdot qd - g at its centre
+        fx, fy = -m * bx, -m * by
+        count = body_levers(table, system.body_parent, b, levers, columns)
+        add_body_terms(mass, q, levers, columns, count, m, system.body_inertia[b], HIP + b, fx, fy, with_forces)
+        if m == 0.0:
+            continue
+        total += m
+        if with_forces:
+            q[0] += fx
+            q[1] += fy
+        for a in range(count):
+            mass[columns[a], 0] += m * levers[a, 0]
+            mass[columns[a], 1] += m * levers[a, 1]
+    mass[0, 0] = mass[1, 1] = total
 
 
 @kernel(reference_counts=False)
@@ -207,7 +220,7 @@ def _tree_foot_forces(y: np.ndarray, system: tuple, modes: np.ndarray, table: np
 
 
 _kinematics = inlined(tree_kinematics)  # the three take the whole system: inlined (module docstring)
-_mass_matrix = inlined(tree_mass_matrix, calls=frozenset({"body_jacobian", "add_body_terms", "mirror_upper"}))
+_mass_matrix = inlined(tree_mass_matrix)
 _foot_forces = inlined(_tree_foot_forces, calls=frozenset({"arc_contact", "arc_forces", "is_loaded",
                                                           "add_generalized_force"}))  # fmt: skip
 
@@ -222,11 +235,11 @@ def tree_rhs(
     nb, nf = system.body_mass.shape[0], system.foot_body.shape[0]
     n = HIP + nb
     _kinematics(y, system, table)
-    mass, q, jacobian = table[nb : nb + n, :n], table[nb : nb + n, n], table[nb : nb + n, n + 1 : n + 3]
+    mass, q, levers = table[nb : nb + n, :n], table[nb : nb + n, n], table[nb : nb + n, n + 1 : n + 3]
     for k in range(n):
         q[k] = 0.0
         ydot[k] = y[n + k]
-    _mass_matrix(y, system, table, mass, q, jacobian, True)
+    _mass_matrix(y, system, table, mass, q, levers, work.columns, True)
     w_normal, w_friction = _foot_forces(y, system, modes, table, q, ydot)
     ydot[2 * n + nf] = w_normal
     ydot[2 * n + nf + 1] = w_friction
@@ -304,7 +317,8 @@ def hip_impulse(y: np.ndarray, system: tuple, impulse: np.ndarray) -> np.ndarray
     n = HIP + nb
     table, mass, generalized = np.zeros((nb, N_TREE_COLUMNS)), np.zeros((n, n)), np.zeros(n)
     tree_kinematics(y, system, table)
-    tree_mass_matrix(y, system, table, mass, generalized, np.zeros((n, 2)), False)
+    tree_mass_matrix(y, system, table, mass, generalized, np.zeros((nb, 2)), np.zeros(nb, dtype=np.int64), False)
+    mass += np.tril(mass, -1).T  # its lower triangle, mirrored
     generalized[:HIP] = impulse[:HIP]
     out = np.array(y, dtype=np.float64)
     out[n : 2 * n] += np.linalg.solve(mass, generalized)

@@ -257,6 +257,20 @@ def _points(tree: Tree, rows: list, light: list, n: int) -> tuple[np.ndarray, np
     return records, w
 
 
+def _nonzero_columns(w: np.ndarray, rolling: list[int], radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(columns, n_columns) of :class:`~biped_sim.rigid.tree_layout.RigidTree`: each point's coordinates whose w
+    vector is nonzero, or that of the body whose foot rolls in its table (its Jacobian column has (-R, 0) too),
+    descending and padded with -1; the other columns of its Jacobian are zero."""
+    tables, points, n = w.shape[:3]
+    columns, n_columns = np.full((tables, points, n), -1, dtype=np.int64), np.zeros((tables, points), dtype=np.int64)
+    for t in range(tables):
+        for i in range(points):
+            nonzero = [k for k in range(n) if np.any(w[t, i, k] != 0.0) or (k == rolling[t] and radius != 0.0)]
+            columns[t, i, : len(nonzero)] = nonzero[::-1]
+            n_columns[t, i] = len(nonzero)
+    return columns, n_columns
+
+
 def tree_params(config: Config, d: WalkerDescription, gravity: float) -> RigidTree:
     """The records of the kernels (the tables, locks, phases, relabelling, elements) and their workspace."""
     tree = Tree(d)
@@ -275,12 +289,13 @@ def tree_params(config: Config, d: WalkerDescription, gravity: float) -> RigidTr
     elements = tree_elements(tree, d)
     check_elements_mirrored(d, elements, perm)
     records, w = _points(tree, rows, light, n)
+    columns, n_columns = _nonzero_columns(w, rolling, radius)
     coords = list(zip(perm, shift, *(map(bool, f) for f in flags), _fall_angles(tree, d, config), strict=True))
     return RigidTree(
         n=n, leg_length=float(depth + radius), radius=float(radius), landing_radius=float(tree.feet[1].radius),
         lean=float(lean), gx=float(gx), gy=float(gy), fall=float(config.simulation.fall_leg_angle),
         n_points=len(rows[0]), n_light=len(light[0]), n_off=len(tree.off_legs), rolling=(rolling[0], rolling[1]),
-        rows=records, w=np.ascontiguousarray(w, dtype=float),
+        rows=records, w=np.ascontiguousarray(w, dtype=float), columns=columns, n_columns=n_columns,
         locks=_table([lock[:5] for lock in locks], LOCK), phases=_table(phases, PHASE),
         coords=_table(coords, COORD), elements=_table([tuple(e[:3]) for e in elements], ELEMENT),
         element_params=np.array([e[3:] for e in elements], dtype=float).reshape(len(elements), N_ELEMENT_PARAMS),

@@ -33,19 +33,19 @@ from __future__ import annotations
 import numpy as np
 
 from biped_sim.kernel import kernel
-from biped_sim.multibody.bodies import add_body_terms, body_energy, mirror_upper
+from biped_sim.multibody.bodies import add_body_terms, body_energy, lever_terms, mirror_lower
 from biped_sim.rigid.tree_elements import element_forces, tree_element_energy
 from biped_sim.rigid.tree_layout import (
     RigidTree,
     fill_trig,
     hip,
     jacobian_column,
+    lever,
     light,
     light_row,
     point,
     point_at,
     point_velocity,
-    turned,
     velocity_at,
 )
 
@@ -55,18 +55,24 @@ RELEASED = 2.0  # a lock's active field: held through the stance, released throu
 
 
 @kernel(literal_arguments=False)
-def _row_jacobian(tree: RigidTree, t: int, w: np.ndarray, qd: np.ndarray, jacobian: np.ndarray) -> tuple[float, float]:
-    """Write the Jacobian columns of the point whose w vectors are w to ``jacobian`` (n x 2) and return its bias
-    acceleration Jdot qd = -sum_k Rot(theta_k) w_k thetadot_k^2 (from the same turned vectors: one pass, cached
-    angles)."""
+def _row_jacobian(
+    tree: RigidTree, t: int, i: int, qd: np.ndarray, jacobian: np.ndarray, dense: bool
+) -> tuple[float, float]:
+    """Write the Jacobian of point i of table t to ``jacobian`` and return its bias acceleration Jdot qd, both by
+    :func:`~biped_sim.multibody.bodies.lever_terms` of each coordinate's lever (one pass, cached angles), over its
+    nonzero columns alone (``tree.columns[t, i]``, summed in ascending order: a zero column adds nothing to the
+    sum, the same bits): row a is column ``tree.columns[t, i, a]``, or, ``dense``, row k is column k (n x 2)."""
+    w, columns, roll = tree.w[t, i], tree.columns[t, i], tree.rolling[t]
+    if dense:
+        for k in range(tree.n):
+            jacobian[k, 0] = jacobian[k, 1] = 0.0
     bx = by = 0.0
-    roll = tree.rolling[t]
-    for k in range(tree.n):
-        jx, jy = turned(tree, w, k)
-        r2 = qd[k] * qd[k]
-        bx -= jy * r2
-        by += jx * r2
-        jacobian[k, 0], jacobian[k, 1] = (jx - tree.radius, jy) if k == roll else (jx, jy)
+    for a in range(tree.n_columns[t, i] - 1, -1, -1):
+        k = columns[a]
+        lx, ly = lever(tree, w, k)
+        jx, jy, bx, by = lever_terms(lx, ly, qd[k], bx, by)
+        row = k if dense else a
+        jacobian[row, 0], jacobian[row, 1] = (jx - tree.radius, jy) if k == roll else (jx, jy)
     return bx, by
 
 
@@ -74,10 +80,10 @@ def _row_jacobian(tree: RigidTree, t: int, w: np.ndarray, qd: np.ndarray, jacobi
 def _assemble(tree: RigidTree, t: int, m: int, qd: np.ndarray, flow: bool, release: bool) -> int:
     """Write M of table t and the active lock rows into the workspace's (m x m) matrix and, for the ``flow``, the
     generalized forces sum_i m_i J_i^T (g - Jdot_i qd) into its right side, work[:m] (each row's terms by
-    :func:`~biped_sim.multibody.bodies.add_body_terms`, as the compliant tree's); returns the rows used (the
-    workspace's ``jacobian`` holds a row's Jacobian meanwhile; the angles cached by :func:`fill_trig`).
-    ``release``: the locks marked RELEASED are left free (a heel strike's trailing knee)."""
-    n, work, matrix, jacobian = tree.n, tree.work, tree.matrix, tree.jacobian
+    :func:`~biped_sim.multibody.bodies.add_body_terms` over its nonzero columns, as the compliant tree's); returns
+    the rows used (the workspace's ``jacobian`` holds a row's columns meanwhile; the angles cached by
+    :func:`fill_trig`). ``release``: the locks marked RELEASED are left free (a heel strike's trailing knee)."""
+    n, work, matrix, levers = tree.n, tree.work, tree.matrix, tree.jacobian
     forces = work[:m]
     for a in range(m):
         for b in range(m):
@@ -89,10 +95,11 @@ def _assemble(tree: RigidTree, t: int, m: int, qd: np.ndarray, flow: bool, relea
         mass = row.mass
         fx = fy = 0.0
         if mass != 0.0:
-            bx, by = _row_jacobian(tree, t, tree.w[t, i], qd, jacobian)
+            bx, by = _row_jacobian(tree, t, i, qd, levers, False)
             fx, fy = mass * (tree.gx - bx), mass * (tree.gy - by)
-        add_body_terms(matrix, forces, jacobian, mass, row.inertia, row.own, fx, fy, flow)
-    mirror_upper(matrix, n)
+        count = tree.n_columns[t, i]
+        add_body_terms(matrix, forces, levers, tree.columns[t, i], count, mass, row.inertia, row.own, fx, fy, flow)
+    mirror_lower(matrix, n)
     used = n
     for j in range(tree.locks.shape[0]):
         lock = tree.locks[j]
@@ -171,7 +178,7 @@ def _light_tier(tree: RigidTree, t: int, q: np.ndarray, qd: np.ndarray, mode: in
     for j in range(tree.n_light):
         if j == t:
             continue
-        bx, by = _row_jacobian(tree, t, tree.w[t, light_row(tree, j)], qd, jacobian)
+        bx, by = _row_jacobian(tree, t, light_row(tree, j), qd, jacobian, True)
         cx, cy = (tree.gx - bx, tree.gy - by) if mode == FLOW else (0.0, 0.0)
         if mode == IMPACT:
             cx, cy = velocity_at(tree, 0, tree.w[0, light_row(tree, j)], qd)

@@ -52,6 +52,8 @@ class RigidTree(NamedTuple):
     rolling: tuple[int, int]  # each table's pinned foot's body
     rows: np.ndarray  # (2, points) ROW
     w: np.ndarray  # (2, points, n, 2)
+    columns: np.ndarray  # (2, points, n) int64: the coordinates of each point's nonzero Jacobian columns, descending
+    n_columns: np.ndarray  # (2, points) int64: how many (a point's w vectors nonzero, or the rolling foot's body)
     locks: np.ndarray  # LOCK
     phases: np.ndarray  # PHASE
     coords: np.ndarray  # (n,) COORD
@@ -132,12 +134,19 @@ def gravity_vector(gravity: float, slope: float) -> tuple[float, float]:
 
 
 @kernel
-def turned(tree: RigidTree, w: np.ndarray, k: int) -> tuple[float, float]:
-    """Rot(theta_k) perp(w_k) of the point whose w vectors are w: d/dtheta_k of Rot(theta_k) w_k, whose rotation by
-    -90 degrees, (y, -x), is Rot(theta_k) w_k itself (cached angles)."""
+def lever(tree: RigidTree, w: np.ndarray, k: int) -> tuple[float, float]:
+    """Rot(theta_k) w_k of the point whose w vectors are w: its lever turning with coordinate k (cached angles)."""
     wx, wy = w[k, 0], w[k, 1]
     s, c = tree.trig[k, 0], tree.trig[k, 1]
-    return -s * wx - c * wy, c * wx - s * wy
+    return c * wx - s * wy, s * wx + c * wy
+
+
+@kernel
+def turned(tree: RigidTree, w: np.ndarray, k: int) -> tuple[float, float]:
+    """Rot(theta_k) perp(w_k) = perp(Rot(theta_k) w_k) of the point whose w vectors are w: d/dtheta_k of its
+    :func:`lever` (cached angles)."""
+    lx, ly = lever(tree, w, k)
+    return -ly, lx
 
 
 @kernel
