@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -110,6 +111,23 @@ def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(mon
     os.kill(process.pid, signal.SIGINT)
     aside.join(process)
     assert process.exitcode == 0
+
+
+def _raise_on_sigterm(signum: int, frame: object) -> None:  # as the CLI's handler (cli.common)
+    raise KeyboardInterrupt
+
+
+def test_a_second_process_terminated_by_a_run_that_ended_first_says_nothing(capfd: pytest.CaptureFixture[str]) -> None:
+    previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)  # the run's handler, inherited at the fork
+    try:
+        process = aside._fork(time.sleep, (60.0,))
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    time.sleep(0.2)  # the process in its target
+    process.terminate()  # what multiprocessing does to a daemon at exit (a run ended by an error or Ctrl-C)
+    process.join(10.0)
+    assert process.exitcode == -signal.SIGTERM
+    assert "Traceback" not in capfd.readouterr().err
 
 
 @pytest.mark.slow
