@@ -18,6 +18,7 @@ import pytest
 from numba.core.dispatcher import Dispatcher
 
 from biped_sim.config import Config, derive, load_config
+from biped_sim.contact.response import ARMED
 from biped_sim.errors import ConfigError
 from biped_sim.measure.steps import step_table
 from biped_sim.rigid.build import rigid_walker
@@ -25,6 +26,8 @@ from biped_sim.rigid.compiled import compile_walker, rigid_step
 from biped_sim.rigid.start import RigidStart
 from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import CompliantRunResult, integrate_config
+from biped_sim.walkers import BuiltModel
+from biped_sim.walkers.model import start_modes_deferred
 from tests.conftest import CONFIGS
 
 
@@ -68,10 +71,33 @@ def test_the_stand_in_has_the_run_s_types_and_its_start_state() -> None:
 
 def test_a_warm_cache_starts_no_process() -> None:
     config = Config()
-    prepare_model(config)  # whatever its build compiles is now in this process
+    built = prepare_model(config)
+    aside.compile_for(aside.events.system_is_leading, (built.y0, built.system, 0))  # the cold probe's: loaded
     model, process = aside.prepare_compiling_aside(config)
     assert process is None
-    assert (model.y0 == prepare_model(config).y0).all()
+    assert (model.y0 == built.y0).all() and (model.modes0 == built.modes0).all()
+
+
+@pytest.mark.parametrize("name", ["round_foot_walker", "kneed_walker_compliant", "four_legged_walker"])
+def test_a_draft_model_has_the_run_s_types_and_start(name: str) -> None:
+    config = load_config(CONFIGS / f"{name}.yaml")
+    with start_modes_deferred():
+        draft = prepare_model(config)
+    model = prepare_model(config)
+    assert isinstance(draft, BuiltModel) and isinstance(model, BuiltModel)
+    assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
+        numba.typeof(x) for x in (model.y0, model.modes0, model.system)
+    ]
+    assert (draft.y0 == model.y0).all() and draft.modes0.shape == model.modes0.shape
+
+
+def test_a_draft_leaves_out_only_the_start_s_mode_update_and_only_inside_its_block() -> None:
+    config = derive(Config(), {"simulation.initial.swing_angle": 0.3})  # the swing foot ahead: the update arms it
+    with start_modes_deferred():
+        draft = prepare_model(config)
+    model = prepare_model(config)
+    assert (draft.modes0[0] == model.modes0[0]).all()  # the stance foot, as the start sets it
+    assert draft.modes0[1, ARMED] == 0.0 and model.modes0[1, ARMED] == 1.0
 
 
 def test_a_rigid_run_on_a_warm_cache_starts_no_process() -> None:
@@ -100,17 +126,33 @@ def test_the_rigid_measure_twins_have_the_types_a_run_measures_with() -> None:
 
 @pytest.mark.slow
 def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
-    def build_compiling(config: Config) -> object:  # a build that compiles something: a cold cache
-        numba.njit(lambda x: x + 1)(1)
-        return prepare_model(config)
-
-    monkeypatch.setattr(aside, "prepare_model", build_compiling)
+    monkeypatch.setattr(aside, "_cold_loop", lambda model: True)
     monkeypatch.setattr(aside, "available_cores", lambda: 2)
-    _, process = aside.prepare_compiling_aside(Config())
+    model, process = aside.prepare_compiling_aside(Config())
+    assert (model.modes0 == prepare_model(Config()).modes0).all()  # the real start, not the draft's
     assert process is not None and process.daemon
     os.kill(process.pid, signal.SIGINT)
     aside.join(process)
     assert process.exitcode == 0
+
+
+_SECOND_DIES_AT_ONCE = """
+import os
+from biped_sim.config import Config
+from biped_sim.simulate import aside, prepare_model
+aside._cold_loop = lambda model: True
+aside.available_cores = lambda: 2
+aside._compile_quietly = lambda config, model, rhs_ready: os._exit(3)  # dies before its right-hand side
+model, process = aside.prepare_compiling_aside(Config())
+aside.join(process)
+print(process.exitcode, (model.modes0 == prepare_model(Config()).modes0).all())
+"""
+
+
+def test_a_run_whose_second_process_died_before_its_right_hand_side_goes_on() -> None:
+    out = subprocess.run([sys.executable, "-c", _SECOND_DIES_AT_ONCE], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["3", "True"]  # not waiting for the right-hand side forever; the model is the run's
 
 
 def _raise_on_sigterm(signum: int, frame: object) -> None:  # as the CLI's handler (cli.common)
@@ -163,10 +205,11 @@ from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import integrate_config
 config = derive(Config(), {"simulation.t_end": 0.01})
 model = prepare_model(config)
-aside.compile_loop_callees(config, model)
+rhs, rest = aside.loop_callees(config, model)
+aside.compile_all(rhs + rest)
 with recording_compilations() as compiled:
     integrate_config(config, model)
-callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in aside.loop_callees(config, model)]
+callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in rhs + rest]
 print(json.dumps([callees, compiled]))
 """
 
@@ -178,8 +221,9 @@ def test_the_loop_compiled_after_its_callees_finds_them_all_in_the_cache(tmp_pat
     assert out.returncode == 0, out.stderr
     callees, compiled = json.loads(out.stdout.strip().splitlines()[-1])
     assert "biped_sim.integrate.explicit.advance_python_entry" in compiled  # the loop was compiled here
-    assert "biped_sim.multibody.planar.fall_overload" in callees  # the formulation's fall, as the loop's overload
-    assert len(callees) == 9 and not set(callees) & set(compiled)  # ... but none of its callees
+    assert "biped_sim.multibody.planar.rhs_overload" in callees  # the formulation's right-hand side and fall, ...
+    assert "biped_sim.multibody.planar.fall_overload" in callees  # ... as the loop's overloads
+    assert len(callees) == 10 and not set(callees) & set(compiled)  # ... but none of its callees
 
 
 _STEP_AFTER_ITS_CALLEES = """

@@ -2,18 +2,19 @@
 (a rigid run's: the phase's integration, while this one compiles the step map's other callees).
 
 On an empty compile cache a run compiles one function at a time (numba's compiler lock holds a process to one
-thread): the integration loop first, then, after the integration, its measures (the step table and every channel
-of its files: the measure loops and the twins Python calls). The measures do not depend on the integration, only
-on the types of its arrays, so :func:`prepare_compiling_aside` forks a process that writes to the on-disk cache,
-on a second core while this process compiles the loop: first the contact channels (their tree, the contact
-forces, is the right-hand side's, the largest the loop's compile reaches early), then the loop's callees
-that its compile reaches last (:func:`compile_loop_callees`), then the measures of a stand-in of the run
-(:func:`stand_in`: two samples and two heel strikes of the model in its start state). The loop's compile and the
-run's measures then load them from the cache (:func:`join` waits for the process before the run is measured).
-It does so only when building the model compiled something (a cold cache for the run's group) and the process
-may use more than one core; on a warm cache the run starts no process. A fork, not a new interpreter: the
-process starts at once, with the model and everything the build compiled, rather than some 2.5 CPU s of imports
-later.
+thread): the integration loop first, then, after the integration, its measures (the step table and every channel of
+its files: the measure loops and the twins Python calls). The measures do not depend on the integration, only on the
+types of its arrays, so :func:`prepare_compiling_aside` forks a process that writes to the on-disk cache, on a
+second core while this process compiles the loop: first the loop's right-hand side (with the contact forces below
+it: the largest callee the loop's compile reaches early), then the loop's other callees (:func:`loop_callees`), then
+the measures of a stand-in of the run (:func:`stand_in`: two samples and two heel strikes of the model in its start
+state). The loop's compile and the run's measures then load them from the cache (:func:`join` waits for the process
+before the run is measured). The process is forked before the model's start is settled, with a draft of the model
+(its types: the start's mode update, a compile, left out); this process compiles that update, then the loop's late
+callees until the right-hand side is in the cache, and only then the loop, which loads it. It does so only on a cold
+cache for the run's formulation and ground (a loop callee compiled rather than loaded) and when the process may use
+more than one core; on a warm cache the run starts no process. A fork, not a new interpreter: the process starts at
+once, with the model, rather than some 2.5 CPU s of imports later.
 
 A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`'s Python twin), whose
 compile is half the phase's integration (:func:`phase_integration`: DOP853 over the flow, its events and samples).
@@ -30,6 +31,7 @@ import signal
 from collections.abc import Callable
 from multiprocessing import get_context
 from multiprocessing.process import BaseProcess
+from multiprocessing.synchronize import Event
 
 import numpy as np
 from numba.core.dispatcher import Dispatcher
@@ -40,7 +42,6 @@ from biped_sim.integrate import blowup, dense, recorder, stepper
 from biped_sim.integrate.driver import STIFF_METHODS, Integration, explicit_loop, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
 from biped_sim.kernel import Kernel, compile_for, overload_implementation
-from biped_sim.measure.channels import contact_channels
 from biped_sim.measure.loops import rigid_loop
 from biped_sim.measure.steps import step_table
 from biped_sim.multibody import events
@@ -61,12 +62,14 @@ from biped_sim.rigid.tree_kernels import (
     tree_push,
 )
 from biped_sim.rigid.tree_layout import point
-from biped_sim.simulate import SpaceStart, prepare_model
+from biped_sim.simulate import SpaceStart, initial_state, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel
+from biped_sim.walkers.model import start_modes_deferred
 
 STAND_IN_SAMPLES = 2  # samples and heel strikes of the stand-in: a step between two strikes, a sample interval
+RHS_POLL_S = 0.05  # [s] how often a run waiting for the second process's right-hand side looks whether it died
 
 
 def stand_in(model: BuiltModel) -> Integration:
@@ -82,41 +85,46 @@ def stand_in(model: BuiltModel) -> Integration:
     return finish_integration(rec, 1.0)
 
 
-def loop_callees(config: Config, model: BuiltModel) -> tuple[tuple[Dispatcher, tuple[object, ...]], ...]:
-    """The explicit loop's callees with arguments of the types it calls them with, those its compile reaches last
-    first (none for a stiff method, which has no loop): the formulation's fall (the overload implementation its
-    ``system_fall`` compiles), then the loop's own kernels; the arguments come from the driver's constructor
+Compiles = tuple[tuple[Dispatcher, tuple[object, ...]], ...]  # kernels with arguments of the types callers pass
+
+
+def loop_callees(config: Config, model: BuiltModel) -> tuple[Compiles, Compiles]:
+    """The explicit loop's callees with arguments of the types it calls them with, as (the right-hand side's, the
+    rest), both empty for a stiff method (no loop); the arguments come from the driver's constructor
     (:func:`~biped_sim.integrate.driver.explicit_loop`).
 
-    Not the right-hand side: the loop's compile reaches it some 3 CPU s after its start, before a second process
-    started with it could have compiled it with the contact forces below it (about 6 CPU s)."""
+    The first: the formulation's right-hand side (the overload implementation its ``system_rhs`` compiles, with
+    the contact forces below it: the costliest callee, reached a few CPU s into the loop's compile) and the starting
+    step's norm, which the loop reaches right after it. The rest, those the loop's compile reaches last first: the
+    formulation's fall and the loop's fall check, the event update, the dense output, the recorder's."""
     if config.integrator.method in STIFF_METHODS:
-        return ()
+        return (), ()
     y, modes = np.array(model.y0, dtype=np.float64), np.array(model.modes0, dtype=np.float64)
     loop = explicit_loop(model.system, y, modes, config.integrator.method, make_recorder(len(y), len(modes), 1, 1, 0))
     system, work, sc, rec = loop.system, loop.work, loop.sc, loop.rec
-    return (
-        (overload_implementation(formulation_of(system).fall), (y, system)),
+    formulation = formulation_of(system)
+    rhs = (
+        (overload_implementation(formulation.rhs), (0.0, y, system, modes, work, sc.k[0])),
+        (stepper.rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
+    )
+    rest = (
+        (overload_implementation(formulation.fall), (y, system)),
         (blowup.fall, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, 1)),
         (events.system_is_leading, (y, system, 0)),
         (events.system_update_modes, (0.0, y, system, modes, loop.contact)),
         (dense.dense_eval, (loop.tab, 0.0, 0.0, y, sc, sc.y_new)),
         (dense.dense_coefficients, (loop.tab, 0.0, y, sc)),
-        (stepper.rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
         (recorder.has_room, (rec, len(modes))),
         (recorder.record_sample, (rec, 0.0, y, modes)),
     )
+    return rhs, rest
 
 
-def compile_loop_callees(config: Config, model: BuiltModel) -> None:
-    """Compile (and cache) the explicit loop's callees (:func:`loop_callees`), those it reaches last first.
-
-    The run's process compiles the loop (:func:`~biped_sim.integrate.explicit.advance`) while this one runs:
-    numba's front end first works over the loop's whole inlined body, then types it from its start, compiling
-    each callee at its first call, or loading it from the on-disk cache if another process has written it. The
-    late callees compiled here (the fall and its checks, the event update, the dense output) are in the cache by then.
-    """
-    for function, args in loop_callees(config, model):
+def compile_all(compiles: Compiles, until: Callable[[], bool] = lambda: False) -> None:
+    """Compile (and cache) each kernel for its arguments' types, in order, unless ``until()`` before it."""
+    for function, args in compiles:
+        if until():
+            return
         compile_for(function, args)
 
 
@@ -206,8 +214,7 @@ def _prepare_rigid(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     if compiled and available_cores() >= 2:
         process = _fork(_compile_phase_quietly, (cw,))
         rigid_walker(config)  # its legs checked alike: a ConfigError here ends the second process with this one
-        for function, args in step_callees(cw):
-            compile_for(function, args)
+        compile_all(step_callees(cw))
         for twin, args in measure_twins(cw):
             twin.entry_for(*args)
         join(process)
@@ -222,12 +229,16 @@ def measure_stand_in(config: Config, model: BuiltModel) -> None:
     _ = result.summary
 
 
-def _compile_quietly(config: Config, model: BuiltModel) -> None:
-    """The contact channels, :func:`compile_loop_callees`, :func:`measure_stand_in`, in the second process, which
-    exits without a word if it fails: the run then compiles them itself (and reports any error of its own)."""
+def _compile_quietly(config: Config, model: BuiltModel, rhs_ready: Event) -> None:
+    """In the second process: the loop's right-hand side (then ``rhs_ready`` is set), the loop's other callees, those
+    its compile reaches first first (the run's process takes them from the other end meanwhile), then
+    :func:`measure_stand_in`; it exits without a word if it fails: the run then compiles them itself (and reports
+    any error of its own)."""
     try:
-        contact_channels(model, stand_in(model))  # the contact forces: the loop's compile reaches them early
-        compile_loop_callees(config, model)
+        rhs, rest = loop_callees(config, model)
+        compile_all(rhs)
+        rhs_ready.set()
+        compile_all(rest[::-1])
         measure_stand_in(config, model)
     except Exception:  # the run measures for real and reports what went wrong
         raise SystemExit(1) from None
@@ -243,11 +254,39 @@ def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | S
     """
     if config.dynamics == "rigid" and not config.in_space:
         return _prepare_rigid(config), None
+    if config.dynamics == "rigid":
+        return prepare_model(config), None
+    return _prepare_compliant(config)
+
+
+def _cold_loop(model: BuiltModel) -> bool:
+    """Whether the compile cache lacks ``model``'s loop (for its formulation and ground): one of the loop's small
+    callees, :func:`~biped_sim.multibody.events.system_is_leading` (with the feet's kinematics below it, which the
+    start's mode update and the right-hand side both call), compiled rather than loaded."""
     with recording_compilations() as compiled:
-        model = prepare_model(config)
-    if not compiled or not isinstance(model, BuiltModel) or available_cores() < 2:
-        return model, None
-    return model, _fork(_compile_quietly, (config, model))
+        compile_for(events.system_is_leading, (model.y0, model.system, 0))
+    return bool(compiled)
+
+
+def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
+    """A compliant run's :func:`~biped_sim.simulate.prepare_model`, and the second process of a cold cache
+    (:func:`_cold_loop`) on more than one core. The process is forked with a draft of the model (every check and
+    the run's types, the start's mode update left out: :func:`~biped_sim.walkers.model.start_modes_deferred`) and
+    compiles the loop's right-hand side first; meanwhile this process builds the model (compiling that update),
+    then compiles the loop's late callees (:func:`loop_callees`) until the right-hand side is in the cache (or
+    waits for it), so that its loop's compile, next, loads it."""
+    initial = initial_state(config)
+    with start_modes_deferred():
+        draft = prepare_model(config, initial=initial)
+    if not isinstance(draft, BuiltModel) or not _cold_loop(draft) or available_cores() < 2:
+        return prepare_model(config, initial=initial), None
+    rhs_ready = get_context("fork").Event()
+    process = _fork(_compile_quietly, (config, draft, rhs_ready))
+    model = prepare_model(config, initial=initial)
+    compile_all(loop_callees(config, draft)[1], until=lambda: rhs_ready.is_set() or not process.is_alive())
+    while process.is_alive() and not rhs_ready.wait(RHS_POLL_S):
+        pass
+    return model, process
 
 
 def join(process: BaseProcess | None) -> None:

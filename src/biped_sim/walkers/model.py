@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -18,6 +21,21 @@ from biped_sim.multibody.minimal import MinimalSystem, tree_system
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import SpatialSystem
 from biped_sim.multibody.tree import tree_state
+
+_START_MODES_DEFERRED = ContextVar("start_modes_deferred", default=False)
+
+
+@contextmanager
+def start_modes_deferred() -> Iterator[None]:
+    """Inside the block, :func:`standing_start` leaves out the start's mode update, so that a build compiles
+    nothing: a model with the run's types, shapes and checks, whose only use is a compile's argument types (a
+    first run's second process, :mod:`biped_sim.simulate.aside`, which starts before the update's compile), never
+    a model to integrate."""
+    token = _START_MODES_DEFERRED.set(True)
+    try:
+        yield
+    finally:
+        _START_MODES_DEFERRED.reset(token)
 
 
 @dataclass
@@ -149,7 +167,8 @@ def standing_start(
         modes0[foot, ARMED] = 1.0
         modes0[foot, TOUCHING] = 1.0
         modes0[foot, IMPACT_SPEED] = impact_speed
-    system_update_modes(0.0, y0, system, modes0, contact_buffers(system))
+    if not _START_MODES_DEFERRED.get():
+        system_update_modes(0.0, y0, system, modes0, contact_buffers(system))
     return y0, modes0
 
 
