@@ -24,6 +24,7 @@ from biped_sim.studies.fit.parameters import parse_parameter
 from biped_sim.studies.fit.problem import FitProblem
 from biped_sim.studies.fit.stats import summarize
 from biped_sim.studies.fit.synthetic import synthetic_reference_data
+from biped_sim.walkers.space_geometry import TO_SPATIAL
 from biped_sim.walkers.space_walker import BODY_NAMES
 from tests.conftest import invoke, one_line_error
 from tests.test_space_compliant import GAIT, RIGID_PERIOD
@@ -74,6 +75,11 @@ def test_the_toys_run_walks_its_limit_cycle_and_writes_its_steps(tmp_path: Path)
     np.testing.assert_array_equal(run.steps["bank"], frame["bank"].to_numpy())
     drawn = space_poses(run)  # the 3D drawing's legs: the hinge's midpoint where the run put the hip
     np.testing.assert_allclose(drawn.hip, run.hip, atol=1e-12)
+    first = run.time < result.heel_strike_times[0]  # the left foot on the ground, drawn down to its contact point
+    left = drawn.feet[first, 0]
+    lowest = left[np.arange(len(left)), np.nanargmin(left[:, :, 1], axis=1)]
+    contact = np.column_stack([run.state[first, 8:10], np.zeros(len(left))]) @ TO_SPATIAL.T
+    np.testing.assert_allclose(lowest, contact, rtol=0, atol=1e-15)
     at_strikes = np.searchsorted(run.time, result.heel_strike_times)  # the legs' attitudes, as a spatial run's
     landing = run.leg_angles()[at_strikes, frame["foot"].to_numpy()]
     assert run.body_names == BODY_NAMES == ["left", "right"]

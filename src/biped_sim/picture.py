@@ -8,7 +8,7 @@ each joint stop as a square at its joint, filled when the joint is at or past it
 world frame: the slope frame turned by the slope angle, so that the ground visibly descends. A walker in space
 (:class:`SpaceWalkerPicture`) is drawn in matplotlib's 3D axes (x downhill, y to the walker's left, z up) and, on
 2D axes beside them, in its sagittal view: each leg from the hinge to its hip point, its centre of mass and its
-foot centre, each foot its circle (:mod:`biped_sim.measure.space_pose`).
+foot centre, each foot as the shape its contact rolls on (:mod:`biped_sim.measure.space_pose`).
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ class SpaceWalkerPicture:
         self.lines2d = [sagittal.plot([], [], color=f"C{k % 2}", **style)[0] for k in range(4)] if sagittal else []
 
     def place(self, poses: SpacePoses, i: int) -> None:
-        """Every artist at sample ``i`` of ``poses``: each leg's polyline, then each foot's circle."""
+        """Every artist at sample ``i`` of ``poses``: each leg's polyline, then each foot's curves."""
         shapes = [poses.legs[i, 0], poses.legs[i, 1], poses.feet[i, 0], poses.feet[i, 1]]
         for k, points in enumerate(shapes):
             world = space_world(self.slope, points)
@@ -136,7 +136,7 @@ def draw_space_walker(sagittal: Axes, ax3d: Axes, run: RunData, samples: np.ndar
     for i, alpha in zip(samples, np.linspace(0.3, 1.0, len(samples)), strict=True):
         SpaceWalkerPicture(ax3d, sagittal, slope, float(alpha), 1.2).place(poses, int(i))
     points = np.concatenate([poses.legs[samples].reshape(-1, 3), poses.feet[samples].reshape(-1, 3)])
-    low, high = points.min(axis=0), points.max(axis=0)
+    low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)  # NaN: the break between two curves of a foot
     reach = float(np.max(high - low))
     draw_ground(sagittal, run.config, float(low[0]) - 0.2 * reach, float(high[0]) + 0.2 * reach, 0.1 * reach)
     draw_space_ground(ax3d, slope, (low[0] - 0.2 * reach, high[0] + 0.2 * reach), (low[2] - 0.2 * reach,
@@ -147,7 +147,7 @@ def draw_space_walker(sagittal: Axes, ax3d: Axes, run: RunData, samples: np.ndar
     sagittal.autoscale_view()
     world = space_world(slope, points)
     for axis, k in zip("xyz", range(3), strict=True):
-        centre = 0.5 * (world[:, k].min() + world[:, k].max())
+        centre = 0.5 * (np.nanmin(world[:, k]) + np.nanmax(world[:, k]))
         getattr(ax3d, f"set_{axis}lim")(centre - 0.6 * reach, centre + 0.6 * reach)
     ax3d.set_box_aspect((1.0, 1.0, 1.0))  # type: ignore[arg-type]
     ax3d.set_axis_off()

@@ -2,12 +2,13 @@
 3D, for drawing it (:mod:`biped_sim.picture`).
 
 Each leg is drawn as the polyline from the hinge's midpoint to its hip point, out to its centre of mass and back,
-and down to its foot's centre, and
-its foot as a circle: a ring in its plane, a sphere's great circle in the leg's sagittal (x-z) plane, a point foot
-none. The points come from the run's state (each leg's centre of mass and Euler parameters, the spatial
-formulation's bodies) and the leg geometry of its description (:func:`~biped_sim.walkers.space_geometry.leg_geometry`,
-the hip mass folded into the left leg as the compliant builder does), in the slope frame (x downhill, y the
-slope's normal, z = x cross y: the walker's right).
+and down to its foot's centre, and its foot as the shape the contact rolls on (:func:`foot_outline`), each curve
+through the foot's lowest point: a ring as itself; a torus as its outer equator and its tube's section at the
+bottom; a sphere or an ellipsoid as its three principal sections and its outline seen from the side (along the
+slope's lateral axis, as the sagittal view sees it); a point foot as its centre. The points come from the run's state
+(each leg's centre of mass and Euler parameters, the spatial formulation's bodies) and the leg geometry of its
+description (:func:`~biped_sim.walkers.space_geometry.leg_geometry`, the hip mass folded into the left leg as the
+compliant builder does), in the slope frame (x downhill, y the slope's normal, z = x cross y: the walker's right).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from biped_sim.io.trajectory import RunData
 from biped_sim.rigid.space_cycle import space_walker_model
 from biped_sim.rigid.space_model import foot_bottom
 from biped_sim.walkers.space_geometry import (
+    EZ,
     TO_SPATIAL,
     LegGeometry,
     attitude,
@@ -29,16 +31,18 @@ from biped_sim.walkers.space_geometry import (
     with_point_mass,
 )
 
-CIRCLE_POINTS = 33
+CIRCLE_POINTS = 33  # per closed curve of a foot, its first point where the curve is lowest
+EY = np.array([0.0, 1.0, 0.0])  # the rigid slope frame's lateral axis: the sagittal view looks along it
+ANGLES = np.linspace(0.0, 2.0 * np.pi, CIRCLE_POINTS)
 
 
 @dataclass(frozen=True)
 class SpacePoses:
-    """A run's 3D poses in the slope frame [m]: per sample and leg, its polyline and its foot's circle."""
+    """A run's 3D poses in the slope frame [m]: per sample and leg, its polyline and its foot's outline."""
 
     time: np.ndarray  # (ns,)
     legs: np.ndarray  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot centre
-    feet: np.ndarray  # (ns, 2, CIRCLE_POINTS, 3): the foot's circle (all at its centre for a point foot)
+    feet: np.ndarray  # (ns, 2, k, 3): the foot's closed curves of CIRCLE_POINTS, a row of NaN between two (k by shape)
     hip: np.ndarray  # (ns, 3): the hinge's midpoint
 
 
@@ -53,14 +57,73 @@ def rotation_matrices(e: np.ndarray) -> np.ndarray:
     return identity + 2.0 * v[:, :, None] * v[:, None, :] + 2.0 * e0[:, None, None] * cross
 
 
-def foot_circle(leg: LegGeometry) -> np.ndarray:
-    """(CIRCLE_POINTS, 3) the foot's circle in the walker frame: in a ring's plane, else in the leg's x-z plane."""
-    normal = np.array([0.0, 1.0, 0.0]) if leg.foot_normal is None else leg.foot_normal
-    u = np.cross(normal, [0.0, 0.0, 1.0])
-    u = u / np.linalg.norm(u) if np.linalg.norm(u) > 1e-12 else np.array([1.0, 0.0, 0.0])
-    w = np.cross(normal, u)
-    angle = np.linspace(0.0, 2.0 * np.pi, CIRCLE_POINTS)
-    return leg.foot_centre + leg.foot_radius * (np.outer(np.cos(angle), u) + np.outer(np.sin(angle), w))
+def _unit(v: np.ndarray) -> np.ndarray:
+    """(ns, 3) rows of ``v`` scaled to length 1."""
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _ellipse(centre: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(ns, CIRCLE_POINTS, 3): centre + cos(s) a + sin(s) b per sample (a, b: (ns, 3) or one (3,) for all), from
+    s = 0, the point centre + a."""
+    c, s = np.cos(ANGLES)[None, :, None], np.sin(ANGLES)[None, :, None]
+    return centre[:, None, :] + c * a[..., None, :] + s * b[..., None, :]
+
+
+def _joined(curves: list[np.ndarray]) -> np.ndarray:
+    """(ns, k, 3) closed curves one after the other, a row of NaN between two (matplotlib breaks the line there)."""
+    gap = np.full((len(curves[0]), 1, 3), np.nan)
+    return np.concatenate([part for curve in curves for part in (gap, curve)][1:], axis=1)
+
+
+def foot_outline(leg: LegGeometry, rotation: np.ndarray) -> np.ndarray:
+    """(ns, k, 3) the foot drawn from the walker frame's origin, its leg turned by ``rotation`` (ns, 3, 3: walker
+    frame -> rigid slope frame, z the slope's normal), from the ``LegGeometry`` the contact rolls on
+    (:func:`~biped_sim.walkers.space_geometry.lowest_point`): every curve but a torus's equator starts at the foot's
+    lowest point. A ring: itself; a torus: its outer equator (radius + tube, in its plane: its outline seen along
+    its axis) and its tube's section at the bottom; a sphere or an ellipsoid: :func:`_quadric_outline`; a point: its
+    centre."""
+    centre = rotation @ leg.foot_centre
+    quadric = _quadric(leg)
+    if quadric is not None:
+        return _quadric_outline(quadric, rotation, centre)
+    if leg.foot_normal is None:
+        return np.repeat(centre[:, None, :], CIRCLE_POINTS, axis=1)
+    n = rotation @ leg.foot_normal
+    down = _unit(-(EZ - n[:, 2:] * n))  # in the plane, most against the normal: toward the lowest point
+    along = np.cross(n, down)
+    if leg.foot_tube == 0.0:
+        return _ellipse(centre, leg.foot_radius * down, leg.foot_radius * along)
+    outer = leg.foot_radius + leg.foot_tube
+    section = _ellipse(centre + leg.foot_radius * down, -leg.foot_tube * EZ, leg.foot_tube * np.cross(along, -EZ))
+    return _joined([_ellipse(centre, outer * down, outer * along), section])
+
+
+def _quadric(leg: LegGeometry) -> np.ndarray | None:
+    """The quadric Q of a foot whose points are centre + Q^(1/2) u, |u| = 1: an ellipsoid's (its ``foot_quadric``, as
+    :func:`~biped_sim.walkers.space_geometry.lowest_point` tells it), a sphere's radius^2 I; None for the others."""
+    if leg.foot_quadric[2, 2] > 0.0:
+        return leg.foot_quadric
+    return leg.foot_radius**2 * np.eye(3) if leg.foot_radius > 0.0 and leg.foot_normal is None else None
+
+
+def _quadric_outline(quadric: np.ndarray, rotation: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """A sphere's or an ellipsoid's curves: its three principal sections (the ellipses through two of its semi-axes,
+    turned with the leg) and its outline seen along the lateral axis EY, the ellipse of its points whose normal is
+    across EY, starting at its lowest point. Its points are centre + A u, |u| = 1, A = Q^(1/2) (the quadric Q's
+    semi-axes the square roots of its eigenvalues: :func:`_quadric`); the normal at A u is along A^-1 u, so
+    the outline is A u for u across A^-1 EY, and the lowest point is A u at u = -A z / |A z| (there the normal is -z,
+    across EY)."""
+    eigenvalues, axes = np.linalg.eigh(quadric)
+    semi = np.sqrt(eigenvalues)
+    turned = rotation @ axes  # (ns, 3, 3): the principal axes, columns
+    half = turned * semi @ turned.transpose(0, 2, 1)  # A, turned with the leg
+    inverse = turned / semi @ turned.transpose(0, 2, 1)
+    low = -_unit(half @ EZ)
+    across = _unit(np.cross(inverse @ EY, low))
+    pairs = ((0, 1), (1, 2), (2, 0))
+    sections = [_ellipse(centre, semi[i] * turned[:, :, i], semi[j] * turned[:, :, j]) for i, j in pairs]
+    outline = _ellipse(centre, np.einsum("sij,sj->si", half, low), np.einsum("sij,sj->si", half, across))
+    return _joined([outline, *sections])
 
 
 def space_poses(run: RunData) -> SpacePoses:
@@ -70,27 +133,37 @@ def space_poses(run: RunData) -> SpacePoses:
     if run.dynamics == "rigid":
         return rigid_space_poses(run, legs)
     names = run.state_names
-    polylines, circles = [], []
-    for leg, body, side in zip(legs, ("left", "right"), (1.0, -1.0), strict=True):
+    placed = []
+    for leg, body in zip(legs, ("left", "right"), strict=True):
         columns = [names.index(f"{c}_{body}") for c in ("x", "y", "z", "e0", "e1", "e2", "e3")]
-        centre, rotation = run.state[:, columns[:3]], rotation_matrices(run.state[:, columns[3:]])
-        body_points = (_walker_points(space, leg, side) - leg.com) @ TO_SPATIAL.T
-        points = centre[:, None, :] + np.einsum("sij,kj->ski", rotation, body_points)
-        polylines.append(points[:, :5])
-        circles.append(points[:, 5:])
-    return _poses(run.time, polylines, circles)
+        rotation = TO_SPATIAL.T @ rotation_matrices(run.state[:, columns[3:]]) @ TO_SPATIAL  # walker -> rigid frame
+        origin = run.state[:, columns[:3]] @ TO_SPATIAL - rotation @ leg.com
+        placed.append((origin, rotation))
+    return _poses(run.time, space, legs, placed)
 
 
 def _walker_points(space: SpaceDescription, leg: LegGeometry, side: float) -> np.ndarray:
-    """A leg's drawn points in the walker frame: the hinge's midpoint, its hip point (the left leg's at +y), centre
-    of mass, hip point again, foot centre, then its foot's circle."""
+    """A leg's polyline in the walker frame: the hinge's midpoint, its hip point (the left leg's at +y), centre of
+    mass, hip point again, foot centre."""
     hip_point = np.array([0.0, 0.5 * side * space.hip_width, 0.0])
-    return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, leg.foot_centre, foot_circle(leg)])
+    return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, leg.foot_centre])
 
 
-def _poses(time: np.ndarray, polylines: list[np.ndarray], circles: list[np.ndarray]) -> SpacePoses:
+def _poses(
+    time: np.ndarray,
+    space: SpaceDescription,
+    legs: tuple[LegGeometry, LegGeometry],
+    placed: list[tuple[np.ndarray, np.ndarray]],
+) -> SpacePoses:
+    """The poses of both legs, each ``placed`` at its walker frame's origin (ns, 3) and turned by its rotation
+    (ns, 3, 3) in the rigid slope frame, in the spatial formulation's slope frame."""
+    polylines, feet = [], []
+    for k, (leg, (origin, rotation)) in enumerate(zip(legs, placed, strict=True)):
+        body = _walker_points(space, leg, 1.0 - 2.0 * k)
+        polylines.append((origin[:, None, :] + np.einsum("sij,kj->ski", rotation, body)) @ TO_SPATIAL.T)
+        feet.append((origin[:, None, :] + foot_outline(leg, rotation)) @ TO_SPATIAL.T)
     legs_3d = np.stack(polylines, axis=1)
-    return SpacePoses(time, legs_3d, np.stack(circles, axis=1), legs_3d[:, 0, 0])
+    return SpacePoses(time, legs_3d, np.stack(feet, axis=1), legs_3d[:, 0, 0])
 
 
 def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> SpacePoses:
@@ -102,12 +175,9 @@ def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> Sp
     stance = np.zeros(len(run.time), dtype=int)
     for at, foot in zip(run.steps["strike_time"], run.steps["foot"], strict=True):
         stance[run.time >= at] = int(foot)
-    points = {0: [], 1: []}
-    for x, leg in zip(run.state, stance, strict=True):
+    hinge, turns = np.zeros((len(run.time), 3)), np.zeros((2, len(run.time), 3, 3))
+    for i, (x, leg) in enumerate(zip(run.state, stance, strict=True)):
         rotation = attitude(x[0], x[1], x[2])
-        turns = {leg: rotation, 1 - leg: rotation @ rot_y(x[3])}
-        hinge = np.array([x[8], x[9], 0.0]) - foot_bottom(feet[leg], rotation)[0]
-        for k in (0, 1):
-            points[k].append(hinge + _walker_points(space, legs[k], 1.0 - 2.0 * k) @ turns[k].T)
-    world = [np.array(points[k]) @ TO_SPATIAL.T for k in (0, 1)]
-    return _poses(run.time, [w[:, :5] for w in world], [w[:, 5:] for w in world])
+        turns[leg, i], turns[1 - leg, i] = rotation, rotation @ rot_y(x[3])
+        hinge[i] = np.array([x[8], x[9], 0.0]) - foot_bottom(feet[leg], rotation)[0]
+    return _poses(run.time, space, legs, [(hinge, turns[0]), (hinge, turns[1])])
