@@ -4,6 +4,7 @@ measures, and the process starts only on a cold compile cache."""
 from __future__ import annotations
 
 import gc
+import importlib
 import json
 import os
 import signal
@@ -17,7 +18,8 @@ import numba
 import pytest
 from numba.core.dispatcher import Dispatcher
 
-from biped_sim.config import Config, derive, load_config
+from biped_sim.config import Config, InitialState, derive, load_config
+from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.contact.response import ARMED
 from biped_sim.errors import ConfigError
 from biped_sim.measure.steps import step_table
@@ -39,6 +41,9 @@ def _compiled_signatures() -> set[tuple[str, str]]:
         if issubclass(type(d), Dispatcher)  # not isinstance: a dead weak proxy among the objects raises on it
         for signature in d.signatures
     }
+
+
+simulate_module = importlib.import_module("biped_sim.simulate")  # the package, not the function it exports
 
 
 def _with_knee_stops() -> Config:
@@ -89,6 +94,30 @@ def test_a_draft_model_has_the_run_s_types_and_start(name: str) -> None:
         numba.typeof(x) for x in (model.y0, model.modes0, model.system)
     ]
     assert (draft.y0 == model.y0).all() and draft.modes0.shape == model.modes0.shape
+
+
+@pytest.mark.parametrize("name", ["round_foot_walker", "space/tinkertoy_compliant"])
+def test_a_draft_of_a_limit_cycle_start_solves_none_and_has_the_run_s_types(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    config = derive(load_config(CONFIGS / f"{name}.yaml"), {"simulation.initial": "rigid_limit_cycle"})
+    given = prepare_model(derive(config, {"simulation.initial": _start(name)}))  # the walker, its start given
+    monkeypatch.setattr(simulate_module, "rigid_limit_cycle_initial", _no_limit_cycle)
+    monkeypatch.setattr(importlib.import_module("biped_sim.simulate.space_rigid"), "space_limit_cycle", _no_limit_cycle)
+    draft = aside._draft(config)
+    assert isinstance(draft, BuiltModel) and isinstance(given, BuiltModel)
+    assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
+        numba.typeof(x) for x in (given.y0, given.modes0, given.system)
+    ]
+
+
+def _no_limit_cycle(config: Config) -> None:
+    raise AssertionError("a draft solved a limit cycle")
+
+
+def _start(name: str) -> dict[str, float]:
+    """A given start of the config ``name`` (the planar defaults, or a walker in space upright)."""
+    return InitialState().model_dump() if name == "round_foot_walker" else dict.fromkeys(SPACE_STATE_KEYS, 0.0)
 
 
 def test_a_draft_leaves_out_only_the_start_s_mode_update_and_only_inside_its_block() -> None:

@@ -68,13 +68,9 @@ def initial_state(config: Config) -> InitialState | dict[str, float]:
     return initial
 
 
-def prepare_model(
-    config: Config, *, initial: InitialState | dict[str, float] | None = None
-) -> BuiltModel | RigidStart | SpaceStart:
+def prepare_model(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
-    for ``dynamics: rigid`` the rigid walker (a walker in space: its model) and its resolved initial state.
-
-    ``initial``: a compliant model's start when the caller has resolved it (:func:`initial_state`), not again."""
+    for ``dynamics: rigid`` the rigid walker (a walker in space: its model) and its resolved initial state."""
     if config.dynamics == "rigid" and config.in_space:
         space = space_start(config)
         check_run_size(config, 2 * len(space.state) + 8)  # state, world state, hip, energy terms
@@ -83,7 +79,7 @@ def prepare_model(
         start = rigid_start(config)
         check_run_size(config, 2 * len(start.state) + 4)  # state, hip, energy terms
         return start
-    model = build_model(config, initial if initial is not None else initial_state(config))
+    model = build_model(config, initial_state(config))
     formulation = formulation_of(model.system)
     if config.simulation.pushes and formulation.hip_impulse is None:
         raise ConfigError("simulation.pushes", f"the {formulation.name} formulation has no push model")

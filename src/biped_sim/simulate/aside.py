@@ -37,7 +37,9 @@ import numpy as np
 from numba.core.dispatcher import Dispatcher
 
 from biped_sim._compiled_cache import recording_compilations
-from biped_sim.config import Config
+from biped_sim.config import Config, InitialState, derive
+from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.errors import ConfigError
 from biped_sim.integrate import blowup, dense, recorder, stepper
 from biped_sim.integrate.driver import STIFF_METHODS, Integration, explicit_loop, finish_integration
 from biped_sim.integrate.recorder import COMPLETED, make_recorder
@@ -62,7 +64,7 @@ from biped_sim.rigid.tree_kernels import (
     tree_push,
 )
 from biped_sim.rigid.tree_layout import point
-from biped_sim.simulate import SpaceStart, initial_state, prepare_model
+from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel
@@ -270,23 +272,37 @@ def _cold_loop(model: BuiltModel) -> bool:
 
 def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
     """A compliant run's :func:`~biped_sim.simulate.prepare_model`, and the second process of a cold cache
-    (:func:`_cold_loop`) on more than one core. The process is forked with a draft of the model (every check and
-    the run's types, the start's mode update left out: :func:`~biped_sim.walkers.model.start_modes_deferred`) and
-    compiles the loop's right-hand side first; meanwhile this process builds the model (compiling that update),
-    then compiles the loop's late callees (:func:`loop_callees`) until the right-hand side is in the cache (or
-    waits for it), so that its loop's compile, next, loads it."""
-    initial = initial_state(config)
-    with start_modes_deferred():
-        draft = prepare_model(config, initial=initial)
-    if not isinstance(draft, BuiltModel) or not _cold_loop(draft) or available_cores() < 2:
-        return prepare_model(config, initial=initial), None
+    (:func:`_cold_loop`) on more than one core. The process is forked with a draft of the model (:func:`_draft`)
+    and compiles the loop's right-hand side first; meanwhile this process resolves the start (a limit cycle: the
+    rigid step map compiled), builds the model (compiling the start's mode update), then compiles the loop's late
+    callees (:func:`loop_callees`) until the right-hand side is in the cache (or waits for it), so that its loop's
+    compile, next, loads it."""
+    draft = _draft(config)
+    if draft is None or not _cold_loop(draft) or available_cores() < 2:
+        return prepare_model(config), None
     rhs_ready = get_context("fork").Event()
     process = _fork(_compile_quietly, (config, draft, rhs_ready))
-    model = prepare_model(config, initial=initial)
+    model = prepare_model(config)
     compile_all(loop_callees(config, draft)[1], until=lambda: rhs_ready.is_set() or not process.is_alive())
     while process.is_alive() and not rhs_ready.wait(RHS_POLL_S):
         pass
     return model, process
+
+
+def _draft(config: Config) -> BuiltModel | None:
+    """A model of ``config`` whose build compiles nothing, only for its types: every check of the build, the start's
+    mode update left out (:func:`~biped_sim.walkers.model.start_modes_deferred`), and in place of a
+    ``rigid_limit_cycle`` start (a Newton solve on the rigid step map, compiled) a stand-in with the gait's keys (a
+    walker in space upright at rest, a planar walker's default start); None when the stand-in does not build."""
+    if config.simulation.initial == "rigid_limit_cycle":
+        stand_in = dict.fromkeys(SPACE_STATE_KEYS, 0.0) if config.in_space else InitialState().model_dump()
+        config = derive(config, {"simulation.initial": stand_in})
+    try:
+        with start_modes_deferred():
+            draft = prepare_model(config)
+    except ConfigError:
+        return None  # the stand-in's own: the run's build reports the config's
+    return draft if isinstance(draft, BuiltModel) else None
 
 
 def join(process: BaseProcess | None) -> None:
