@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numba
+import numpy as np
 import pytest
 from numba.core.dispatcher import Dispatcher
 
@@ -109,6 +110,41 @@ def test_a_draft_of_a_limit_cycle_start_solves_none_and_has_the_run_s_types(
     assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
         numba.typeof(x) for x in (given.y0, given.modes0, given.system)
     ]
+
+
+COMPLIANT_CONFIGS = (
+    "round_foot_walker", "compass_goswami", "torso_walker", "kneed_walker_compliant", "four_legged_walker",
+)  # fmt: skip
+VARIATIONS = (
+    ["formulation.kind=minimal"],
+    ["formulation.kind=spatial"],
+    ["ground.profile={kind: steps, steps: [{at: 0.45, height: -0.005}]}"],
+    ["simulation.initial=rigid_limit_cycle"],
+    ["integrator.method=rk4", "integrator.dt=1e-4"],
+    ["contact.model=hunt_crossley", "friction.model=lugre"],
+)
+
+
+@pytest.mark.slow
+def test_drafts_of_random_variations_of_the_bundled_configs_have_their_runs_types() -> None:
+    rng = np.random.default_rng(20261204)  # cases drawn, not chosen: a config and up to two variations
+    checked, refused = 0, 0
+    for _ in range(12):
+        name = COMPLIANT_CONFIGS[rng.integers(len(COMPLIANT_CONFIGS))]
+        picked = rng.choice(len(VARIATIONS), size=rng.integers(3), replace=False)
+        try:
+            config = load_config(CONFIGS / f"{name}.yaml", [o for k in picked for o in VARIATIONS[k]])
+            model = prepare_model(config)
+        except ConfigError:  # a variation the walker does not take (a formulation it has no model in)
+            refused += 1
+            continue
+        draft = aside._draft(config)
+        assert isinstance(draft, BuiltModel) and isinstance(model, BuiltModel), (name, picked)
+        assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
+            numba.typeof(x) for x in (model.y0, model.modes0, model.system)
+        ], (name, picked)
+        checked += 1
+    assert checked >= 8, refused
 
 
 def _no_limit_cycle(config: Config) -> None:

@@ -28,9 +28,11 @@ from biped_sim.rigid.tree_kernels import (
     tree_rhs,
 )
 from biped_sim.rigid.tree_layout import point
+from biped_sim.simulate import initial_state, prepare_model
 from biped_sim.studies.basin import CONVERGED, BasinSpec, map_basin, parse_axis
 from biped_sim.studies.continuation import continue_cycle, flip_margin
 from biped_sim.studies.robustness import gait_start, largest_disturbance, trial
+from biped_sim.walkers import BuiltModel, describe
 
 from .conftest import CONFIGS
 
@@ -278,3 +280,12 @@ def test_robustness_finds_the_kneed_walkers_largest_push() -> None:
     survived, failed = largest_disturbance(gait, "push", 1.0)
     assert 0.0 < survived < (failed if failed is not None else math.inf)
     assert trial(gait, "push", survived).survived and not trial(gait, "push", failed or 10.0).survived
+
+
+def test_the_compliant_kneed_walker_starts_on_its_rigid_limit_cycle() -> None:
+    config = derive(load_config(CONFIGS / "kneed_walker_compliant.yaml"), {"simulation.initial": "rigid_limit_cycle"})
+    start = initial_state(config)
+    assert isinstance(start, dict) and set(start) == set(describe(config).state_keys())  # a kneed walker's keys
+    assert start == rigid_limit_cycle(config).fixed_point
+    model = prepare_model(config)
+    assert isinstance(model, BuiltModel) and np.isfinite(model.y0).all()

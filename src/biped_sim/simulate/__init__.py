@@ -59,12 +59,14 @@ def study_formulation(config: Config) -> str:
 
 def initial_state(config: Config) -> InitialState | dict[str, float]:
     """The compliant run's initial leg state: as configured, or the rigid model's limit cycle (a walker in space:
-    its own rigid model's post-strike fixed point)."""
+    its own rigid model's post-strike fixed point), keyed by the walker's state keys (a kneed walker's or a torso's
+    too: an :class:`InitialState` holds a compass's only)."""
     initial = config.simulation.initial
     if config.in_space:
         return space_initial(config)  # type: ignore[return-value]
     if initial == "rigid_limit_cycle":
-        return InitialState(**rigid_limit_cycle_initial(config))
+        point = rigid_limit_cycle_initial(config)
+        return InitialState(**point) if set(point) == set(InitialState.model_fields) else point
     return initial
 
 

@@ -37,7 +37,7 @@ import numpy as np
 from numba.core.dispatcher import Dispatcher
 
 from biped_sim._compiled_cache import recording_compilations
-from biped_sim.config import Config, InitialState, derive
+from biped_sim.config import Config, derive
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
 from biped_sim.integrate import blowup, dense, recorder, stepper
@@ -67,7 +67,7 @@ from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
 from biped_sim.simulate.warmup import available_cores
-from biped_sim.walkers import BuiltModel
+from biped_sim.walkers import BuiltModel, describe
 from biped_sim.walkers.model import start_modes_deferred
 
 STAND_IN_SAMPLES = 2  # samples and heel strikes of the stand-in: a step between two strikes, a sample interval
@@ -292,11 +292,11 @@ def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceS
 def _draft(config: Config) -> BuiltModel | None:
     """A model of ``config`` whose build compiles nothing, only for its types: every check of the build, the start's
     mode update left out (:func:`~biped_sim.walkers.model.start_modes_deferred`), and in place of a
-    ``rigid_limit_cycle`` start (a Newton solve on the rigid step map, compiled) a stand-in with the gait's keys (a
-    walker in space upright at rest, a planar walker's default start); None when the stand-in does not build."""
+    ``rigid_limit_cycle`` start (a Newton solve on the rigid step map, compiled) a stand-in with the gait's keys, the
+    walker upright at rest; None when the stand-in does not build."""
     if config.simulation.initial == "rigid_limit_cycle":
-        stand_in = dict.fromkeys(SPACE_STATE_KEYS, 0.0) if config.in_space else InitialState().model_dump()
-        config = derive(config, {"simulation.initial": stand_in})
+        keys = SPACE_STATE_KEYS if config.in_space else describe(config).state_keys()
+        config = derive(config, {"simulation.initial": dict.fromkeys(keys, 0.0)})
     try:
         with start_modes_deferred():
             draft = prepare_model(config)
