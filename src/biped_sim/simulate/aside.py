@@ -63,6 +63,8 @@ from biped_sim.rigid.tree_kernels import (
 from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
+from biped_sim.simulate.space_aside import clearance_twin, events_share, first_callee, flow_share
+from biped_sim.simulate.space_rigid import check_space_run_size
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel
 
@@ -164,11 +166,12 @@ def measure_twins(cw: CompiledWalker) -> tuple[tuple[Kernel, tuple[object, ...]]
     )
 
 
-def _compile_phase_quietly(cw: CompiledWalker) -> None:
-    """:func:`phase_integration` compiled in the second process of a rigid run, which exits without a word if it
-    fails: the run then compiles it itself (and reports any error of its own)."""
+def _compile_each_quietly(callees: tuple[tuple[Dispatcher, tuple[object, ...]], ...]) -> None:
+    """Each of ``callees`` compiled for its arguments' types in the second process of a rigid run, which exits
+    without a word if one fails: the run then compiles it itself (and reports any error of its own)."""
     try:
-        compile_for(*phase_integration(cw))
+        for function, args in callees:
+            compile_for(function, args)
     except Exception:  # the run compiles it for real and reports what went wrong
         raise SystemExit(1) from None
 
@@ -204,12 +207,31 @@ def _prepare_rigid(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     with recording_compilations() as compiled:
         compile_for(begin_step, (cw.params,))  # the step's first callee: loaded on a warm cache
     if compiled and available_cores() >= 2:
-        process = _fork(_compile_phase_quietly, (cw,))
+        process = _fork(_compile_each_quietly, ((phase_integration(cw),),))
         rigid_walker(config)  # its legs checked alike: a ConfigError here ends the second process with this one
         for function, args in step_callees(cw):
             compile_for(function, args)
         for twin, args in measure_twins(cw):
             twin.entry_for(*args)
+        join(process)
+    return prepare_model(config)
+
+
+def _prepare_space(config: Config) -> BuiltModel | RigidStart | SpaceStart:
+    """A rigid run in space's :func:`~biped_sim.simulate.prepare_model` (the limit cycle's search compiles the stance
+    phase). On a cold cache (the phase's first callee compiled, :func:`.space_aside.first_callee`) and more than one
+    core, a second process compiles the flow's tree (:func:`.space_aside.flow_share`) while this one checks the run's
+    size and compiles the events' tree (:func:`.space_aside.events_share`) and the clearance's twin; the phase is
+    compiled once that process has ended (it then finds both trees in the cache)."""
+    with recording_compilations() as compiled:
+        compile_for(*first_callee())
+    if compiled and available_cores() >= 2:
+        process = _fork(_compile_each_quietly, (flow_share(),))
+        check_space_run_size(config)  # a ConfigError here ends the second process with this one
+        for function, args in events_share():
+            compile_for(function, args)
+        twin, args = clearance_twin()
+        twin.entry_for(*args)
         join(process)
     return prepare_model(config)
 
@@ -241,6 +263,8 @@ def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | S
 
     The process ignores Ctrl-C (the run's own handling reports it) and ends with this one (a daemon).
     """
+    if config.dynamics == "rigid" and config.in_space:
+        return _prepare_space(config), None
     if config.dynamics == "rigid" and not config.in_space:
         return _prepare_rigid(config), None
     with recording_compilations() as compiled:
