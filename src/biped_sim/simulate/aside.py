@@ -21,7 +21,8 @@ When the step's first callee had to be compiled (a cold cache), a second process
 checked compiles the integration, while this one checks the walker (the flow's twin), compiles the step's other
 callees (:func:`step_callees`) and the twins the run's measures call (:func:`measure_twins`), then waits for it:
 the step, compiled last, finds every callee in the cache. The step itself cannot go aside: it is the twin Python
-calls, compiled where it is called.
+calls, compiled where it is called. A rigid run in space splits its stance phase's callees between the two processes
+alike (:mod:`biped_sim.simulate.space_aside`).
 """
 
 from __future__ import annotations
