@@ -212,5 +212,10 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
         o = PARTS + k * PART_SIZE
         _add_part(p, o, x, swing if p[o] == 1.0 else stance, -foot, axis, p_dot, mass, force)
     cholesky_solve(mass, force, 4)
-    rates = attitude_rates(x)  # no slice assignments: their shape check's message compiles numba's string functions
-    return np.array([rates[0], rates[1], rates[2], x[7], force[0], force[1], force[2], force[3], p_dot[0], p_dot[1]])
+    rates = attitude_rates(x)
+    x_dot = np.empty(10)
+    for i in range(4):  # not slice assignments: their shape check's message compiles numba's string functions
+        x_dot[i] = rates[i] if i < 3 else x[7]
+        x_dot[4 + i] = force[i]
+    x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
+    return x_dot
