@@ -179,8 +179,10 @@ def _add_part(
     e, extra = np.zeros(3), np.zeros(3)
     if p[o] == 1.0:  # the swing leg: the hinge turns it about the axis through the origin
         s = r - origin
-        a_matrix[:, 3] = cross(axis, s)
-        b_matrix[:, 3] = axis
+        lever = cross(axis, s)
+        for i in range(3):  # not a slice assignment: its shape check's message compiles numba's string functions
+            a_matrix[i, 3] = lever[i]
+            b_matrix[i, 3] = axis[i]
         v += rate * a_matrix[:, 3]
         w += rate * axis
         extra = rate * (cross(cross(omega, axis), s) + cross(axis, cross(w, s)))
@@ -210,9 +212,10 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
         o = PARTS + k * PART_SIZE
         _add_part(p, o, x, swing if p[o] == 1.0 else stance, -foot, axis, p_dot, mass, force)
     cholesky_solve(mass, force, 4)
+    rates = attitude_rates(x)
     x_dot = np.empty(10)
-    x_dot[:3] = attitude_rates(x)
-    x_dot[3] = x[7]
-    x_dot[4:8] = force
-    x_dot[8:] = p_dot[:2]
+    for i in range(4):  # not slice assignments: their shape check's message compiles numba's string functions
+        x_dot[i] = rates[i] if i < 3 else x[7]
+        x_dot[4 + i] = force[i]
+    x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
     return x_dot

@@ -28,6 +28,7 @@ from biped_sim.simulate.rigid import RigidRunResult, simulate_rigid
 from biped_sim.simulate.space_rigid import (
     SpaceRunResult,
     SpaceStart,
+    check_space_run_size,
     simulate_space_rigid,
     space_initial,
     space_start,
@@ -74,9 +75,8 @@ def prepare_model(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """Build and validate what :func:`simulate` needs (ConfigError naming the field): the compliant model, or
     for ``dynamics: rigid`` the rigid walker (a walker in space: its model) and its resolved initial state."""
     if config.dynamics == "rigid" and config.in_space:
-        space = space_start(config)
-        check_run_size(config, 2 * len(space.state) + 8)  # state, world state, hip, energy terms
-        return space
+        check_space_run_size(config)  # before the start's limit cycle is sought
+        return space_start(config)
     if config.dynamics == "rigid":
         start = rigid_start(config)
         check_run_size(config, 2 * len(start.state) + 4)  # state, hip, energy terms

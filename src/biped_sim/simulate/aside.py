@@ -22,7 +22,8 @@ When the step's first callee had to be compiled (a cold cache), a second process
 checked compiles the integration, while this one checks the walker (the flow's twin), compiles the step's other
 callees (:func:`step_callees`) and the twins the run's measures call (:func:`measure_twins`), then waits for it:
 the step, compiled last, finds every callee in the cache. The step itself cannot go aside: it is the twin Python
-calls, compiled where it is called.
+calls, compiled where it is called. A rigid run in space splits its stance phase's callees between the two processes
+alike (:mod:`biped_sim.simulate.space_aside`).
 """
 
 from __future__ import annotations
@@ -66,6 +67,8 @@ from biped_sim.rigid.tree_kernels import (
 from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
+from biped_sim.simulate.space_aside import clearance_twin, events_share, first_callee, flow_share
+from biped_sim.simulate.space_rigid import check_space_run_size
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel, describe
 from biped_sim.walkers.model import start_modes_deferred
@@ -130,7 +133,7 @@ def compile_all(compiles: Compiles, until: Callable[[], bool] = lambda: False) -
         compile_for(function, args)
 
 
-def step_callees(cw: CompiledWalker) -> tuple[tuple[Dispatcher, tuple[object, ...]], ...]:
+def step_callees(cw: CompiledWalker) -> Compiles:
     """The rigid step map's callees but the phase's integration (:func:`~biped_sim.rigid.compiled.step_kernel`'s,
     compiled in the run's process while the second compiles :func:`phase_integration`), with arguments of the types
     it calls them with, those the integration calls too first (the second process then finds them in the cache): the
@@ -174,11 +177,11 @@ def measure_twins(cw: CompiledWalker) -> tuple[tuple[Kernel, tuple[object, ...]]
     )
 
 
-def _compile_phase_quietly(cw: CompiledWalker) -> None:
-    """:func:`phase_integration` compiled in the second process of a rigid run, which exits without a word if it
-    fails: the run then compiles it itself (and reports any error of its own)."""
+def _compile_each_quietly(callees: Compiles) -> None:
+    """Each of ``callees`` compiled for its arguments' types in the second process of a rigid run, which exits
+    without a word if one fails: the run then compiles it itself (and reports any error of its own)."""
     try:
-        compile_for(*phase_integration(cw))
+        compile_all(callees)
     except Exception:  # the run compiles it for real and reports what went wrong
         raise SystemExit(1) from None
 
@@ -214,11 +217,29 @@ def _prepare_rigid(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     with recording_compilations() as compiled:
         compile_for(begin_step, (cw.params,))  # the step's first callee: loaded on a warm cache
     if compiled and available_cores() >= 2:
-        process = _fork(_compile_phase_quietly, (cw,))
+        process = _fork(_compile_each_quietly, ((phase_integration(cw),),))
         rigid_walker(config)  # its legs checked alike: a ConfigError here ends the second process with this one
         compile_all(step_callees(cw))
         for twin, args in measure_twins(cw):
             twin.entry_for(*args)
+        join(process)
+    return prepare_model(config)
+
+
+def _prepare_space(config: Config) -> BuiltModel | RigidStart | SpaceStart:
+    """A rigid run in space's :func:`~biped_sim.simulate.prepare_model` (the limit cycle's search compiles the stance
+    phase). On a cold cache (the phase's first callee compiled, :func:`.space_aside.first_callee`) and more than one
+    core, a second process compiles the flow's tree (:func:`.space_aside.flow_share`) while this one checks the run's
+    size and compiles the events' tree (:func:`.space_aside.events_share`) and the clearance's twin; the phase is
+    compiled once that process has ended (it then finds both trees in the cache)."""
+    with recording_compilations() as compiled:
+        compile_for(*first_callee())
+    if compiled and available_cores() >= 2:
+        process = _fork(_compile_each_quietly, (flow_share(),))
+        check_space_run_size(config)  # a ConfigError here ends the second process with this one
+        compile_all(events_share())
+        twin, args = clearance_twin()
+        twin.entry_for(*args)
         join(process)
     return prepare_model(config)
 
@@ -254,10 +275,8 @@ def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | S
 
     The process ignores Ctrl-C (the run's own handling reports it) and ends with this one (a daemon).
     """
-    if config.dynamics == "rigid" and not config.in_space:
-        return _prepare_rigid(config), None
     if config.dynamics == "rigid":
-        return prepare_model(config), None
+        return (_prepare_space(config) if config.in_space else _prepare_rigid(config)), None
     return _prepare_compliant(config)
 
 

@@ -44,6 +44,7 @@ from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, pose
 from biped_sim.rigid.space_step import SpaceStep, step_time_limit
 from biped_sim.rigid.space_walk import Frame, walk_step
 from biped_sim.rigid.step import MAX_STEP_TIME, RTOL
+from biped_sim.simulate.budget import check_run_size
 from biped_sim.simulate.result import RunResult, ordered_pushes, wall_deadline
 from biped_sim.simulate.rigid import RIGID_ENERGY_TERMS, WalkEnd, summarize_rigid
 from biped_sim.walkers.space_walker import BODY_NAMES, check_initial
@@ -72,6 +73,13 @@ def space_initial(config: Config) -> object:
             "simulation.initial", f"rigid_limit_cycle: Newton did not converge (residual {cycle.residual:.1e})"
         )
     return cycle.fixed_point
+
+
+def check_space_run_size(config: Config) -> None:
+    """The run's samples within the memory budget (ConfigError naming the field otherwise): the state, the state in
+    the run's frame, the hip and the energy terms per sample. Before its start is sought (the limit cycle's search
+    compiles the step map on a cold cache), so that a run too large fails at once."""
+    check_run_size(config, 2 * N_STATE + 8)
 
 
 def space_start(config: Config) -> SpaceStart:
