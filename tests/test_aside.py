@@ -207,7 +207,7 @@ from biped_sim.config import Config
 from biped_sim.simulate import aside, prepare_model
 aside._cold_loop = lambda model: True
 aside.available_cores = lambda: 2
-aside._compile_quietly = lambda config, model, rhs_ready: os._exit(3)  # dies before its right-hand side
+aside._compile_quietly = lambda config, model, rhs_typed: os._exit(3)  # dies before its right-hand side
 model, process = aside.prepare_compiling_aside(Config())
 aside.join(process)
 print(process.exitcode, (model.modes0 == prepare_model(Config()).modes0).all())
@@ -270,11 +270,11 @@ from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import integrate_config
 config = derive(Config(), {"simulation.t_end": 0.01})
 model = prepare_model(config)
-rhs, rest = aside.loop_callees(config, model)
-aside.compile_all(rhs + rest)
+callees = sum(aside.loop_callees(config, model), ())
+aside.compile_all(callees)
 with recording_compilations() as compiled:
     integrate_config(config, model)
-callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in rhs + rest]
+callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in callees]
 print(json.dumps([callees, compiled]))
 """
 

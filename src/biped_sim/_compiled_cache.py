@@ -23,7 +23,7 @@ import os
 import re
 import time
 from collections import defaultdict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -141,6 +141,24 @@ def recording_compilations() -> Iterator[list[str]]:
 
     with event.install_listener("numba:compile", _Compilations()):
         yield names
+
+
+@contextmanager
+def signalling_lowering(qualname: str, signal: Callable[[], None]) -> Iterator[None]:
+    """Inside the block, ``signal()`` when numba starts lowering a function named ``qualname``: its typing is done, so
+    every function it calls has been compiled or loaded, and what remains of its compile is its own lowering and
+    LLVM's work. Uses numba's event API ("numba:run_pass")."""
+
+    class _Lowering(event.Listener):
+        def on_start(self, ev: event.Event) -> None:
+            if ev.data["qualname"] == qualname and ev.data["name"].startswith(LOWERING_PASS):
+                signal()
+
+        def on_end(self, ev: event.Event) -> None:
+            pass
+
+    with event.install_listener("numba:run_pass", _Lowering()):
+        yield
 
 
 class CompileProfile(event.Listener):

@@ -11,10 +11,11 @@ the measures of a stand-in of the run (:func:`stand_in`: two samples and two hee
 state). The loop's compile and the run's measures then load them from the cache (:func:`join` waits for the process
 before the run is measured). The process is forked before the model's start is settled, with a draft of the model
 (its types: the start's mode update, a compile, left out); this process compiles that update, then the loop's late
-callees until the right-hand side is in the cache, and only then the loop, which loads it. It does so only on a cold
-cache for the run's formulation and ground (a loop callee compiled rather than loaded) and when the process may use
-more than one core; on a warm cache the run starts no process. A fork, not a new interpreter: the process starts at
-once, with the model, rather than some 2.5 CPU s of imports later.
+callees until only the right-hand side's own lowering remains (its callees cached), and only then the loop, whose
+compile reaches it later and loads it. It does so only on a cold cache for the run's formulation and ground (a loop
+callee compiled rather than loaded) and when the process may use more than one core; on a warm cache the run starts
+no process. A fork, not a new interpreter: the process starts at once, with the model, rather than some 2.5 CPU s of
+imports later.
 
 A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`'s Python twin), whose
 compile is half the phase's integration (:func:`phase_integration`: DOP853 over the flow, its events and samples).
@@ -33,11 +34,12 @@ from collections.abc import Callable
 from multiprocessing import get_context
 from multiprocessing.process import BaseProcess
 from multiprocessing.synchronize import Event
+from typing import NamedTuple
 
 import numpy as np
 from numba.core.dispatcher import Dispatcher
 
-from biped_sim._compiled_cache import recording_compilations
+from biped_sim._compiled_cache import recording_compilations, signalling_lowering
 from biped_sim.config import Config, derive
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
@@ -93,36 +95,46 @@ def stand_in(model: BuiltModel) -> Integration:
 Compiles = tuple[tuple[Dispatcher, tuple[object, ...]], ...]  # kernels with arguments of the types callers pass
 
 
-def loop_callees(config: Config, model: BuiltModel) -> tuple[Compiles, Compiles]:
-    """The explicit loop's callees with arguments of the types it calls them with, as (the right-hand side's, the
-    rest), both empty for a stiff method (no loop); the arguments come from the driver's constructor
-    (:func:`~biped_sim.integrate.driver.explicit_loop`).
+class LoopCallees(NamedTuple):
+    """The explicit loop's callees with arguments of the types it calls them with (:func:`loop_callees`)."""
 
-    The first: the formulation's right-hand side (the overload implementation its ``system_rhs`` compiles, with
-    the contact forces below it: the costliest callee, reached a few CPU s into the loop's compile) and the starting
-    step's norm, which the loop reaches right after it. The rest, those the loop's compile reaches last first: the
-    formulation's fall and the loop's fall check, the event update, the dense output, the recorder's."""
+    rhs: Compiles  # the second process's, first: the right-hand side, then the starting step's norm
+    check: Compiles  # the run's process's, first: the loop's fall check
+    shared: Compiles  # the run's process from the front, the second from the back
+
+
+def loop_callees(config: Config, model: BuiltModel) -> LoopCallees:
+    """The explicit loop's callees (all empty for a stiff method: no loop); the arguments come from the driver's
+    constructor (:func:`~biped_sim.integrate.driver.explicit_loop`).
+
+    The right-hand side (the overload implementation the loop's ``system_rhs`` compiles, with the contact forces below
+    it: the costliest callee) and the starting step's norm are the second process's; the loop's compile reaches them
+    a few CPU s after its start. The loop's fall check (some 2 CPU s, reached soon after) is the run's process's,
+    compiled before the model's build: the run's share is compiled until the right-hand side is typed, and a compile
+    stops only between two callees. The shared ones are small, those the loop reaches last first: the formulation's
+    fall, the event update, the dense output, the recorder's."""
     if config.integrator.method in STIFF_METHODS:
-        return (), ()
+        return LoopCallees((), (), ())
     y, modes = np.array(model.y0, dtype=np.float64), np.array(model.modes0, dtype=np.float64)
     loop = explicit_loop(model.system, y, modes, config.integrator.method, make_recorder(len(y), len(modes), 1, 1, 0))
     system, work, sc, rec = loop.system, loop.work, loop.sc, loop.rec
     formulation = formulation_of(system)
-    rhs = (
-        (overload_implementation(formulation.rhs), (0.0, y, system, modes, work, sc.k[0])),
-        (stepper.rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
+    return LoopCallees(
+        rhs=(
+            (overload_implementation(formulation.rhs), (0.0, y, system, modes, work, sc.k[0])),
+            (stepper.rms_norm, (y, sc.y_dense)),  # the loop's starting step calls it
+        ),
+        check=((blowup.fall, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, 1)),),
+        shared=(
+            (overload_implementation(formulation.fall), (y, system)),
+            (events.system_update_modes, (0.0, y, system, modes, loop.contact)),
+            (dense.dense_coefficients, (loop.tab, 0.0, y, sc)),
+            (dense.dense_eval, (loop.tab, 0.0, 0.0, y, sc, sc.y_new)),
+            (events.system_is_leading, (y, system, 0)),
+            (recorder.has_room, (rec, len(modes))),
+            (recorder.record_sample, (rec, 0.0, y, modes)),
+        ),
     )
-    rest = (
-        (overload_implementation(formulation.fall), (y, system)),
-        (blowup.fall, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, 1)),
-        (events.system_is_leading, (y, system, 0)),
-        (events.system_update_modes, (0.0, y, system, modes, loop.contact)),
-        (dense.dense_eval, (loop.tab, 0.0, 0.0, y, sc, sc.y_new)),
-        (dense.dense_coefficients, (loop.tab, 0.0, y, sc)),
-        (recorder.has_room, (rec, len(modes))),
-        (recorder.record_sample, (rec, 0.0, y, modes)),
-    )
-    return rhs, rest
 
 
 def compile_all(compiles: Compiles, until: Callable[[], bool] = lambda: False) -> None:
@@ -252,16 +264,19 @@ def measure_stand_in(config: Config, model: BuiltModel) -> None:
     _ = result.summary
 
 
-def _compile_quietly(config: Config, model: BuiltModel, rhs_ready: Event) -> None:
-    """In the second process: the loop's right-hand side (then ``rhs_ready`` is set), the loop's other callees, those
-    its compile reaches first first (the run's process takes them from the other end meanwhile), then
-    :func:`measure_stand_in`; it exits without a word if it fails: the run then compiles them itself (and reports
-    any error of its own)."""
+def _compile_quietly(config: Config, model: BuiltModel, rhs_typed: Event) -> None:
+    """In the second process: the loop's right-hand side (``rhs_typed`` is set once its callees are in the cache and
+    only its own lowering remains, about a CPU s, less than the loop's compile takes to reach it), the starting step's
+    norm, the shared callees, those the loop reaches first first (the run's process takes them from the other end
+    meanwhile), the fall check (compiled by the run's process by then: loaded), then
+    :func:`measure_stand_in`; it exits without a word if it fails: the run then compiles them itself (and reports any
+    error of its own)."""
     try:
-        rhs, rest = loop_callees(config, model)
-        compile_all(rhs)
-        rhs_ready.set()
-        compile_all(rest[::-1])
+        callees = loop_callees(config, model)
+        with signalling_lowering(callees.rhs[0][0].py_func.__qualname__ if callees.rhs else "", rhs_typed.set):
+            compile_all(callees.rhs[:1])
+        rhs_typed.set()  # also when it was loaded from the cache (nothing lowered) or there is no loop
+        compile_all(callees.rhs[1:] + callees.shared[::-1] + callees.check)
         measure_stand_in(config, model)
     except Exception:  # the run measures for real and reports what went wrong
         raise SystemExit(1) from None
@@ -292,18 +307,20 @@ def _cold_loop(model: BuiltModel) -> bool:
 def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceStart, BaseProcess | None]:
     """A compliant run's :func:`~biped_sim.simulate.prepare_model`, and the second process of a cold cache
     (:func:`_cold_loop`) on more than one core. The process is forked with a draft of the model (:func:`_draft`)
-    and compiles the loop's right-hand side first; meanwhile this process resolves the start (a limit cycle: the
-    rigid step map compiled), builds the model (compiling the start's mode update), then compiles the loop's late
-    callees (:func:`loop_callees`) until the right-hand side is in the cache (or waits for it), so that its loop's
-    compile, next, loads it."""
+    and compiles the loop's right-hand side first; meanwhile this process compiles the loop's fall check, resolves
+    the start (a limit cycle: the rigid step map compiled), builds the model (compiling the start's mode update),
+    then compiles the loop's small late callees (:func:`loop_callees`) until only the right-hand side's own
+    lowering remains (or waits for it), so that its loop's compile, next, loads it when it reaches it."""
     draft = _draft(config)
     if draft is None or not _cold_loop(draft) or available_cores() < 2:
         return prepare_model(config), None
-    rhs_ready = get_context("fork").Event()
-    process = _fork(_compile_quietly, (config, draft, rhs_ready))
+    rhs_typed = get_context("fork").Event()
+    process = _fork(_compile_quietly, (config, draft, rhs_typed))
+    callees = loop_callees(config, draft)
+    compile_all(callees.check)
     model = prepare_model(config)
-    compile_all(loop_callees(config, draft)[1], until=lambda: rhs_ready.is_set() or not process.is_alive())
-    while process.is_alive() and not rhs_ready.wait(RHS_POLL_S):
+    compile_all(callees.shared, until=lambda: rhs_typed.is_set() or not process.is_alive())
+    while process.is_alive() and not rhs_typed.wait(RHS_POLL_S):
         pass
     return model, process
 
