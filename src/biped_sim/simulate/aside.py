@@ -10,12 +10,12 @@ it: the largest callee the loop's compile reaches early), then the loop's other 
 the measures of a stand-in of the run (:func:`stand_in`: two samples and two heel strikes of the model in its start
 state). The loop's compile and the run's measures then load them from the cache (:func:`join` waits for the process
 before the run is measured). The process is forked before the model's start is settled, with a draft of the model
-(its types: the start's mode update, a compile, left out); this process compiles that update, then the loop's late
-callees until only the right-hand side's own lowering remains (its callees cached), and only then the loop, whose
-compile reaches it later and loads it. It does so only on a cold cache for the run's formulation and ground (a loop
-callee compiled rather than loaded) and when the process may use more than one core; on a warm cache the run starts
-no process. A fork, not a new interpreter: the process starts at once, with the model, rather than some 2.5 CPU s of
-imports later.
+(its types: the start's mode update, a compile, left out); this process compiles the loop's fall check and that
+update, then the loop's small late callees until only the right-hand side's own lowering remains (its callees
+cached), and only then the loop, whose compile reaches it later and loads it. It does so only on a cold cache for
+the run's formulation and ground (a loop callee compiled rather than loaded) and when the process may use more than
+one core; on a warm cache the run starts no process. A fork, not a new interpreter: the process starts at once, with
+the model, rather than some 2.5 CPU s of imports later.
 
 A planar rigid run compiles its step map (:func:`~biped_sim.rigid.compiled.step_kernel`'s Python twin), whose
 compile is half the phase's integration (:func:`phase_integration`: DOP853 over the flow, its events and samples).
