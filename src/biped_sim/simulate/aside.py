@@ -37,7 +37,6 @@ from multiprocessing.synchronize import Event
 from typing import NamedTuple
 
 import numpy as np
-from numba.core.dispatcher import Dispatcher
 
 from biped_sim._compiled_cache import recording_compilations, signalling_lowering
 from biped_sim.config import Config, derive
@@ -69,7 +68,7 @@ from biped_sim.rigid.tree_kernels import (
 from biped_sim.rigid.tree_layout import point
 from biped_sim.simulate import SpaceStart, prepare_model
 from biped_sim.simulate.compliant import CompliantRunResult
-from biped_sim.simulate.space_aside import clearance_twin, events_share, first_callee, flow_share
+from biped_sim.simulate.space_aside import Callee, clearance_twin, events_share, first_callee, flow_share
 from biped_sim.simulate.space_rigid import check_space_run_size
 from biped_sim.simulate.warmup import available_cores
 from biped_sim.walkers import BuiltModel, describe
@@ -92,7 +91,7 @@ def stand_in(model: BuiltModel) -> Integration:
     return finish_integration(rec, 1.0)
 
 
-Compiles = tuple[tuple[Dispatcher, tuple[object, ...]], ...]  # kernels with arguments of the types callers pass
+Compiles = tuple[Callee, ...]  # kernels with arguments of the types callers pass
 
 
 class LoopCallees(NamedTuple):
@@ -168,7 +167,7 @@ def step_callees(cw: CompiledWalker) -> Compiles:
     )
 
 
-def phase_integration(cw: CompiledWalker) -> tuple[Dispatcher, tuple[object, ...]]:
+def phase_integration(cw: CompiledWalker) -> Callee:
     """The phase's integration :func:`~biped_sim.rigid.integration.stretch` (DOP853 over the flow, its events and
     samples: half the step map's compile), with arguments of the types the step calls it with."""
     x = np.zeros(cw.sc.y_new.shape[0])
