@@ -201,6 +201,21 @@ def test_a_cold_build_compiles_the_measures_in_a_process_that_ignores_ctrl_c(mon
     assert process.exitcode == 0
 
 
+class _NoSemaphores:
+    """multiprocessing's fork context on a system without shared semaphores (a container without /dev/shm)."""
+
+    def Event(self) -> None:  # noqa: N802 (multiprocessing's name)
+        raise OSError(38, "Function not implemented")
+
+
+def test_a_cold_run_without_shared_semaphores_compiles_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(aside, "_cold_loop", lambda model: True)
+    monkeypatch.setattr(aside, "available_cores", lambda: 2)
+    monkeypatch.setattr(aside, "get_context", lambda method: _NoSemaphores())
+    model, process = aside.prepare_compiling_aside(Config())
+    assert process is None and (model.modes0 == prepare_model(Config()).modes0).all()
+
+
 _SECOND_DIES_AT_ONCE = """
 import os
 from biped_sim.config import Config

@@ -311,9 +311,9 @@ def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceS
     then compiles the loop's small late callees (:func:`loop_callees`) until only the right-hand side's own
     lowering remains (or waits for it), so that its loop's compile, next, loads it when it reaches it."""
     draft = _draft(config)
-    if draft is None or not _cold_loop(draft) or available_cores() < 2:
+    rhs_typed = _shared_event() if draft is not None and _cold_loop(draft) and available_cores() >= 2 else None
+    if draft is None or rhs_typed is None:
         return prepare_model(config), None
-    rhs_typed = get_context("fork").Event()
     process = _fork(_compile_quietly, (config, draft, rhs_typed))
     callees = loop_callees(config, draft)
     compile_all(callees.check)
@@ -322,6 +322,15 @@ def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceS
     while process.is_alive() and not rhs_typed.wait(RHS_POLL_S):
         pass
     return model, process
+
+
+def _shared_event() -> Event | None:
+    """An event both processes of a fork see, or None where the system has no shared semaphores (a container
+    without /dev/shm): the run then compiles alone, as on one core."""
+    try:
+        return get_context("fork").Event()
+    except OSError:
+        return None
 
 
 def _draft(config: Config) -> BuiltModel | None:
