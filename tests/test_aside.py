@@ -47,6 +47,11 @@ def _compiled_signatures() -> set[tuple[str, str]]:
 simulate_module = importlib.import_module("biped_sim.simulate")  # the package, not the function it exports
 
 
+def _types(model: BuiltModel) -> list[object]:
+    """numba's types of what a model gives the loop: its state, its modes and its system."""
+    return [numba.typeof(x) for x in (model.y0, model.modes0, model.system)]
+
+
 def _with_knee_stops() -> Config:
     """The compliant kneed walker (its stops add mode rows), for a short run."""
     return load_config(CONFIGS / "kneed_walker_compliant.yaml")
@@ -91,9 +96,7 @@ def test_a_draft_model_has_the_run_s_types_and_start(name: str) -> None:
         draft = prepare_model(config)
     model = prepare_model(config)
     assert isinstance(draft, BuiltModel) and isinstance(model, BuiltModel)
-    assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
-        numba.typeof(x) for x in (model.y0, model.modes0, model.system)
-    ]
+    assert _types(draft) == _types(model)
     assert (draft.y0 == model.y0).all() and draft.modes0.shape == model.modes0.shape
 
 
@@ -107,9 +110,7 @@ def test_a_draft_of_a_limit_cycle_start_solves_none_and_has_the_run_s_types(
     monkeypatch.setattr(importlib.import_module("biped_sim.simulate.space_rigid"), "space_limit_cycle", _no_limit_cycle)
     draft = aside._draft(config)
     assert isinstance(draft, BuiltModel) and isinstance(given, BuiltModel)
-    assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
-        numba.typeof(x) for x in (given.y0, given.modes0, given.system)
-    ]
+    assert _types(draft) == _types(given)
 
 
 COMPLIANT_CONFIGS = (
@@ -140,9 +141,7 @@ def test_drafts_of_random_variations_of_the_bundled_configs_have_their_runs_type
             continue
         draft = aside._draft(config)
         assert isinstance(draft, BuiltModel) and isinstance(model, BuiltModel), (name, picked)
-        assert [numba.typeof(x) for x in (draft.y0, draft.modes0, draft.system)] == [
-            numba.typeof(x) for x in (model.y0, model.modes0, model.system)
-        ], (name, picked)
+        assert _types(draft) == _types(model), (name, picked)
         checked += 1
     assert checked >= 8, refused
 

@@ -214,8 +214,9 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     cholesky_solve(mass, force, 4)
     rates = attitude_rates(x)
     x_dot = np.empty(10)
-    for i in range(4):  # not slice assignments: their shape check's message compiles numba's string functions
-        x_dot[i] = rates[i] if i < 3 else x[7]
+    # not slice assignments: their shape check's message compiles numba's string functions
+    x_dot[0], x_dot[1], x_dot[2], x_dot[3] = rates[0], rates[1], rates[2], x[7]
+    for i in range(4):
         x_dot[4 + i] = force[i]
     x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
     return x_dot

@@ -37,6 +37,7 @@ from multiprocessing.synchronize import Event
 from typing import NamedTuple
 
 import numpy as np
+from numba.core.dispatcher import Dispatcher
 
 from biped_sim._compiled_cache import recording_compilations, signalling_lowering
 from biped_sim.config import Config, derive
@@ -225,9 +226,7 @@ def _prepare_rigid(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     (:func:`measure_twins`); the step is compiled once that process has ended (it then finds the integration in
     the cache)."""
     cw = compile_walker(rigid_walker(config, checked=False))  # the kernels' argument types, before any check
-    with recording_compilations() as compiled:
-        compile_for(begin_step, (cw.params,))  # the step's first callee: loaded on a warm cache
-    if compiled and available_cores() >= 2:
+    if _compiled(begin_step, (cw.params,)) and available_cores() >= 2:  # the step's first callee: a warm cache loads it
         process = _fork(_compile_each_quietly, ((phase_integration(cw),),))
         rigid_walker(config)  # its legs checked alike: a ConfigError here ends the second process with this one
         compile_all(step_callees(cw))
@@ -243,9 +242,7 @@ def _prepare_space(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     core, a second process compiles the flow's tree (:func:`.space_aside.flow_share`) while this one checks the run's
     size and compiles the events' tree (:func:`.space_aside.events_share`) and the clearance's twin; the phase is
     compiled once that process has ended (it then finds both trees in the cache)."""
-    with recording_compilations() as compiled:
-        compile_for(*first_callee())
-    if compiled and available_cores() >= 2:
+    if _compiled(*first_callee()) and available_cores() >= 2:
         process = _fork(_compile_each_quietly, (flow_share(),))
         check_space_run_size(config)  # a ConfigError here ends the second process with this one
         compile_all(events_share())
@@ -298,8 +295,14 @@ def _cold_loop(model: BuiltModel) -> bool:
     """Whether the compile cache lacks ``model``'s loop (for its formulation and ground): one of the loop's small
     callees, :func:`~biped_sim.multibody.events.system_is_leading` (with the feet's kinematics below it, which the
     start's mode update and the right-hand side both call), compiled rather than loaded."""
+    return _compiled(events.system_is_leading, (model.y0, model.system, 0))
+
+
+def _compiled(function: Dispatcher, args: tuple[object, ...]) -> bool:
+    """Compile ``function`` for the types of ``args`` or load it from the cache; whether it was compiled (something
+    of it was missing from the cache: a first run's, which a second process is worth starting for)."""
     with recording_compilations() as compiled:
-        compile_for(events.system_is_leading, (model.y0, model.system, 0))
+        compile_for(function, args)
     return bool(compiled)
 
 
