@@ -284,7 +284,8 @@ from biped_sim.simulate import aside, prepare_model, simulate
 from biped_sim.simulate.compliant import integrate_config
 config = derive(Config(), {"simulation.t_end": 0.01})
 model = prepare_model(config)
-callees = sum(aside.loop_callees(config, model), ())
+loop = aside.loop_callees(config, model)
+callees = loop.rhs + loop.check + loop.shared
 aside.compile_all(callees)
 with recording_compilations() as compiled:
     integrate_config(config, model)
@@ -303,6 +304,37 @@ def test_the_loop_compiled_after_its_callees_finds_them_all_in_the_cache(tmp_pat
     assert "biped_sim.multibody.planar.rhs_overload" in callees  # the formulation's right-hand side and fall, ...
     assert "biped_sim.multibody.planar.fall_overload" in callees  # ... as the loop's overloads
     assert len(callees) == 10 and not set(callees) & set(compiled)  # ... but none of its callees
+
+
+_STIFF_RUN_AFTER_ITS_CALLEES = """
+import json
+from biped_sim._compiled_cache import recording_compilations
+from biped_sim.config import Config, derive
+from biped_sim.simulate import aside, prepare_model
+from biped_sim.simulate.compliant import integrate_config
+config = derive(Config(), {"simulation.t_end": 0.05, "integrator.method": "bdf"})
+model = prepare_model(config)
+stiff = aside.loop_callees(config, model)
+callees = stiff.rhs + stiff.check + stiff.shared
+aside.compile_all(callees)
+with recording_compilations() as compiled:
+    run = integrate_config(config, model)
+callees = [f"{k.py_func.__module__}.{k.py_func.__qualname__}" for k, _ in callees]
+print(json.dumps([callees, compiled, run.rhs_evals, stiff.signal_at_lowering]))
+"""
+
+
+@pytest.mark.slow
+def test_a_stiff_run_after_its_callees_compiles_nothing(tmp_path: Path) -> None:
+    """scipy's driver calls the compiled right-hand side and Jacobian, the events, the recorder and the checks from
+    Python: compiled aside for the draft's types (:func:`aside.stiff_callees`), the run finds every one in the cache,
+    and the second process signals once the right-hand side is in the cache, not when its lowering starts."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # empty: the callees compile
+    out = subprocess.run([sys.executable, "-c", _STIFF_RUN_AFTER_ITS_CALLEES], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    callees, compiled, rhs_evals, signal_at_lowering = json.loads(out.stdout.strip().splitlines()[-1])
+    assert callees[0] == "biped_sim.integrate.stiff.stiff_derivatives_python_entry" and rhs_evals > 0
+    assert compiled == [] and not signal_at_lowering
 
 
 _STEP_AFTER_ITS_CALLEES = """

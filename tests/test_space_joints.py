@@ -147,7 +147,7 @@ def test_the_planar_models_refuse_a_foot_of_another_shape_naming_it() -> None:
     assert "\n" not in str(error.value)
 
 
-@pytest.mark.slow  # 12 s of a walk in Euler parameters (7.1 million right-hand sides)
+@pytest.mark.slow  # 12 s of a walk in Euler parameters (BDF: 340,000 right-hand sides)
 def test_the_3d_kneed_walker_walks_twenty_steps_at_a_steady_heading() -> None:
     """Chen's kneed walker with a 0.1 m hip width on lateral torus feet and spin friction walks 12 s without
     falling, left and right feet in turn, its step width, sway, heading and bank in the step table. Its heading
@@ -168,3 +168,20 @@ def test_the_3d_kneed_walker_walks_twenty_steps_at_a_steady_heading() -> None:
     for column, tolerance in ((steps.period, 0.02), (steps.length, 0.05)):
         left, right = (column[:-1][steps.foot[:-1] == foot][-4:].mean() for foot in (0, 1))
         assert abs(left - right) < tolerance * right
+
+
+@pytest.mark.slow  # dopri5's 1.2 s of walk: 700,000 right-hand sides
+def test_the_3d_kneed_walker_s_stiff_method_strikes_where_dopri5_does() -> None:
+    """The bundled walker integrates by BDF (its friction's regularisation makes the walk stiff); dopri5 at the same
+    tolerances strikes at the same times over its first two steps, to 1e-6 s, and in the same state to 1e-5."""
+    data = yaml.safe_load(KNEED_3D.read_text())
+    data["simulation"]["t_end"] = 1.2
+    runs = {}
+    for method in ("bdf", "dopri5"):
+        data["integrator"]["method"] = method
+        runs[method] = simulate(config_from_dict(data))
+    stiff, explicit = runs["bdf"], runs["dopri5"]
+    assert stiff.status == explicit.status == "walking" and len(stiff.steps.period) == len(explicit.steps.period) >= 2
+    np.testing.assert_allclose(stiff.steps.strike_time, explicit.steps.strike_time, rtol=0.0, atol=1e-6)
+    for column in ("stance_angle", "swing_angle", "heading", "bank", "sway"):
+        np.testing.assert_allclose(getattr(stiff.steps, column), getattr(explicit.steps, column), rtol=0.0, atol=1e-5)

@@ -73,9 +73,11 @@ class Kernel(CPUDispatcher):
         return self._python_entry
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        return self._twin()(*args, **kwargs)
+        return self.twin()(*args, **kwargs)
 
-    def _twin(self) -> CPUDispatcher:
+    def twin(self) -> CPUDispatcher:
+        """The twin Python calls reach (created, not compiled, on first use): compiled for some types in another
+        process, it is in the cache when this one's Python calls reach it."""
         if self._python_entry is None:
             self._python_entry = _python_twin(self.py_func, self.targetoptions)
         return self._python_entry
@@ -85,7 +87,7 @@ class Kernel(CPUDispatcher):
         numba's typing of its arguments: the dispatcher types a NamedTuple argument in Python at every call, a
         cost that grows with the arrays it holds. Only for arguments of exactly these types (numba's unboxing checks an
         array's item size, not its dtype, dimensions or layout): a caller that holds them, calling often."""
-        return self._twin().compile(tuple(numba.typeof(arg) for arg in args))
+        return self.twin().compile(tuple(numba.typeof(arg) for arg in args))
 
 
 def _python_twin(function: FunctionType, options: dict[str, Any]) -> CPUDispatcher:

@@ -55,10 +55,22 @@ class StoppedError(Exception):
 
 
 @kernel
-def finite_difference_jacobian(
-    t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, f0: np.ndarray, jac: np.ndarray
+def stiff_derivatives(
+    t: float,
+    y: np.ndarray,
+    system: tuple,
+    modes: np.ndarray,
+    work: tuple,
+    f: np.ndarray,
+    jac: np.ndarray,
+    with_jacobian: bool,
 ) -> None:
-    """Forward-difference Jacobian df/dy with steps sqrt(eps) max(|y_j|, 1e-3)."""
+    """f(t, y) into ``f`` and, ``with_jacobian``, its forward-difference Jacobian df/dy into ``jac`` (steps
+    sqrt(eps) max(|y_j|, 1e-3)): scipy's ``fun`` and ``jac`` in one function, so that a first run compiles the
+    right-hand side once for both."""
+    system_rhs(t, y, system, modes, work, f)
+    if not with_jacobian:
+        return
     ny = y.shape[0]
     y_pert = y.copy()
     f_pert = np.empty(ny)
@@ -67,7 +79,7 @@ def finite_difference_jacobian(
         y_pert[j] = y[j] + step
         system_rhs(t, y_pert, system, modes, work, f_pert)
         for i in range(ny):
-            jac[i, j] = (f_pert[i] - f0[i]) / step
+            jac[i, j] = (f_pert[i] - f[i]) / step
         y_pert[j] = y[j]
 
 
@@ -87,33 +99,52 @@ def integrate_stiff(
     """Integrate with scipy's Radau or BDF, restarting at every contact event; returns the (enlarged) recorder.
 
     The run stops as 'timeout' past ``deadline`` (``time.monotonic()``) and as diverged after
-    ``MAX_STIFF_EVALS`` right-hand sides or when the blow-up checks (``checks``) fail.
+    ``MAX_STIFF_EVALS`` right-hand sides or when the blow-up checks (``checks``) fail. scipy calls the compiled
+    right-hand side and event functions through their entries for this run's argument types
+    (:meth:`~biped_sim.kernel.Kernel.entry_for`), without numba's typing of the system at every call.
     """
     ny = y.shape[0]
     work = make_workspace(system)
     counts = {"jac": 0, "fun": 0}
+    unused_jacobian = np.empty((ny, ny))
+    derivatives = stiff_derivatives.entry_for(0.0, y, system, modes, work, y, unused_jacobian, False)
 
-    def fun(t: float, state: np.ndarray) -> np.ndarray:
+    def evaluated(t: float, state: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
         counts["fun"] += 1
         if counts["fun"] > MAX_STIFF_EVALS:
             raise StoppedError(DIVERGED, EVALUATION_BUDGET)
         if time.monotonic() > deadline:
             raise StoppedError(TIMEOUT)
         out = np.empty(ny)
-        system_rhs(t, state, system, modes, work, out)
+        derivatives(t, np.ascontiguousarray(state), system, modes, work, out, jacobian, jacobian is not unused_jacobian)
         return out
 
+    def fun(t: float, state: np.ndarray) -> np.ndarray:
+        return evaluated(t, state, unused_jacobian)
+
     def jac(t: float, state: np.ndarray) -> np.ndarray:
-        f0 = fun(t, state)
         out = np.empty((ny, ny))
-        finite_difference_jacobian(t, state, system, modes, work, f0, out)
+        evaluated(t, state, out)
         counts["jac"] += 1
         return out
+
+    compiled_events = system_event_functions.entry_for(y, system, np.empty(event_count(system)))
+    last_values, last_state = np.empty(event_count(system)), [b""]
+
+    def event_values(state: np.ndarray, system: tuple, g: np.ndarray) -> None:
+        """The event functions at ``state`` into ``g``; scipy asks each event in turn at a step's state, and the
+        functions depend on the state alone (the system's geometry is fixed), so one compiled call serves them all."""
+        contiguous = np.ascontiguousarray(state)
+        if contiguous.tobytes() != last_state[0]:
+            compiled_events(contiguous, system, last_values)
+            last_state[0] = contiguous.tobytes()
+        g[:] = last_values
 
     method = "Radau" if integrator.method == "radau" else "BDF"
     rec = integrate_scipy(
         system, rec, y, modes, contact_buffers(system), method, integrator.rtol, integrator.atol, integrator.max_step,
         t_end, interval, max_strikes, progress, fun, jac=jac, checks=checks, work=work,
+        event_values=event_values,
     )  # fmt: skip
     rec.state[0].rhs_evals += counts["jac"] * (ny + 1)
     return rec

@@ -50,7 +50,7 @@ from biped_sim.kernel import Kernel, compile_for, overload_implementation
 from biped_sim.measure.loops import rigid_loop
 from biped_sim.measure.steps import step_table
 from biped_sim.multibody import events
-from biped_sim.multibody.dispatch import formulation_of
+from biped_sim.multibody.dispatch import contact_buffers, formulation_of, make_workspace
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.compiled import CompiledWalker, compile_walker
 from biped_sim.rigid.ground import clearance, riser_hit, tree_swing_foot
@@ -96,15 +96,17 @@ Compiles = tuple[Callee, ...]  # kernels with arguments of the types callers pas
 
 
 class LoopCallees(NamedTuple):
-    """The explicit loop's callees with arguments of the types it calls them with (:func:`loop_callees`)."""
+    """The explicit loop's callees with arguments of the types it calls them with (:func:`loop_callees`); a stiff run's
+    alike (:func:`stiff_callees`)."""
 
     rhs: Compiles  # the second process's, first: the right-hand side, then the starting step's norm
     check: Compiles  # the run's process's, first: the loop's fall check
     shared: Compiles  # the run's process from the front, the second from the back
+    signal_at_lowering: bool = True  # the event is set when the right-hand side's own lowering starts, not after it
 
 
 def loop_callees(config: Config, model: BuiltModel) -> LoopCallees:
-    """The explicit loop's callees (all empty for a stiff method: no loop); the arguments come from the driver's
+    """The explicit loop's callees (a stiff method's: :func:`stiff_callees`); the arguments come from the driver's
     constructor (:func:`~biped_sim.integrate.driver.explicit_loop`).
 
     The right-hand side (the overload implementation the loop's ``system_rhs`` compiles, with the contact forces below
@@ -114,7 +116,7 @@ def loop_callees(config: Config, model: BuiltModel) -> LoopCallees:
     stops only between two callees. The shared ones are small, those the loop reaches last first: the formulation's
     fall, the event update, the dense output, the recorder's."""
     if config.integrator.method in STIFF_METHODS:
-        return LoopCallees((), (), ())
+        return stiff_callees(model)
     y, modes = np.array(model.y0, dtype=np.float64), np.array(model.modes0, dtype=np.float64)
     loop = explicit_loop(model.system, y, modes, config.integrator.method, make_recorder(len(y), len(modes), 1, 1, 0))
     system, work, sc, rec = loop.system, loop.work, loop.sc, loop.rec
@@ -134,6 +136,35 @@ def loop_callees(config: Config, model: BuiltModel) -> LoopCallees:
             (recorder.has_room, (rec, len(modes))),
             (recorder.record_sample, (rec, 0.0, y, modes)),
         ),
+    )
+
+
+def stiff_callees(model: BuiltModel) -> LoopCallees:
+    """What a stiff run's driver (:mod:`~biped_sim.integrate.stiff`, scipy's Radau or BDF) calls from Python, with
+    arguments of the types it passes: the kernels' twins and the jitted functions. The second process's: the
+    right-hand side with its Jacobian (:func:`~biped_sim.integrate.stiff.stiff_derivatives`, the costliest), after
+    which the event is set (the driver calls it at once). The run's, before the model's build: the event update and
+    the blow-up check. Shared: the start's energy, the samples' recorder, the event functions, the formulation's
+    fall."""
+    from biped_sim.integrate.stiff import stiff_derivatives  # here: scipy.integrate adds 0.3 s to every start-up
+
+    system = model.system
+    y, modes = np.array(model.y0, dtype=np.float64), np.array(model.modes0, dtype=np.float64)
+    work, rec = make_workspace(system), make_recorder(len(y), len(modes), 1, 1, 0)
+    touching = np.zeros(modes.shape[0])
+    return LoopCallees(
+        rhs=((stiff_derivatives.twin(), (0.0, y, system, modes, work, y, np.empty((len(y), len(y))), False)),),
+        check=(
+            (recorder.apply_events, (0.0, y, system, modes, contact_buffers(system), rec, touching, 0)),
+            (blowup.check, (0.0, y, system, modes, work, rec.state, blowup.NO_CHECKS, True)),
+        ),
+        shared=(
+            (blowup.energy_reference, (y, system, modes)),
+            (recorder.record_sample.twin(), (rec, 0.0, y, modes)),
+            (events.system_event_functions.twin(), (y, system, np.empty(events.event_count(system)))),
+            (formulation_of(system).fall.twin(), (y, system)),  # system_fall, from Python
+        ),
+        signal_at_lowering=False,
     )
 
 
@@ -269,7 +300,8 @@ def _compile_quietly(config: Config, model: BuiltModel, rhs_typed: Event) -> Non
     error of its own)."""
     try:
         callees = loop_callees(config, model)
-        with signalling_lowering(callees.rhs[0][0].py_func.__qualname__ if callees.rhs else "", rhs_typed.set):
+        signalling = callees.rhs[0][0].py_func.__qualname__ if callees.signal_at_lowering else ""
+        with signalling_lowering(signalling, rhs_typed.set):
             compile_all(callees.rhs[:1])
         rhs_typed.set()  # also when it was loaded from the cache (nothing lowered) or there is no loop
         compile_all(callees.rhs[1:] + callees.shared[::-1] + callees.check)
