@@ -232,11 +232,12 @@ def largest(cycle: LimitCycle) -> tuple[complex, str]:
     return complex(values[k]), cycle.section_names[int(np.argmax(np.abs(vectors[:, k])))]
 
 
-@pytest.mark.slow  # the unsplayed gait's search and nine Newton solves, about 3 CPU s
+@pytest.mark.slow  # two searches without a guess and nine Newton solves, about 5 CPU s
 def test_splay_changes_the_kuo_compass_unstable_mode_but_does_not_stabilise_it() -> None:
     """Point feet splayed outward along one branch: the rocking's flip shrinks (-6.59 -> -3.39 at 0.02 rad), a
     complex pair takes over (2.455372 at 0.05), then a real yaw mode (3.08 at 0.1, 3.06 at 0.15); the largest
-    modulus stays above 1 at every splay. The old model's turn (:func:`turned`) has the same gait at 0.05."""
+    modulus stays above 1 at every splay. At 0.05 (the config's) the search without a guess finds the same gait, and
+    the old model's turn (:func:`turned`) has it too."""
     cycles = space_branch([kuo_splayed(s) for s in KUO_SPLAYS])
     assert [c.converged for c in cycles] == [True] * len(KUO_SPLAYS)
     assert all(c.max_multiplier_modulus > 1.0 for c in cycles)
@@ -247,6 +248,10 @@ def test_splay_changes_the_kuo_compass_unstable_mode_but_does_not_stabilise_it()
     assert abs(found[splay][0]) == pytest.approx(modulus, abs=1e-6) and abs(found[splay][0].imag) > 1.0
     assert {s: found[s][1] for s in KUO_MODE} == KUO_MODE
     pair = cycles[KUO_SPLAYS.index(splay)]
+    searched = space_limit_cycle(kuo_splayed(splay))  # the config's gait, found without a guess: the same
+    assert searched.converged and "sagittal twin" in searched.start
+    np.testing.assert_allclose(searched.section_point, pair.section_point, rtol=0, atol=1e-9)
+    assert searched.step_period == pytest.approx(0.67101559, abs=1e-8)
     step_map = SpaceMap(kuo_turned(splay))
     z, converged, _, _ = newton_fixed_point(step_map, pair.section_point, RIGID_TOLERANCE)
     assert converged
