@@ -70,3 +70,17 @@ def test_progress_chunking_does_not_change_results() -> None:
     with_progress = simulate(config, progress=times.append)
     assert len(times) >= 2 and times == sorted(times) and times[-1] == pytest.approx(3.0)
     assert np.array_equal(with_progress.run.y, simulate(config).run.y)
+
+
+def test_a_stiff_run_whose_event_search_fails_ends_diverged_with_its_reason(monkeypatch: pytest.MonkeyPatch) -> None:
+    """scipy's root search raising "f(a) and f(b) must have different signs" (its interpolant disagreeing in sign with
+    its step's end states) is a status, not a crash: with no event at zero to hold, the run ends diverged, saying why."""
+    from biped_sim.integrate import stiff
+
+    def failing_search(*args: object, **kwargs: object) -> None:
+        raise ValueError("f(a) and f(b) must have different signs")
+
+    monkeypatch.setattr(stiff, "solve_ivp", failing_search)
+    result = simulate(default_walker("integrator.method=radau", t_end=0.05))
+    assert result.status == "diverged"
+    assert result.status_reason == "the stiff solver's event search failed (an event function within round-off of zero)"

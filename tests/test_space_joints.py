@@ -185,3 +185,21 @@ def test_the_3d_kneed_walker_s_stiff_method_strikes_where_dopri5_does() -> None:
     np.testing.assert_allclose(stiff.steps.strike_time, explicit.steps.strike_time, rtol=0.0, atol=1e-6)
     for column in ("stance_angle", "swing_angle", "heading", "bank", "sway"):
         np.testing.assert_allclose(getattr(stiff.steps, column), getattr(explicit.steps, column), rtol=0.0, atol=1e-5)
+
+
+@pytest.mark.slow  # 1.5 s of walk by BDF
+def test_a_stiff_run_with_knees_at_their_stops_holds_those_events_and_walks_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the hips 0.12 m apart the knees' stop events sit within round-off of zero after a restart, and scipy's root
+    search found no sign change where its step saw one: the run raised a traceback. The segment is now retried with
+    those events held on their side (the knee stops' rows), and the run walks."""
+    from biped_sim.integrate import stiff
+
+    held: list[np.ndarray] = []
+    hold = stiff._hold_at_zero
+    monkeypatch.setattr(stiff, "_hold_at_zero", lambda *args: hold(*args) and not held.append(args[3].copy()))
+    data = yaml.safe_load(KNEED_3D.read_text())
+    data["walker"]["parameters"][0]["value"] = 0.12  # hip_width
+    data["simulation"]["t_end"] = 1.5
+    result = simulate(config_from_dict(data))
+    assert result.status == "walking" and result.summary["n_steps"] >= 2
+    assert held and all(list(np.flatnonzero(h)) == [4, 5] for h in held)  # the two knee stops' events

@@ -39,6 +39,7 @@ RUNNING, COMPLETED, FELL, DIVERGED, TIMEOUT = 0, 1, 2, 3, 4
 # why a run diverged (LOOP_STATE.reason; the blow-up checks' value is LOOP_STATE.excess)
 NONFINITE, MIN_STEP_REACHED, TOO_MANY_FORCED, STEPS_COLLAPSED, EVALUATION_BUDGET, SOLVER_FAILED = 1, 2, 3, 4, 5, 6
 ENERGY_RESIDUAL, ENERGY_JUMP, JOINT_DRIFT = 7, 8, 9  # integrate.blowup's checks
+EVENT_SEARCH_FAILED = 10  # the stiff driver's: scipy found no root where its step saw an event change sign
 BLEW_UP = ": the integration blew up"
 DIVERGENCE_REASONS = {
     NONFINITE: "non-finite state",
@@ -47,6 +48,7 @@ DIVERGENCE_REASONS = {
     STEPS_COLLAPSED: "steps averaging below 1e-8 s over 200000 steps: the step-size control is stuck",
     EVALUATION_BUDGET: "right-hand-side evaluation budget exhausted",
     SOLVER_FAILED: "the stiff solver failed (its step size fell below round-off)",
+    EVENT_SEARCH_FAILED: "the stiff solver's event search failed (an event function within round-off of zero)",
     ENERGY_RESIDUAL: "energy residual {:.2g} m g l" + BLEW_UP,
     ENERGY_JUMP: "energy error of {:.2g} m g l between two checks (1 ms or one step apart), then a fall" + BLEW_UP,
     JOINT_DRIFT: "joint drift {:.2g} leg lengths" + BLEW_UP,

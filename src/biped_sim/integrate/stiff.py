@@ -27,6 +27,7 @@ from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
     EVALUATION_BUDGET,
+    EVENT_SEARCH_FAILED,
     FELL,
     NONFINITE,
     RUNNING,
@@ -42,6 +43,7 @@ from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system
 from biped_sim.multibody.events import event_count, system_event_functions
 
 EVENT_NUDGE = 1e-12  # [s] step past a located event so that its function has its new sign
+EVENT_NOISE = 1e-12  # [m, m/s] an event function closer to zero at a segment's start is on its boundary (a retry's)
 MAX_STIFF_EVALS = 20_000_000  # right-hand sides a stiff run may evaluate (about 10 minutes of scipy)
 
 
@@ -188,10 +190,12 @@ def integrate_scipy(
     touching_before = np.zeros(nf)
     g = np.empty(event_count(system))
 
+    held = np.zeros(event_count(system))  # per event: the side a retried segment holds it on near zero (0: none)
+
     def make_event(j: int) -> Callable[[float, np.ndarray], float]:
         def event(t: float, state: np.ndarray) -> float:
             event_values(state, system, g)
-            return g[j]
+            return held[j] * EVENT_NOISE if held[j] != 0.0 and abs(g[j]) < EVENT_NOISE else g[j]
 
         event.terminal = True  # type: ignore[attr-defined]
         return event
@@ -215,6 +219,14 @@ def integrate_scipy(
         except StoppedError as stop:
             st.status, st.reason, st.stop_time = stop.status, stop.reason, t
             break
+        except ValueError as error:  # scipy's root search on its interpolant: no sign change where its step saw one
+            if "different signs" not in str(error):
+                raise
+            if held.any() or not _hold_at_zero(y, system, event_values, held):
+                st.status, st.reason, st.stop_time = DIVERGED, EVENT_SEARCH_FAILED, t
+                break
+            continue  # the segment again, the events at zero held on their side
+        held[:] = 0.0
         nfev += sol.nfev
         st.accepted += len(sol.t) - 1
         t_stop = float(sol.t[-1])
@@ -247,6 +259,20 @@ def integrate_scipy(
     st.rhs_evals += nfev
     st.time = t
     return rec
+
+
+def _hold_at_zero(
+    y: np.ndarray, system: tuple, event_values: Callable[[np.ndarray, tuple, np.ndarray], None], held: np.ndarray
+) -> bool:
+    """Hold the events within ``EVENT_NOISE`` of zero at ``y`` (a segment's start) on their side, the explicit loop's
+    (zero counts as not positive), until they leave that band; whether there was one. An event function at zero
+    (a joint at its stop's angle) flickers in sign by round-off, and scipy's root search on its interpolant then
+    finds no sign change where its step's end states had one."""
+    g = np.empty(held.shape[0])
+    event_values(y, system, g)
+    at_zero = np.abs(g) < EVENT_NOISE
+    held[:] = np.where(at_zero, np.where(g > 0.0, 1.0, -1.0), 0.0)
+    return bool(at_zero.any())
 
 
 def _stop_if_fallen(
