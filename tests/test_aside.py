@@ -221,7 +221,7 @@ from biped_sim.config import Config
 from biped_sim.simulate import aside, prepare_model
 aside._cold_loop = lambda model: True
 aside.available_cores = lambda: 2
-aside._compile_quietly = lambda config, model, rhs_typed: os._exit(3)  # dies before its right-hand side
+aside._compile_quietly = lambda config, model, rhs_typed, flow_done: os._exit(3)  # dies before its right-hand side
 model, process = aside.prepare_compiling_aside(Config())
 aside.join(process)
 print(process.exitcode, (model.modes0 == prepare_model(Config()).modes0).all())

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numba
@@ -103,3 +104,44 @@ def test_a_user_error_of_a_cold_rigid_run_in_space_is_one_line(tmp_path: Path) -
     assert out.returncode == 2
     assert "budget" in one_line_error(out.stderr)  # no traceback: the second process ended quietly
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("cold_phase", [True, False], ids=["cold stance phase", "warm stance phase"])
+def test_a_cold_compliant_run_from_the_rigid_limit_cycle_in_space_splits_the_stance_phase(
+    monkeypatch: pytest.MonkeyPatch, cold_phase: bool
+) -> None:
+    """Its second process compiles the rigid flow's tree first and signals; the run compiles its share of the stance
+    phase and seeks the limit cycle only after the signal (a warm stance phase: neither)."""
+    monkeypatch.setattr(aside, "_cold_loop", lambda model: True)
+    monkeypatch.setattr(aside, "available_cores", lambda: 2)
+    if cold_phase:
+        monkeypatch.setattr(aside, "first_callee", lambda: (numba.njit(lambda x: x), (1.0,)))  # compiled here
+    monkeypatch.setattr(aside, "flow_share", lambda: ((_SlowCompile(), ()),))  # the second process signals after it
+    monkeypatch.setattr(aside, "measure_stand_in", lambda config, model: None)
+    steps: list[object] = []
+    monkeypatch.setattr(aside, "_compile_phase_share", lambda: steps.append("phase share"))
+    forked = []
+    fork = aside._fork
+    monkeypatch.setattr(aside, "_fork", lambda target, args: forked.append(args[-1]) or fork(target, args))
+    prepare = aside.prepare_model
+    monkeypatch.setattr(aside, "prepare_model", lambda config: _flow_done(forked, steps) or prepare(config))
+    config = load_config(CONFIGS / "space" / "tinkertoy_compliant.yaml", ["simulation.t_end=0.5"])
+    model, process = aside.prepare_compiling_aside(config)
+    aside.join(process)
+    assert process.exitcode == 0
+    assert steps == (["phase share", True] if cold_phase else [None])
+    assert model.y0 == pytest.approx(prepare(config).y0, abs=0.0)  # the run's start: the rigid limit cycle
+
+
+class _SlowCompile:
+    """A stand-in of a kernel whose compile takes a second (the flow's tree takes some 6 CPU s)."""
+
+    def compile(self, signature: tuple) -> None:
+        time.sleep(1.0)
+
+
+def _flow_done(forked: list[object], steps: list[object]) -> None:
+    """Note in ``steps`` whether the forked process's flow signal is set (None: it was given none); nothing before the
+    fork (the draft's build)."""
+    if forked:
+        steps.append(None if forked[0] is None else forked[0].is_set())  # type: ignore[attr-defined]

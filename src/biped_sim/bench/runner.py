@@ -77,6 +77,8 @@ CASES: tuple[BenchCase, ...] = (
     BenchCase("dopri5 1e-6, four-legged, spatial", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=spatial"), False),
     BenchCase("dopri5 1e-6, four-legged, minimal", "dopri5", 1e-6, (FOUR_LEGGED, "formulation.kind=minimal"), False),
     BenchCase(KNEED_MINIMAL, "dopri5", 1e-6, ("formulation.kind=minimal",), False, "kneed_walker_compliant.yaml"),
+    BenchCase("bdf rtol 1e-6 (scipy over the compiled RHS)", "bdf", 1e-6),
+    BenchCase("radau rtol 1e-6 (scipy over the compiled RHS)", "radau", 1e-6),
     BenchCase("rk4", "rk4"),
     BenchCase("rk2", "rk2"),
     BenchCase("euler", "euler"),

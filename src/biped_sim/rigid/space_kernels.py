@@ -94,10 +94,10 @@ def attitude_rates(x: np.ndarray) -> np.ndarray:
     return np.array([x[6] - theta_rate * sx, x[4] * cz + x[5] * sz, theta_rate])
 
 
-@kernel
+@kernel(literal_arguments=False)
 def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A foot's lowest point from its frame's origin and the unit vector d from its centre toward it (slope frame;
-    a torus's: its ring's, lowered by the tube radius)."""
+    a torus's: its ring's, lowered by the tube radius). Compiled once for both feet (callers pass 0 and 1)."""
     o = FEET + foot * FOOT_SIZE
     centre = mat_vec(rotation, p[o + 2 : o + 5])
     d = np.zeros(3)

@@ -24,7 +24,8 @@ checked compiles the integration, while this one checks the walker (the flow's t
 callees (:func:`step_callees`) and the twins the run's measures call (:func:`measure_twins`), then waits for it:
 the step, compiled last, finds every callee in the cache. The step itself cannot go aside: it is the twin Python
 calls, compiled where it is called. A rigid run in space splits its stance phase's callees between the two processes
-alike (:mod:`biped_sim.simulate.space_aside`).
+alike (:mod:`biped_sim.simulate.space_aside`), and so does a compliant run in space that starts on the rigid limit
+cycle, whose second process compiles the flow's tree before the loop's right-hand side.
 """
 
 from __future__ import annotations
@@ -76,7 +77,7 @@ from biped_sim.walkers import BuiltModel, describe
 from biped_sim.walkers.model import start_modes_deferred
 
 STAND_IN_SAMPLES = 2  # samples and heel strikes of the stand-in: a step between two strikes, a sample interval
-RHS_POLL_S = 0.05  # [s] how often a run waiting for the second process's right-hand side looks whether it died
+RHS_POLL_S = 0.05  # [s] how often a run waiting for the second process's signal looks whether it died
 
 
 def stand_in(model: BuiltModel) -> Integration:
@@ -271,16 +272,22 @@ def _prepare_space(config: Config) -> BuiltModel | RigidStart | SpaceStart:
     """A rigid run in space's :func:`~biped_sim.simulate.prepare_model` (the limit cycle's search compiles the stance
     phase). On a cold cache (the phase's first callee compiled, :func:`.space_aside.first_callee`) and more than one
     core, a second process compiles the flow's tree (:func:`.space_aside.flow_share`) while this one checks the run's
-    size and compiles the events' tree (:func:`.space_aside.events_share`) and the clearance's twin; the phase is
-    compiled once that process has ended (it then finds both trees in the cache)."""
+    size and compiles its share of the phase (:func:`_compile_phase_share`); the phase is compiled once that process
+    has ended (it then finds both trees in the cache)."""
     if _compiled(*first_callee()) and available_cores() >= 2:
         process = _fork(_compile_each_quietly, (flow_share(),))
         check_space_run_size(config)  # a ConfigError here ends the second process with this one
-        compile_all(events_share())
-        twin, args = clearance_twin()
-        twin.entry_for(*args)
+        _compile_phase_share()
         join(process)
     return prepare_model(config)
+
+
+def _compile_phase_share() -> None:
+    """The run's process's share of a rigid stance phase in space while a second compiles the flow's tree: the
+    events' tree (:func:`.space_aside.events_share`) and the clearance's twin (the limit cycle's section calls it)."""
+    compile_all(events_share())
+    twin, args = clearance_twin()
+    twin.entry_for(*args)
 
 
 def measure_stand_in(config: Config, model: BuiltModel) -> None:
@@ -291,19 +298,23 @@ def measure_stand_in(config: Config, model: BuiltModel) -> None:
     _ = result.summary
 
 
-def _compile_quietly(config: Config, model: BuiltModel, rhs_typed: Event) -> None:
-    """In the second process: the loop's right-hand side (``rhs_typed`` is set once its callees are in the cache and
-    only its own lowering remains, about a CPU s, less than the loop's compile takes to reach it), the starting step's
-    norm, the shared callees, those the loop reaches first first (the run's process takes them from the other end
-    meanwhile), the fall check (compiled by the run's process by then: loaded), then
-    :func:`measure_stand_in`; it exits without a word if it fails: the run then compiles them itself (and reports any
-    error of its own)."""
+def _compile_quietly(config: Config, model: BuiltModel, rhs_typed: Event, flow_done: Event | None) -> None:
+    """In the second process: with ``flow_done`` (a start on the rigid limit cycle in space, cold) first the rigid
+    flow's tree (:func:`.space_aside.flow_share`), then set; the loop's right-hand side (``rhs_typed`` is set once its
+    callees are in the cache and only its own lowering remains, about a CPU s, less than the loop's compile takes to
+    reach it; a stiff run's once it is in the cache), the starting step's norm, the shared callees, those the loop
+    reaches first first (the run's process takes them from the other end meanwhile), the fall check (compiled by the
+    run's process by then: loaded), then :func:`measure_stand_in`; it exits without a word if it fails: the run then
+    compiles them itself (and reports any error of its own)."""
     try:
+        if flow_done is not None:
+            compile_all(flow_share())
+            flow_done.set()
         callees = loop_callees(config, model)
         signalling = callees.rhs[0][0].py_func.__qualname__ if callees.signal_at_lowering else ""
         with signalling_lowering(signalling, rhs_typed.set):
             compile_all(callees.rhs[:1])
-        rhs_typed.set()  # also when it was loaded from the cache (nothing lowered) or there is no loop
+        rhs_typed.set()  # also when it was loaded from the cache (nothing lowered)
         compile_all(callees.rhs[1:] + callees.shared[::-1] + callees.check)
         measure_stand_in(config, model)
     except Exception:  # the run measures for real and reports what went wrong
@@ -344,19 +355,37 @@ def _prepare_compliant(config: Config) -> tuple[BuiltModel | RigidStart | SpaceS
     and compiles the loop's right-hand side first; meanwhile this process compiles the loop's fall check, resolves
     the start (a limit cycle: the rigid step map compiled), builds the model (compiling the start's mode update),
     then compiles the loop's small late callees (:func:`loop_callees`) until only the right-hand side's own
-    lowering remains (or waits for it), so that its loop's compile, next, loads it when it reaches it."""
+    lowering remains (or waits for it), so that its loop's compile, next, loads it when it reaches it. A start on
+    the rigid limit cycle in space (:func:`_cold_space_cycle`) splits the stance phase's compile as a rigid run in
+    space does: the process compiles the flow's tree before the right-hand side, this one its share after the fall
+    check, and waits for the flow's tree before it seeks the limit cycle."""
     draft = _draft(config)
     rhs_typed = _shared_event() if draft is not None and _cold_loop(draft) and available_cores() >= 2 else None
     if draft is None or rhs_typed is None:
         return prepare_model(config), None
-    process = _fork(_compile_quietly, (config, draft, rhs_typed))
+    flow_done = _shared_event() if _cold_space_cycle(config) else None
+    process = _fork(_compile_quietly, (config, draft, rhs_typed, flow_done))
     callees = loop_callees(config, draft)
     compile_all(callees.check)
+    if flow_done is not None:
+        _compile_phase_share()
+        _wait(flow_done, process)
     model = prepare_model(config)
     compile_all(callees.shared, until=lambda: rhs_typed.is_set() or not process.is_alive())
-    while process.is_alive() and not rhs_typed.wait(RHS_POLL_S):
-        pass
+    _wait(rhs_typed, process)
     return model, process
+
+
+def _cold_space_cycle(config: Config) -> bool:
+    """Whether ``config`` starts on the rigid limit cycle of a walker in space whose stance phase the cache lacks
+    (:func:`.space_aside.first_callee` compiled rather than loaded)."""
+    return config.in_space and config.simulation.initial == "rigid_limit_cycle" and _compiled(*first_callee())
+
+
+def _wait(event: Event, process: BaseProcess) -> None:
+    """Wait until ``event`` is set or ``process`` has died (it then sets nothing: this process compiles alone)."""
+    while process.is_alive() and not event.wait(RHS_POLL_S):
+        pass
 
 
 def _shared_event() -> Event | None:
