@@ -33,9 +33,9 @@ OTHER_GROUPS = (
     "biped_sim.integrate.stiff",
 )
 
-# bundled configs whose group the warm-up leaves to their first run: the 3D kneed walker's (Euler parameters with joint
+# bundled configs whose group the warm-up leaves to their first run: the 3D kneed walkers' (Euler parameters with joint
 # stops), which only the slow tier and a user who asks for it run
-NOT_WARMED = {"kneed_walker_3d.yaml"}
+NOT_WARMED = {"kneed_walker_3d.yaml", "kneed_walker_3d_settled.yaml"}
 
 # the profile geometry and the profile implementations of the ground's functions: a flat run compiles none
 PROFILE_CODE = ("biped_sim.contact.ground.", "biped_sim.contact.response._profile_")
