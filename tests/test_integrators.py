@@ -73,8 +73,9 @@ def test_progress_chunking_does_not_change_results() -> None:
 
 
 def test_a_stiff_run_whose_event_search_fails_ends_diverged_with_its_reason(monkeypatch: pytest.MonkeyPatch) -> None:
-    """scipy's root search raising "f(a) and f(b) must have different signs" (its interpolant disagreeing in sign with
-    its step's end states) is a status, not a crash: with no event at zero to hold, the run ends diverged, saying why."""
+    """scipy's root search raising "f(a) and f(b) must have different signs" (its interpolant disagreeing in sign
+    with its step's end states) is a status, not a crash: with no event at zero to hold, the run ends diverged, saying
+    why."""
     from biped_sim.integrate import stiff
 
     def failing_search(*args: object, **kwargs: object) -> None:

@@ -233,8 +233,14 @@ def test_a_stiff_run_with_knees_at_their_stops_holds_those_events_and_walks_on(m
     from biped_sim.integrate import stiff
 
     held: list[np.ndarray] = []
-    hold = stiff._hold_at_zero
-    monkeypatch.setattr(stiff, "_hold_at_zero", lambda *args: hold(*args) and not held.append(args[3].copy()))
+    retry = stiff.WatchedEvents.retry_holding
+
+    def noted_retry(watched: stiff.WatchedEvents, error: ValueError, y: np.ndarray) -> bool:
+        again = retry(watched, error, y)
+        held.append(watched.held.copy())
+        return again
+
+    monkeypatch.setattr(stiff.WatchedEvents, "retry_holding", noted_retry)
     data = yaml.safe_load(KNEED_3D.read_text())
     data["walker"]["parameters"][0]["value"] = 0.12  # hip_width
     data["simulation"]["t_end"] = 1.5

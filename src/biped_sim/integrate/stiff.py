@@ -188,19 +188,7 @@ def integrate_scipy(
     """
     nf = modes.shape[0]
     touching_before = np.zeros(nf)
-    g = np.empty(event_count(system))
-
-    held = np.zeros(event_count(system))  # per event: the side a retried segment holds it on near zero (0: none)
-
-    def make_event(j: int) -> Callable[[float, np.ndarray], float]:
-        def event(t: float, state: np.ndarray) -> float:
-            event_values(state, system, g)
-            return held[j] * EVENT_NOISE if held[j] != 0.0 and abs(g[j]) < EVENT_NOISE else g[j]
-
-        event.terminal = True  # type: ignore[attr-defined]
-        return event
-
-    events = [make_event(j) for j in range(event_count(system))]
+    watched = WatchedEvents(system, event_values)
     options = {"jac": jac} if jac is not None else {}
     st = rec.state[0]
     t = float(st.time)
@@ -213,20 +201,18 @@ def integrate_scipy(
             break
         try:
             sol = solve_ivp(
-                fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=events,
+                fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=watched.events,
                 dense_output=True, **options,
             )  # fmt: skip
         except StoppedError as stop:
             st.status, st.reason, st.stop_time = stop.status, stop.reason, t
             break
         except ValueError as error:  # scipy's root search on its interpolant: no sign change where its step saw one
-            if "different signs" not in str(error):
-                raise
-            if held.any() or not _hold_at_zero(y, system, event_values, held):
-                st.status, st.reason, st.stop_time = DIVERGED, EVENT_SEARCH_FAILED, t
-                break
-            continue  # the segment again, the events at zero held on their side
-        held[:] = 0.0
+            if watched.retry_holding(error, y):
+                continue  # the segment again, the events at zero held on their side
+            st.status, st.reason, st.stop_time = DIVERGED, EVENT_SEARCH_FAILED, t
+            break
+        watched.held[:] = 0.0
         nfev += sol.nfev
         st.accepted += len(sol.t) - 1
         t_stop = float(sol.t[-1])
@@ -261,18 +247,39 @@ def integrate_scipy(
     return rec
 
 
-def _hold_at_zero(
-    y: np.ndarray, system: tuple, event_values: Callable[[np.ndarray, tuple, np.ndarray], None], held: np.ndarray
-) -> bool:
-    """Hold the events within ``EVENT_NOISE`` of zero at ``y`` (a segment's start) on their side, the explicit loop's
-    (zero counts as not positive), until they leave that band; whether there was one. An event function at zero
-    (a joint at its stop's angle) flickers in sign by round-off, and scipy's root search on its interpolant then
-    finds no sign change where its step's end states had one."""
-    g = np.empty(held.shape[0])
-    event_values(y, system, g)
-    at_zero = np.abs(g) < EVENT_NOISE
-    held[:] = np.where(at_zero, np.where(g > 0.0, 1.0, -1.0), 0.0)
-    return bool(at_zero.any())
+class WatchedEvents:
+    """The terminal events scipy watches, one per event function of ``system`` (``event_values`` computes them all),
+    and the sides a retried segment holds those at zero on (:meth:`retry_holding`; 0: not held)."""
+
+    def __init__(self, system: tuple, event_values: Callable[[np.ndarray, tuple, np.ndarray], None]) -> None:
+        n = event_count(system)
+        self.system, self.event_values = system, event_values
+        self.values, self.held = np.empty(n), np.zeros(n)
+        self.events = [self._event(j) for j in range(n)]
+
+    def _event(self, j: int) -> Callable[[float, np.ndarray], float]:
+        def event(t: float, state: np.ndarray) -> float:
+            self.event_values(state, self.system, self.values)
+            value, side = self.values[j], self.held[j]
+            return side * EVENT_NOISE if side != 0.0 and abs(value) < EVENT_NOISE else value
+
+        event.terminal = True  # type: ignore[attr-defined]
+        return event
+
+    def retry_holding(self, error: ValueError, y: np.ndarray) -> bool:
+        """After scipy's root search failed (``error``; any other ValueError is raised again): hold the events within
+        ``EVENT_NOISE`` of zero at ``y``, the segment's start, on their side (the explicit loop's: zero counts as not
+        positive) until they leave that band; whether the segment may be tried again (some were at zero, and none was
+        held already). An event function at zero (a joint at its stop's angle) flickers in sign by round-off, and
+        scipy's root search on its interpolant then finds no sign change where its step's end states had one."""
+        if "different signs" not in str(error):
+            raise error
+        if self.held.any():
+            return False
+        self.event_values(y, self.system, self.values)
+        at_zero = np.abs(self.values) < EVENT_NOISE
+        self.held[:] = np.where(at_zero, np.where(self.values > 0.0, 1.0, -1.0), 0.0)
+        return bool(at_zero.any())
 
 
 def _stop_if_fallen(
