@@ -238,13 +238,19 @@ def _raise_on_sigterm(signum: int, frame: object) -> None:  # as the CLI's handl
     raise KeyboardInterrupt
 
 
-def test_a_second_process_terminated_by_a_run_that_ended_first_says_nothing(capfd: pytest.CaptureFixture[str]) -> None:
-    previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)  # the run's handler, inherited at the fork
+@pytest.mark.parametrize("delay", [0.0, 0.2], ids=["at once", "in its target"])
+def test_a_second_process_terminated_by_a_run_that_ended_first_says_nothing(
+    capfd: pytest.CaptureFixture[str], delay: float
+) -> None:
+    """Terminated at once (a user error found before the process runs a line of its own) or later, it ends silently,
+    and the run's own handler is back in place after the fork."""
+    previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)  # the run's handler, not inherited at the fork
     try:
         process = aside._fork(time.sleep, (60.0,))
+        assert signal.getsignal(signal.SIGTERM) is _raise_on_sigterm
     finally:
         signal.signal(signal.SIGTERM, previous)
-    time.sleep(0.2)  # the process in its target
+    time.sleep(delay)
     process.terminate()  # what multiprocessing does to a daemon at exit (a run ended by an error or Ctrl-C)
     process.join(10.0)
     assert process.exitcode == -signal.SIGTERM

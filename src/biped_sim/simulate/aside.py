@@ -230,23 +230,19 @@ def _compile_each_quietly(callees: Compiles) -> None:
         raise SystemExit(1) from None
 
 
-def _silently_terminated(target: Callable[..., None], *args: object) -> None:
-    """``target(*args)`` in a forked process whose SIGTERM ends it at once (the default action), not by the run's
-    handler it inherited (the CLI's raises, which would print a traceback): a run that ends before the process,
-    on a user error or an interrupt, terminates it at exit."""
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    target(*args)
-
-
 def _fork(target: Callable[..., None], args: tuple[object, ...]) -> BaseProcess:
-    """A forked daemon process running ``target(*args)``, started, which ignores Ctrl-C (the run's own handling
-    reports it) and ends with this one, silently (:func:`_silently_terminated`)."""
-    process = get_context("fork").Process(target=_silently_terminated, args=(target, *args), daemon=True)
-    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited: the forked process ignores Ctrl-C
+    """A forked daemon process running ``target(*args)``, started. It inherits, from its first instruction, Ctrl-C
+    ignored (the run's own handling reports it) and SIGTERM's default action rather than the run's handler (the CLI's
+    raises, which would print a traceback): a run that ends before the process, on a user error or an interrupt,
+    terminates it at exit, silently, even before it has run a line of its own."""
+    process = get_context("fork").Process(target=target, args=args, daemon=True)
+    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    terminate = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
         process.start()
     finally:
         signal.signal(signal.SIGINT, interrupt)
+        signal.signal(signal.SIGTERM, terminate)
     return process
 
 
