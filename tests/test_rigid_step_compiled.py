@@ -12,13 +12,17 @@ from contextlib import contextmanager
 
 import numpy as np
 import pytest
+from numba import njit
 from numba.core.registry import CPUDispatcher
 
 from biped_sim import load_config, simulate
 from biped_sim.config import Config, derive
+from biped_sim.integrate.stepper import Scratch, make_scratch
+from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.rigid import compiled
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.ground import Footing, ProfileStrike, rigid_ground
+from biped_sim.rigid.integration import ROOT_TOL, event_root
 from biped_sim.rigid.tree import RigidWalker
 
 from .conftest import CONFIGS, run_as_plain_python
@@ -178,3 +182,38 @@ def test_a_run_with_a_push_and_steps_closes_its_energy_balance() -> None:
     run = simulate(load_config(CONFIGS / "kneed_walker.yaml", overrides))
     assert run.status == "walking" and len(run.strike_time) >= 4 and len(run.pushes) == 1  # type: ignore[attr-defined]
     assert np.max(np.abs(run.energy.residual)) < 1e-9 * run.walker.reference_mass * run.walker.gravity  # type: ignore[attr-defined]
+
+
+@njit(cache=True, inline="always")
+def _line_inlined(on: tuple[float, float], j: int, x: np.ndarray) -> float:
+    return on[0] * x[0] + on[1]
+
+
+@njit(cache=True)
+def _line_called(on: tuple[float, float], j: int, x: np.ndarray) -> float:
+    return on[0] * x[0] + on[1]
+
+
+@njit(cache=True)
+def _event_roots(tab: Tableau, sc: Scratch, y: np.ndarray, on: tuple[float, float]) -> tuple[float, float]:
+    """The one event search with an event function that numba inlines and with one that it calls."""
+    return (
+        event_root(_line_inlined, on, tab, sc, 0, 0.0, 1.0, y),
+        event_root(_line_called, on, tab, sc, 0, 0.0, 1.0, y),
+    )
+
+
+def test_the_event_search_finds_the_root_of_the_dense_output_with_its_event_function_inlined_or_called() -> None:
+    """DOP853's dense output set to y(theta) = 1 - 2 theta + theta (1 - theta) / 2 over a step of length 1 at t = 0,
+    the event 2 y - 0.5: its zero theta = (-3 + sqrt(15)) / 2 to a few ROOT_TOL, the same bits either way; a step
+    that ends on the zero returns 1."""
+    tab, sc = tableau("dop853"), make_scratch(1, 0, 1)
+    y = np.array([1.0])
+    sc.dense[0, 0], sc.dense[1, 0] = -2.0, 0.5  # y + theta (d0 + (1 - theta) d1)
+    on = (2.0, -0.5)
+    sc.g_old[0], sc.g_new[0] = 1.5, -2.5
+    inlined, called = _event_roots(tab, sc, y, on)
+    assert abs(inlined - (-3.0 + np.sqrt(15.0)) / 2.0) <= 4 * ROOT_TOL
+    assert np.float64(inlined).tobytes() == np.float64(called).tobytes()
+    sc.g_new[0] = 0.0
+    assert _event_roots(tab, sc, y, on) == (1.0, 1.0)

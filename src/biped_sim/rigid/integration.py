@@ -17,6 +17,7 @@ the error norm: the states, and every walker's results, are those of the flow al
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -172,14 +173,21 @@ def _prepare_dense(p: RigidTree, tab: Tableau, h: float, y: np.ndarray, sc: Scra
 
 
 @njit(cache=True, inline="always")  # inlined: a call would count references to every array of cw
-def _event_value(cw: CompiledWalker, phase: int, mode: int, j: int, y: np.ndarray) -> float:
+def _event_value(on: tuple[CompiledWalker, int, int], j: int, y: np.ndarray) -> float:
+    """Event j at y for the phase and guard mode of ``on`` = (cw, phase, mode): the guard (j = 0), a fall function."""
+    cw, phase, mode = on
     return phase_guard(cw, phase, mode, y) if j == 0 else fall_check(cw.params, j - 1, y)
 
 
-@njit(cache=True, inline="always")  # inlined: a kernel of its own would emit the flow's code again
-def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float, y: np.ndarray) -> float:
-    """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
-    tab, sc = cw.tab, cw.sc
+@njit(cache=True, inline="always")  # inlined: each caller's event function resolved, and inlined if it is, at typing
+def event_root(
+    value: Callable[..., float], on: tuple, tab: Tableau, sc: Scratch, j: int, t: float, h: float, y: np.ndarray
+) -> float:
+    """Zero of event j inside the accepted step from (t, y) of length h as theta in [0, 1], on the dense output
+    (prepared by the caller) by the Illinois method from the bracket of the event's values sc.g_old[j] at the start
+    and sc.g_new[j] at the end, to ROOT_TOL relative in time; returns the end of the final bracket where the event is
+    closer to zero. ``value(on, j, x)`` is event j at the state x, ``on`` what else it reads: the one search of the
+    planar and the 3D rigid integrations (a jitted function passed as an argument, resolved where this is inlined)."""
     lo, hi = 0.0, 1.0
     g_lo, g_hi = sc.g_old[j], sc.g_new[j]
     if g_hi == 0.0:
@@ -191,7 +199,7 @@ def _root(cw: CompiledWalker, phase: int, mode: int, j: int, t: float, h: float,
             break
         mid = illinois_point(lo, hi, g_lo, g_hi)
         dense_eval(tab, mid, h, y, sc, sc.y_dense)
-        g = _event_value(cw, phase, mode, j, sc.y_dense)
+        g = value(on, j, sc.y_dense)
         same_sign = (g > 0.0) == (g_lo > 0.0) and g != 0.0
         lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, same_sign)
     return lo if abs(g_lo) < abs(g_hi) else hi
@@ -275,7 +283,7 @@ def stretch(
                 if first < 0:  # the first crossing of this step: the dense output is needed
                     _prepare_dense(p, tab, h, y, sc)
                     counters[0] += 3
-                theta = _root(cw, phase, mode, j, t, h, y)
+                theta = event_root(_event_value, (cw, phase, mode), tab, sc, j, t, h, y)
                 if theta < best:
                     best, first = theta, j
         t_end = t + best * h if first >= 0 else (t_stop if clipped else t + h)

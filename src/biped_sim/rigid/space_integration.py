@@ -21,13 +21,12 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from biped_sim.integrate.dense import (
     dense_eval,
     dop853_coefficients,
     dop853_extra_stage_input,
-    illinois_point,
-    illinois_update,
     sample_dense,
 )
 from biped_sim.integrate.stepper import (
@@ -42,7 +41,7 @@ from biped_sim.integrate.stepper import (
 )
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
-from biped_sim.rigid.integration import MIN_STEP, ROOT_TOL, copy_into, first_sample
+from biped_sim.rigid.integration import MIN_STEP, copy_into, event_root, first_sample
 from biped_sim.rigid.space_kernels import bottom, rotations, space_flow
 from biped_sim.rigid.space_model import N_STATE
 from biped_sim.rigid.step import ATOL, RTOL
@@ -107,8 +106,10 @@ def _events(p: np.ndarray, phase: int, fall_height: float, x: np.ndarray, out: n
     out[1] = space_fall(p, fall_height, x)
 
 
-@kernel
-def _event_value(p: np.ndarray, phase: int, fall_height: float, j: int, x: np.ndarray) -> float:
+@njit(cache=True, inline="always")  # inlined into _root: a kernel of its own costs more to compile than its copy
+def _event_value(on: tuple[np.ndarray, int, float], j: int, x: np.ndarray) -> float:
+    """Event j at x for ``on`` = (the parameters, the phase, the fall height): the phase's guard (j = 0), the fall."""
+    p, phase, fall_height = on
     return space_guard(p, phase, x) if j == 0 else space_fall(p, fall_height, x)
 
 
@@ -116,22 +117,9 @@ def _event_value(p: np.ndarray, phase: int, fall_height: float, j: int, x: np.nd
 def _root(
     p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, fall_height: float, j: int, t: float, h: float, y: np.ndarray
 ) -> float:
-    """Zero of event j inside the step as theta in [0, 1] (Illinois on the dense output)."""
-    lo, hi = 0.0, 1.0
-    g_lo, g_hi = sc.g_old[j], sc.g_new[j]
-    if g_hi == 0.0:
-        return 1.0
-    side = 0
-    tol = ROOT_TOL * max(1.0, abs(t)) / h
-    for _ in range(200):
-        if hi - lo <= tol or g_lo == 0.0:
-            break
-        mid = illinois_point(lo, hi, g_lo, g_hi)
-        dense_eval(tab, mid, h, y, sc, sc.y_dense)
-        g = _event_value(p, phase, fall_height, j, sc.y_dense)
-        same_sign = (g > 0.0) == (g_lo > 0.0) and g != 0.0
-        lo, hi, g_lo, g_hi, side = illinois_update(lo, hi, g_lo, g_hi, side, mid, g, same_sign)
-    return lo if abs(g_lo) < abs(g_hi) else hi
+    """Zero of event j inside the step as theta in [0, 1] (:func:`~biped_sim.rigid.integration.event_root`): a kernel
+    of its own, which the run's process compiles while the second compiles the flow (``space_aside.events_share``)."""
+    return event_root(_event_value, (p, phase, fall_height), tab, sc, j, t, h, y)
 
 
 @kernel
