@@ -120,6 +120,17 @@ def test_what_the_rigid_model_in_space_lacks_is_one_line_naming_the_field(change
     assert _refused(change).startswith(message)
 
 
+def test_a_kneed_walker_in_space_made_rigid_is_refused_for_its_legs_not_its_start() -> None:
+    """The bundled 3D kneed walker with ``dynamics: rigid``: its start (the compliant run's body angles) does not
+    fit the rigid model's keys, but what the user must change is the walker (or the dynamics), so that is named."""
+    data = yaml.safe_load((CONFIGS / "space" / "kneed_walker_3d.yaml").read_text())
+    data["dynamics"] = "rigid"
+    del data["formulation"]
+    with pytest.raises(ConfigError) as error:
+        config_from_dict(data)
+    assert str(error.value).startswith("walker.description.legs: the rigid model in space takes two one-body legs")
+
+
 def test_legs_that_are_not_mirror_images_are_refused() -> None:
     """Two legs written by hand (no ``leg``) must be mirror images: here the second is heavier."""
     data = toy()
