@@ -101,19 +101,19 @@ def _torso(d: dict[str, Any]) -> None:
             "walker.description.bodies.torso: the rigid model in space takes two one-body legs on a hip hinge, "
             "no body off the legs",
         ),
-        (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.joints.hip.stops"),
+        (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.hip.stops"),
         (
             lambda d: d["hip"].update(elements=[{"name": "k", "law": "linear_spring", "stiffness": 1.0}]),
-            "walker.description.joints.hip.elements",
+            "walker.description.hip.elements",
         ),
-        (lambda d: d["hip"].update(axis=[1.0, 0.0, 0.0]), "walker.description.joints.hip.axis"),
-        (lambda d: d["hip"].update(at=[0.0, -0.1]), "walker.description.joints.hip.at"),
+        (lambda d: d["hip"].update(axis=[1.0, 0.0, 0.0]), "walker.description.hip.axis"),
+        (lambda d: d["hip"].update(at=[0.0, -0.1]), "walker.description.hip.at"),
         (
             lambda d: d.update(point_masses=[{"name": "hip", "body": "leg_1", "mass": 1.0}]),
             "walker.description.point_masses.hip: the rigid model in space takes two one-body legs on a hip hinge: a "
             "point mass only on the hinge's midpoint (at: [0, 0], lateral: -0.1812)",
         ),
-        (lambda d: d["leg"]["feet"][0].update(centre=[0.0, 0.5]), "walker.description.feet.foot_1.centre"),
+        (lambda d: d["leg"]["feet"][0].update(centre=[0.0, 0.5]), "walker.description.leg.feet.foot.centre"),
     ],
 )
 def test_what_the_rigid_model_in_space_lacks_is_one_line_naming_the_field(change: Any, message: str) -> None:

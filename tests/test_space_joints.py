@@ -144,7 +144,7 @@ def test_an_ellipsoid_foot_is_the_formulations_quadric_in_the_body_frame() -> No
 def test_the_planar_models_refuse_a_foot_of_another_shape_naming_it() -> None:
     data = _kneed_3d()
     data["formulation"] = {"kind": "planar"}
-    with pytest.raises(ConfigError, match=r"^walker\.description\.feet\.foot_1\.shape: only in space") as error:
+    with pytest.raises(ConfigError, match=r"^walker\.description\.leg\.feet\.foot\.shape: only in space") as error:
         config_from_dict(data)
     assert "\n" not in str(error.value)
 
