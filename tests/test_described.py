@@ -270,7 +270,7 @@ def test_a_swing_foot_starting_below_the_ground_is_refused_without_the_scuffing_
 def test_a_latch_needs_a_joint_within_a_leg_one_line_naming_the_field() -> None:
     data = _kneed().model_dump(mode="json")
     data["walker"]["description"]["joints"][0]["stops"] = [{"side": "upper", "angle": 0.5, "latch": True}]
-    with pytest.raises(ConfigError, match=r"^walker\.description\.joints\.0\.stops\.0\.latch: a latch needs") as error:
+    with pytest.raises(ConfigError, match=r"^walker\.description\.joints\.hip\.stops\.0\.latch: a latch") as error:
         config_from_dict(data)
     assert "\n" not in str(error.value)
 

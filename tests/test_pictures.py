@@ -2,21 +2,25 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
+from matplotlib.colors import to_rgba
+from matplotlib.figure import Figure
 from PIL import Image
 
 from biped_sim import load_config, simulate
 from biped_sim.contact.ground import ground_height_at
 from biped_sim.contact.profile import profile_arrays
 from biped_sim.io.trajectory import RunData, load_run
-from biped_sim.measure.pose import Poses, run_poses
+from biped_sim.measure.pose import FOOT_ARC_HALF_ANGLE, FOOT_HALF_WIDTH, Poses, Skeleton, run_poses, skeleton
 from biped_sim.measure.space_pose import space_poses
-from biped_sim.picture import OFF_LEG_COLOUR, body_colour
+from biped_sim.picture import GROUND_COLOUR, OFF_LEG_COLOUR, WalkerPicture, body_colour, draw_ground, draw_space_ground
 from biped_sim.plots import RIGID_RUN_FIGURES, walker_figure
+from biped_sim.walkers.describe import describe
 
 from .conftest import CONFIGS, invoke
 
@@ -170,3 +174,54 @@ def test_every_bundled_walker_in_space_is_drawn_in_3d_and_animated(config: Path,
     with Image.open(out) as image:
         assert image.n_frames == 3 and image.size == (800, 320)
     assert len(walker_figure(run).axes) == 2
+
+
+def drawn_foot(config: Path, overrides: list[str], angles: list[float]) -> tuple[np.ndarray, np.ndarray, Skeleton]:
+    """The first foot as WalkerPicture draws it (world frame, its sector's closing points to the centre dropped) with
+    the walker's bodies at ``angles`` and its hip at the origin, the drawn arc's centre (world frame) and the
+    skeleton."""
+    sk = skeleton(describe(load_config(config, overrides)))
+    pose = Poses.from_angles(sk, np.zeros(1), np.zeros((1, 2)), np.array([angles])).at(0)
+    fig = Figure()
+    picture = WalkerPicture(fig.add_subplot(), sk, 0.0)
+    picture.place(pose)
+    points = np.column_stack(picture.feet[0].get_data())
+    return points[1:-1], points[0], sk
+
+
+def test_a_foot_as_round_as_the_leg_is_drawn_as_a_foot_holding_its_contact_point() -> None:
+    """A foot of radius 0.45 on a leg of 0.5 is drawn as the arc of it no wider than FOOT_HALF_WIDTH leg lengths on
+    each side of its bottom (not 0.8 rad of it, 0.32 m on each side), the contact point below its centre on it at a
+    stance angle of 0.3 rad."""
+    arc, centre, sk = drawn_foot(CONFIGS / "round_foot_walker.yaml", ["walker.foot_radius=0.45"], [0.3, -0.3])
+    radius, half = sk.foot_radius[0], sk.foot_half_angle[0]
+    assert radius == 0.45 and half == pytest.approx(math.asin(FOOT_HALF_WIDTH * 0.5 / 0.45))
+    np.testing.assert_allclose(np.hypot(*(arc - centre).T), radius, rtol=1e-12)
+    across = (arc - centre) @ np.array([math.cos(0.3), math.sin(0.3)])  # along the leg's x axis, turned by 0.3 rad
+    assert np.max(np.abs(across)) == pytest.approx(FOOT_HALF_WIDTH * 0.5, rel=1e-12)
+    contact = centre - np.array([0.0, radius])  # straight below the centre on level ground
+    gaps = np.hypot(*(arc - contact).T)
+    assert gaps.min() < radius * 2 * half / 24  # within one of the arc's 24 pieces
+
+
+def test_a_lateral_torus_foot_is_drawn_in_the_sagittal_view_as_its_tube() -> None:
+    """The 3D kneed walker's feet, tori 1.5 m round sideways and 2 cm fore-aft: its sagittal view draws the 2 cm arc
+    the foot rolls on fore-aft (its sagittal section), down at the foot's bottom, not a sector of the 1.5 m ring."""
+    config = CONFIGS / "space" / "kneed_walker_3d.yaml"
+    arc, centre, sk = drawn_foot(config, [], [0.0] * 4)
+    assert sk.foot_radius[0] == pytest.approx(0.02) and sk.foot_half_angle[0] == FOOT_ARC_HALF_ANGLE
+    np.testing.assert_allclose(np.hypot(*(arc - centre).T), 0.02, rtol=1e-12)
+    assert np.min(arc[:, 1]) == pytest.approx(-load_config(config).walker.leg_length, abs=1e-12)
+
+
+def test_the_3d_ground_is_the_house_ground_colour_as_the_planar_ground() -> None:
+    """The slope plane under a walker in space has the planar ground's fill colour, unshaded (plot_surface's light
+    source turned the pale grey into a dark one), on any view."""
+    fig = Figure()
+    ax3d = fig.add_subplot(projection="3d")
+    surface = draw_space_ground(ax3d, 0.05, (-1.0, 1.0), (-0.5, 0.5))
+    fig.canvas.draw()  # the 3D artists' colours are set at drawing
+    np.testing.assert_allclose(surface.get_facecolor(), [to_rgba(GROUND_COLOUR)], rtol=0, atol=1e-12)
+    planar = fig.add_subplot()
+    draw_ground(planar, load_config(CONFIGS / "round_foot_walker.yaml"), -1.0, 1.0, 0.1)
+    assert to_rgba(planar.patches[0].get_facecolor()) == to_rgba(GROUND_COLOUR)

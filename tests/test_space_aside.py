@@ -52,10 +52,8 @@ def test_the_stance_phase_compiled_after_both_shares_finds_them_all_in_the_cache
     assert "biped_sim.rigid.space_kernels.space_flow" in callees  # the second process's share
     assert not set(callees) & set(compiled)
     ours = {name for name in compiled if name.startswith("biped_sim.")}
-    assert ours == {  # the phase, the accepted step's bookkeeping over both trees, and two small shared kernels
+    assert ours == {  # the phase (the accepted step's bookkeeping over both trees inlined), two small shared kernels
         "biped_sim.rigid.space_integration.space_phase_python_entry",
-        "biped_sim.rigid.space_integration._accepted",
-        "biped_sim.rigid.space_integration._first_event",
         "biped_sim.rigid.integration.first_sample",
         "biped_sim.integrate.stepper.rms_norm",
     }

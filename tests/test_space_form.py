@@ -101,23 +101,34 @@ def _torso(d: dict[str, Any]) -> None:
             "walker.description.bodies.torso: the rigid model in space takes two one-body legs on a hip hinge, "
             "no body off the legs",
         ),
-        (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.joints.hip.stops"),
+        (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.hip.stops"),
         (
             lambda d: d["hip"].update(elements=[{"name": "k", "law": "linear_spring", "stiffness": 1.0}]),
-            "walker.description.joints.hip.elements",
+            "walker.description.hip.elements",
         ),
-        (lambda d: d["hip"].update(axis=[1.0, 0.0, 0.0]), "walker.description.joints.hip.axis"),
-        (lambda d: d["hip"].update(at=[0.0, -0.1]), "walker.description.joints.hip.at"),
+        (lambda d: d["hip"].update(axis=[1.0, 0.0, 0.0]), "walker.description.hip.axis"),
+        (lambda d: d["hip"].update(at=[0.0, -0.1]), "walker.description.hip.at"),
         (
             lambda d: d.update(point_masses=[{"name": "hip", "body": "leg_1", "mass": 1.0}]),
             "walker.description.point_masses.hip: the rigid model in space takes two one-body legs on a hip hinge: a "
             "point mass only on the hinge's midpoint (at: [0, 0], lateral: -0.1812)",
         ),
-        (lambda d: d["leg"]["feet"][0].update(centre=[0.0, 0.5]), "walker.description.feet.foot_1.centre"),
+        (lambda d: d["leg"]["feet"][0].update(centre=[0.0, 0.5]), "walker.description.leg.feet.foot.centre"),
     ],
 )
 def test_what_the_rigid_model_in_space_lacks_is_one_line_naming_the_field(change: Any, message: str) -> None:
     assert _refused(change).startswith(message)
+
+
+def test_a_kneed_walker_in_space_made_rigid_is_refused_for_its_legs_not_its_start() -> None:
+    """The bundled 3D kneed walker with ``dynamics: rigid``: its start (the compliant run's body angles) does not
+    fit the rigid model's keys, but what the user must change is the walker (or the dynamics), so that is named."""
+    data = yaml.safe_load((CONFIGS / "space" / "kneed_walker_3d.yaml").read_text())
+    data["dynamics"] = "rigid"
+    del data["formulation"]
+    with pytest.raises(ConfigError) as error:
+        config_from_dict(data)
+    assert str(error.value).startswith("walker.description.legs: the rigid model in space takes two one-body legs")
 
 
 def test_legs_that_are_not_mirror_images_are_refused() -> None:

@@ -144,7 +144,7 @@ def test_an_ellipsoid_foot_is_the_formulations_quadric_in_the_body_frame() -> No
 def test_the_planar_models_refuse_a_foot_of_another_shape_naming_it() -> None:
     data = _kneed_3d()
     data["formulation"] = {"kind": "planar"}
-    with pytest.raises(ConfigError, match=r"^walker\.description\.feet\.foot_1\.shape: only in space") as error:
+    with pytest.raises(ConfigError, match=r"^walker\.description\.leg\.feet\.foot\.shape: only in space") as error:
         config_from_dict(data)
     assert "\n" not in str(error.value)
 
@@ -154,9 +154,10 @@ def test_the_3d_kneed_walker_walks_twenty_steps_at_a_steady_heading() -> None:
     """Chen's kneed walker with a 0.1 m hip width on lateral torus feet and spin friction walks 12 s without
     falling, left and right feet in turn, its step width, sway, heading and bank in the step table. Its heading
     holds: the mean heading of consecutive steps moves by less than 0.01 rad a step over the second half (measured
-    +0.0014; without spin friction -0.042, and the walker falls at 14.3 s), and its left and right steps are
+    +0.0014; without spin friction -0.042, and the walker falls at 14.3 s), and its right and left steps are
     alike: periods within 2 % (0.5229 and 0.5261 s over the last four of each), lengths within 5 % (0.468 and
-    0.453 m)."""
+    0.453 m). The heading at strike alternates (-0.147 at the right foot's, +0.048 at the left's): the whole walker
+    yaws to and fro, its four bodies' headings one (the hinge's: its legs cannot yaw apart)."""
     result = simulate(config_from_dict(yaml.safe_load(KNEED_3D.read_text())))
     assert result.status == "walking" and result.summary["n_steps"] >= 20
     steps = result.steps
@@ -168,15 +169,20 @@ def test_the_3d_kneed_walker_walks_twenty_steps_at_a_steady_heading() -> None:
     late = pair_heading[len(pair_heading) // 2 :]
     assert abs(np.polyfit(np.arange(late.size), late, 1)[0]) < 0.01
     for column, tolerance in ((steps.period, 0.02), (steps.length, 0.05)):
-        left, right = _left_and_right(steps, column)
+        right, left = _right_and_left(steps, column)
         assert abs(left - right) < tolerance * right
     assert _unsettled(steps)[0] > 1e-3  # not settled: its periods still wander (0.035 s over the last 8 strikes)
+    right, left = _right_and_left(steps, steps.heading)
+    assert right < -0.1 and left > 0.0
+    yaw = result.attitude["yaw"]
+    assert np.max(np.abs(yaw - yaw[:, :1])) < 1e-8
 
 
-def _left_and_right(steps: StepTable, column: np.ndarray) -> tuple[float, float]:
-    """A step table's column averaged over the last four complete steps of the left foot and of the right."""
-    left, right = (column[:-1][steps.foot[:-1] == foot][-4:].mean() for foot in (0, 1))
-    return float(left), float(right)
+def _right_and_left(steps: StepTable, column: np.ndarray) -> tuple[float, float]:
+    """A step table's column averaged over the last four complete steps of the right foot (foot 0, the written
+    leg's) and of the left."""
+    right, left = (column[:-1][steps.foot[:-1] == foot][-4:].mean() for foot in (0, 1))
+    return float(right), float(left)
 
 
 def _unsettled(steps: StepTable, last: int = 8) -> tuple[float, float]:
@@ -203,7 +209,7 @@ def test_the_retuned_3d_kneed_walker_settles_into_a_repeating_gait() -> None:
     period_change, heading_move = _unsettled(result.steps)
     assert period_change < 1e-3 and heading_move < 1e-3
     steps = result.steps
-    left, right = _left_and_right(steps, steps.period)
+    right, left = _right_and_left(steps, steps.period)
     assert abs(left - right) < 1e-3
     assert abs(steps.heading[-3] + steps.heading[-2]) / 2.0 < 0.03
 

@@ -11,6 +11,7 @@ import pytest
 
 from biped_sim.config import Config, load_config
 from biped_sim.io.trajectory import RunData
+from biped_sim.measure.pose import FOOT_HALF_WIDTH, foot_arc_half_angle
 from biped_sim.measure.space_pose import CIRCLE_POINTS, space_poses
 from biped_sim.rigid.space_model import STATE_NAMES
 from biped_sim.walkers.space_geometry import (
@@ -40,10 +41,17 @@ FEET = {  # the toy's walker with each foot shape: (config, overrides, the foot'
     "point": ("kuo_compass_3d.yaml", [f"{FOOT}.radius=0", f"{FOOT}.shape=arc", f"{FOOT}.centre=[0.0, -1.0]"], 1),
 }
 
+LARGE = {  # the toy's walker with a foot wider than a foot is drawn (FOOT_HALF_WIDTH leg lengths on each side)
+    "ring": ("tinkertoy.yaml", [f"{FOOT}.radius=0.9", f"{FOOT}.centre=[0.0, -0.1]"], 1),
+    "torus_lateral": ("tinkertoy.yaml", [f"{FOOT}.shape=torus", f"{FOOT}.plane=lateral", f"{FOOT}.radius=1.48",
+                                         f"{FOOT}.tube=0.02", f"{FOOT}.centre=[0.0, 0.5]"], 2),  # the 3D kneed walker's
+}  # fmt: skip
+
 
 def walker(shape: str) -> tuple[Config, tuple[LegGeometry, LegGeometry]]:
-    """The config of the walker with foot ``shape`` and its legs as the drawing and the contact take them."""
-    name, overrides, _ = FEET[shape]
+    """The config of the walker with foot ``shape`` (FEET's, or LARGE's as ``large_<shape>``) and its legs as the
+    drawing and the contact take them."""
+    name, overrides, _ = LARGE[shape.removeprefix("large_")] if shape.startswith("large_") else FEET[shape]
     config = load_config(SPACE / name, overrides)
     space = config.walker.space
     assert config.in_space and space is not None
@@ -110,3 +118,24 @@ def test_an_ellipsoid_or_a_sphere_is_drawn_as_far_along_each_principal_axis_as_i
         reach = (poses.feet[0, k] - poses.legs[0, k, 4]) @ (TO_SPATIAL @ turn)  # along the leg's x, y, z
         np.testing.assert_allclose(np.nanmax(reach, axis=0), semi, rtol=0, atol=1e-15)
         np.testing.assert_allclose(np.nanmin(reach, axis=0), np.negative(semi), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("dynamics", ["compliant", "rigid"])
+@pytest.mark.parametrize("shape", list(LARGE))
+def test_a_ring_wider_than_a_foot_is_drawn_as_its_arc_holding_the_contact_point(shape: str, dynamics: str) -> None:
+    """A ring (a torus's outer equator) of radius 0.9 or 1.5 on a leg of 1 is drawn as the arc of it about its bottom
+    on the leg (foot_arc_half_angle: FOOT_HALF_WIDTH leg lengths on each side), not as its whole circle, the leg's
+    line down to the arc's middle; the stance foot's contact point on the drawn arc, to the arc's pieces."""
+    run, contact = started(f"large_{shape}", dynamics)
+    space = run.config.walker.space  # type: ignore[union-attr]
+    radius, leg_length = space.leg.foot.radius + space.leg.foot.tube, space.leg_length()
+    half = foot_arc_half_angle(radius, leg_length)
+    poses = space_poses(run)
+    ring = poses.feet[0, 0, :CIRCLE_POINTS]  # the stance foot's ring (a torus's: its equator first)
+    pieces = np.linalg.norm(np.diff(ring, axis=0), axis=1)  # an arc of `radius` over 2 half: equal chords
+    np.testing.assert_allclose(pieces, 2 * radius * np.sin(half / (CIRCLE_POINTS - 1)), rtol=1e-9)
+    span = np.linalg.norm(ring[-1] - ring[0])  # the chord between its ends: 2 R sin(half-angle), no closed circle
+    assert span == pytest.approx(2 * FOOT_HALF_WIDTH * leg_length, rel=1e-12) and half < 0.5
+    np.testing.assert_allclose(ring[CIRCLE_POINTS // 2], poses.legs[0, 0, 4], rtol=0, atol=1e-12)
+    gaps = np.linalg.norm(ring - contact, axis=1)  # a torus's lowest point is its outer equator's
+    assert gaps.min() < pieces[0]  # within one of its pieces

@@ -83,10 +83,10 @@ def test_a_splay_written_as_data_is_the_model_turned_and_walks_its_gait() -> Non
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        ([f"{FOOT}.normal=[0, 0, 0]"], "walker.description.feet.0.normal: a ring's plane normal must not be zero"),
-        ([f"{FOOT}.normal=[0, 2, 0]"], "walker.description.feet.0.normal: a ring across the leg"),
-        ([f"{FOOT}.normal=[0, 0, 1]", f"{FOOT}.plane=sagittal"], "walker.description.feet.0.normal: give the ring's"),
-        ([f"{FOOT}.shape=sphere", f"{FOOT}.normal=[0, 0, 1]"], "walker.description.feet.0.normal: only a ring's plane"),
+        ([f"{FOOT}.normal=[0, 0, 0]"], f"{FOOT}.normal: a ring's plane normal must not be zero"),
+        ([f"{FOOT}.normal=[0, 2, 0]"], f"{FOOT}.normal: a ring across the leg"),
+        ([f"{FOOT}.normal=[0, 0, 1]", f"{FOOT}.plane=sagittal"], f"{FOOT}.normal: give the ring's"),
+        ([f"{FOOT}.shape=sphere", f"{FOOT}.normal=[0, 0, 1]"], f"{FOOT}.normal: only a ring's plane"),
     ],
 )
 def test_a_bad_ring_normal_is_one_line_naming_it(overrides: list[str], message: str) -> None:
@@ -98,7 +98,7 @@ def test_a_bad_ring_normal_is_one_line_naming_it(overrides: list[str], message: 
 def test_a_planar_model_refuses_a_ring_out_of_its_plane() -> None:
     """An arc whose normal is off z' is a foot in space: the planar formulation names it; along z' it is planar."""
     walker = CONFIGS.parent / "tests" / "data" / "kneed_compliant_parametrised.yaml"
-    with pytest.raises(ConfigError, match=r"^walker\.description\.feet\.foot_1\.normal: only in space") as error:
+    with pytest.raises(ConfigError, match=r"^walker\.description\.leg\.feet\.foot\.normal: only in space") as error:
         load_config(walker, ["walker.description.leg.feet.foot.normal=[0, 0.1, 1]"])
     assert "\n" not in str(error.value)
     load_config(walker, ["walker.description.leg.feet.foot.normal=[0, 0, -2]"])  # the sagittal plane

@@ -22,6 +22,7 @@ from tests.conftest import invoke, one_line_error
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 TINKERTOY = CONFIGS / "space" / "tinkertoy.yaml"
+FOOT, LEG = "walker.description.leg.feet.foot", "walker.description.leg.bodies.leg"
 KUO_RADII = (0.001, 0.1, 0.2, 0.3, 0.4, 0.5)  # the feet's radii [m], along one branch of gaits
 KUO_POINT_MULTIPLIER = -6.585415  # its point feet's unstable (lateral) multiplier
 KUO_LARGEST = (6.585415, 5.936549, 5.416117, 5.008537, 4.717795, 4.616600)  # the largest modulus at each radius
@@ -70,19 +71,19 @@ def test_the_tinkertoy_loads_as_a_walker_in_space() -> None:
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("walker.description.leg.feet.foot.shape=torus", "walker.description.feet.0.tube: a torus foot needs a tube"),
-        ("walker.description.leg.feet.foot.tube=0.1", "walker.description.feet.0.tube: a torus foot needs a tube"),
-        ("walker.description.leg.feet.foot.axes=[1, 1, 1]", "walker.description.feet.0.axes: an ellipsoid foot needs"),
-        ("walker.description.leg.feet.foot.shape=ellipsoid", "walker.description.feet.0.radius: an ellipsoid foot has"),
-        ("walker.description.leg.feet.foot.plane=lateral", "walker.description.feet.0.plane: only a torus's ring"),
+        (f"{FOOT}.shape=torus", f"{FOOT}.tube: a torus foot needs a tube"),
+        (f"{FOOT}.tube=0.1", f"{FOOT}.tube: a torus foot needs a tube"),
+        (f"{FOOT}.axes=[1, 1, 1]", f"{FOOT}.axes: an ellipsoid foot needs"),
+        (f"{FOOT}.shape=ellipsoid", f"{FOOT}.radius: an ellipsoid foot has"),
+        (f"{FOOT}.plane=lateral", f"{FOOT}.plane: only a torus's ring"),
         (
-            "walker.description.leg.feet.foot.centre=[0, 0.5]",
-            "walker.description.feet.foot_1.centre: the foot's bottom",
+            f"{FOOT}.centre=[0, 0.5]",
+            f"{FOOT}.centre: the foot's bottom",
         ),
-        ("walker.description.leg.bodies.leg.mass=0", "walker.description.bodies.leg_1.mass: the rigid model in space"),
+        (f"{LEG}.mass=0", f"{LEG}.mass: the rigid model in space"),
         (
-            "walker.description.leg.bodies.leg.inertia_tensor.xx=0.5",
-            "walker.description.bodies.0.inertia_tensor.xx: not",
+            f"{LEG}.inertia_tensor.xx=0.5",
+            f"{LEG}.inertia_tensor.xx: not",
         ),
         ("walker.space={}", "walker.space: unknown key"),
     ],

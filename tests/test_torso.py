@@ -64,7 +64,7 @@ def test_a_wrong_torso_state_is_one_line(overrides: list[str], message: str) -> 
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
-        (lambda d: d["leg"]["bodies"][0].update(fall_angle=0.5), "walker.description.bodies.leg_1.fall_angle: only a "
+        (lambda d: d["leg"]["bodies"][0].update(fall_angle=0.5), "walker.description.leg.bodies.leg.fall_angle: only a "
          "body off the legs (a torso) has its own; the legs' bodies fall past simulation.fall_leg_angle"),
         (lambda d: (d["bodies"][0].update(name="stance"), d["joints"][0].update(child="stance")),
          "the state key 'stance_angle' of a body off the legs is a leg's too; rename the body"),

@@ -10,6 +10,7 @@ import pytest
 
 import biped_sim
 from biped_sim.config import LEG_KEYS, config_from_dict, derive, load_config, parse_yaml
+from biped_sim.config.parameters import written_field
 from biped_sim.errors import ConfigError
 from biped_sim.io.references import Reference, ReferenceSpec
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
@@ -184,8 +185,8 @@ def test_every_study_addresses_a_named_parameter(tmp_path: Path) -> None:
          "has no finite value"),
         (["walker.description.leg.bodies.thigh.mass=1/(hip_mass - 0.5)"], "walker.description.leg.bodies.thigh.mass: "
          "'1/(hip_mass - 0.5)' has no finite value"),
-        (["walker.description.leg.bodies.thigh.mass=-thigh_mass"], "walker.description.bodies.0.mass: Input should "
-         "be greater than or equal to 0"),
+        (["walker.description.leg.bodies.thigh.mass=-thigh_mass"], "walker.description.leg.bodies.thigh.mass: Input "
+         "should be greater than or equal to 0 (in thigh_1, the leg as written)"),
         (["walker.description.legs=[[thigh_1], [thigh_2]]"], "walker.description.legs: follows from the mirrored leg"),
         (["walker.parameters.0.name=hip_mass"], "walker.parameters: 'hip_mass' is given twice"),
         (["walker.description.bodies.thigh_1.mass=0.6"], "walker.description.bodies: expected a list (of the parts "
@@ -211,6 +212,47 @@ def test_the_command_refuses_in_one_line(tmp_path: Path, overrides: list[str], m
     result = invoke("run", str(KNEED), *sets, "--out", str(tmp_path / "run"))
     assert result.exit_code == 2 and one_line_error(result.stderr).startswith(f"error: {message}")
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (["walker.description.leg.bodies.shank.mass=-1"], "walker.description.leg.bodies.shank.mass: Input should be "
+         "greater than or equal to 0 (in shank_1, the leg as written)"),
+        (["walker.description.leg.joints.knee.stops=[{side: up, angle: 0}]"], "walker.description.leg.joints.knee."
+         "stops.0.side: unknown name 'up'"),
+        (["walker.description.leg.feet.foot.radius=-0.1"], "walker.description.leg.feet.foot.radius: Input should be "
+         "greater than or equal to 0 (in foot_1, the leg as written)"),
+        (["walker.description.hip={stops: [{side: up, angle: 0}]}"], "walker.description.hip.stops.0.side: unknown "
+         "name 'up'"),
+        (["walker.description.point_masses.hip.mass=-1"], "walker.description.point_masses.hip.mass: Input should"),
+    ],
+)  # fmt: skip
+def test_a_bad_value_of_a_mirrored_leg_names_the_field_written(
+    tmp_path: Path, overrides: list[str], message: str
+) -> None:
+    """A part of the mirrored leg is named by its path in walker.description.leg (and the copy it is in), the hip
+    joint by walker.description.hip, the description's own parts by name: never a list index of the resolved
+    description (walker.description.bodies.2.mass), which the user did not write."""
+    sets = [arg for key in overrides for arg in ("--set", key)]
+    result = invoke("run", str(PARAMETRISED), *sets, "--out", str(tmp_path / "run"))
+    assert result.exit_code == 2 and one_line_error(result.stderr).startswith(f"error: {message}")
+
+
+def test_a_field_of_the_mirror_image_names_the_written_leg_and_its_copy() -> None:
+    written = parse_yaml(PARAMETRISED.read_text())["walker"]["description"]
+    assert written_field(written, "walker.description.feet.1.radius") == (
+        "walker.description.leg.feet.foot.radius",
+        " (in foot_2, the mirror image of the leg as written)",
+    )
+    assert written_field(written, "walker.description.joints.knee_2.stops.0") == (
+        "walker.description.leg.joints.knee.stops.0",
+        " (in knee_2, the mirror image of the leg as written)",
+    )
+    assert written_field(written, "walker.description.joints.0.axis") == ("walker.description.hip.axis", "")
+    assert written_field(written, "walker.description.point_masses.0") == ("walker.description.point_masses.hip", "")
+    for field in ("walker.description.legs", "walker.description.bodies.9.mass", "walker.parameters.0.value"):
+        assert written_field(written, field) == (field, "")  # not a part of the description: as it is
 
 
 @pytest.mark.slow

@@ -2,13 +2,14 @@
 
 The one drawing of a walker, of any description and either dynamics, shared by the animation
 (:mod:`biped_sim.animate`) and the walker figure (:func:`biped_sim.plots.walker_figure`): each body as its
-segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as sectors of their radius about
-the body's axis (a rocker: the arc joined to its centre) or as dots (point feet), the hip as a black dot, and
-each joint stop as a square at its joint, filled when the joint is at or past its stop. The scene is drawn in the
-world frame: the slope frame turned by the slope angle, so that the ground visibly descends. A walker in space
-(:class:`SpaceWalkerPicture`) is drawn in matplotlib's 3D axes (x downhill, y to the walker's left, z up) and, on
-2D axes beside them, in its sagittal view: each leg from the hinge to its hip point, its centre of mass and its
-foot centre, each foot as the shape its contact rolls on (:mod:`biped_sim.measure.space_pose`).
+segment (a leg's bodies in that leg's colour, a body off the legs in grey), feet as sectors of the arc they roll on
+in the sagittal plane about the body's axis (a rocker: the arc joined to its centre, as wide as
+:func:`~biped_sim.measure.pose.foot_arc_half_angle` draws a foot, at most 0.8 rad on each side) or as dots (point
+feet), the hip as a black dot, and each joint stop as a square at its joint, filled when the joint is at or past its
+stop. The scene is drawn in the world frame: the slope frame turned by the slope angle, so that the ground visibly
+descends. A walker in space (:class:`SpaceWalkerPicture`) is drawn in matplotlib's 3D axes (x downhill, y to the
+walker's left, z up) and, on 2D axes beside them, in its sagittal view: each leg from the hinge to its hip point, its
+centre of mass and its foot centre, each foot as the shape its contact rolls on (:mod:`biped_sim.measure.space_pose`).
 """
 
 from __future__ import annotations
@@ -26,9 +27,9 @@ from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import Pose, Skeleton
 from biped_sim.measure.space_pose import SpacePoses, space_poses
 
-FOOT_ARC_HALF_ANGLE = 0.8  # rad of foot arc drawn on each side of the body's axis
 OFF_LEG_COLOUR = "0.35"
 STOP_COLOUR = "C3"
+GROUND_COLOUR = "0.85"  # the ground's fill, planar and in 3D: a pale grey under the walker's lines
 
 
 def to_world(slope: float) -> np.ndarray:
@@ -44,7 +45,7 @@ def draw_ground(ax: Axes, config: Config, x_min: float, x_max: float, depth: flo
     world = to_world(config.ground.slope)
     surface = world @ outline
     bottom = world @ (outline - np.array([[0.0], [depth]]))
-    ax.fill(np.r_[surface[0], bottom[0, ::-1]], np.r_[surface[1], bottom[1, ::-1]], color="0.85", zorder=0)
+    ax.fill(np.r_[surface[0], bottom[0, ::-1]], np.r_[surface[1], bottom[1, ::-1]], color=GROUND_COLOUR, zorder=0)
     ax.plot(surface[0], surface[1], color="0.3", linewidth=1.0)
 
 
@@ -70,8 +71,8 @@ class WalkerPicture:
         marker = {"marker": "s", "linestyle": "none", "markersize": 2.0 * linewidth, "alpha": alpha, "zorder": 6}
         (self.stops_free,) = ax.plot([], [], markerfacecolor="white", markeredgecolor=STOP_COLOUR, **marker)
         (self.stops_engaged,) = ax.plot([], [], color=STOP_COLOUR, **marker)
-        u = np.linspace(-FOOT_ARC_HALF_ANGLE, FOOT_ARC_HALF_ANGLE, 25)
-        self.arc = np.column_stack([np.sin(u), -np.cos(u)])  # a unit arc about a body's -y axis
+        u = np.linspace(-1.0, 1.0, 25)[None, :] * sk.foot_half_angle[:, None]
+        self.arcs = np.stack([np.sin(u), -np.cos(u)], axis=-1)  # (nf, 25, 2): each foot's unit arc about its body's -y
 
     def _set(self, line: Line2D, points: np.ndarray) -> None:
         """Place ``line`` through slope-frame ``points`` (k, 2)."""
@@ -86,7 +87,7 @@ class WalkerPicture:
             radius, angle = self.sk.foot_radius[f], pose.angles[b]
             c, s = math.cos(angle), math.sin(angle)
             centre = pose.foot_centres[f]
-            arc = centre + radius * self.arc @ np.array([[c, s], [-s, c]])
+            arc = centre + radius * self.arcs[f] @ np.array([[c, s], [-s, c]])
             self._set(line, np.vstack([centre, arc, centre]) if radius > 0 else centre)  # a rocker: a sector
         self._set(self.hip, pose.hip)
         self._set(self.stops_free, pose.joints[~pose.engaged])
@@ -121,12 +122,14 @@ class SpaceWalkerPicture:
 
 
 def draw_space_ground(ax3d: Axes, slope: float, x: tuple[float, float], z: tuple[float, float]) -> Any:
-    """The slope plane over x (downhill) and z (lateral, to the right) ranges, as a pale patch on the 3D axes (3D
-    axes do not clip: the patch is the view's extent); returns its artist."""
+    """The slope plane over x (downhill) and z (lateral, to the right) ranges, as a patch of the planar ground's
+    colour on the 3D axes (3D axes do not clip: the patch is the view's extent); returns its artist. Unshaded:
+    plot_surface's light source would darken the pale grey of a plane tilted away from it to a dark one."""
     corners = np.array([[x[0], 0.0, z[0]], [x[1], 0.0, z[0]], [x[1], 0.0, z[1]], [x[0], 0.0, z[1]]])
     world = space_world(slope, corners)
     grid = world[[0, 1, 3, 2]].reshape(2, 2, 3)
-    return ax3d.plot_surface(grid[..., 0], grid[..., 1], grid[..., 2], color="0.85", zorder=0)  # type: ignore
+    return ax3d.plot_surface(grid[..., 0], grid[..., 1], grid[..., 2], color=GROUND_COLOUR, shade=False,  # type: ignore
+                             linewidth=0, zorder=0)  # fmt: skip
 
 
 def draw_space_walker(sagittal: Axes, ax3d: Axes, run: RunData, samples: np.ndarray) -> None:

@@ -12,6 +12,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
+from biped_sim.config.parameters import written_field
 from biped_sim.config.schema import Config
 from biped_sim.errors import ArgumentError, ConfigError, quote
 
@@ -164,7 +165,17 @@ def config_from_dict(data: Any, overrides: list[str] | tuple[str, ...] = ()) -> 
     try:
         return Config.model_validate(data)
     except ValidationError as exc:
-        raise _format_validation_error(exc) from None
+        raise _as_written(_format_validation_error(exc), data) from None
+
+
+def _as_written(error: ConfigError, data: dict[str, Any]) -> ConfigError:
+    """``error`` naming its field as the user wrote it: a described walker's part by its name, or by its path in
+    the leg written once (and which copy of it), not by its place in the resolved description."""
+    walker = data.get("walker")
+    if not isinstance(walker, dict) or walker.get("kind") != "description":
+        return error
+    field, note = written_field(walker.get("description"), error.field)
+    return error if (field, note) == (error.field, "") else ConfigError(field, error.reason + note)
 
 
 def derive(config: Config, values: Mapping[str, Any]) -> Config:

@@ -150,7 +150,9 @@ def _is_record(annotation: Any) -> bool:
 
 
 def _label(item: Any, index: int) -> str:
-    return str(item.get("name", index)) if isinstance(item, dict) else str(index)
+    """An item of a list as a dotted key names it: its name (a key ``set_dotted`` finds it by), else its index."""
+    name = item.get("name") if isinstance(item, dict) else None
+    return name if isinstance(name, str) and name and "." not in name else str(index)
 
 
 def _numbers(value: Any, names: Mapping[str, float], where: str) -> Any:
@@ -242,3 +244,50 @@ def _leg_copy(leg: dict[str, Any], own: set[str], suffix: str) -> dict[str, Any]
                     if isinstance(item.get(key), str) and item[key] in own:
                         item[key] += suffix
     return renamed
+
+
+# --- what the user wrote of a resolved field -----------------------------------------------------------------------
+
+WRITTEN_AS = "_written_as"  # a skeleton part's path as written (no schema has the key)
+
+
+def written_field(description: Any, field: str, where: str = "walker.description") -> tuple[str, str]:
+    """The dotted path the user wrote of ``field``, a field of the resolved ``description`` at ``where`` (its part
+    by index or resolved name: ``walker.description.bodies.3.mass``), and a note naming the copy of the mirrored leg
+    it is in ("" when in none): a part of the mirrored leg is its path in ``leg``, the hip joint ``hip``, any other
+    part its name. ``description`` is what was written (plain data, expressions unevaluated); a field outside its
+    parts, or one it cannot place, is returned as it is, so that an error message always names a field."""
+    part, _, rest = field.removeprefix(f"{where}.").partition(".")
+    label, dot, tail = rest.partition(".")
+    if not field.startswith(f"{where}.") or part not in LEG_PARTS or not isinstance(description, dict):
+        return field, ""
+    try:
+        resolved = mirror_legs(_skeleton(description)).get(part, [])
+    except ValueError:  # a malformed leg: the error at hand is that
+        return field, ""
+    names = [item.get("name") for item in resolved]
+    index = names.index(label) if label in names else int(label) if label.isdigit() else len(resolved)
+    if index >= len(resolved):
+        return field, ""
+    path, name = resolved[index][WRITTEN_AS], resolved[index].get("name")
+    copy_of = {"_1": "the leg as written", "_2": "the mirror image of the leg as written"}
+    note = f" (in {name}, {copy_of[name[-2:]]})" if path.startswith("leg.") and isinstance(name, str) else ""
+    return f"{where}.{path}{dot}{tail}", note
+
+
+def _skeleton(description: dict[str, Any]) -> dict[str, Any]:
+    """The description's parts reduced to their names and their paths as written, in the form :func:`mirror_legs`
+    takes: mirrored as the description is, each resolved part says where it was written."""
+
+    def parts(section: Any, prefix: str) -> dict[str, list[dict[str, Any]]]:
+        lists = {part: items for part in LEG_PARTS if isinstance(items := section.get(part), list)}
+        return {part: [{**({"name": item["name"]} if isinstance(item, dict) and "name" in item else {}),
+                        WRITTEN_AS: f"{prefix}{part}.{_label(item, i)}"} for i, item in enumerate(items)]
+                for part, items in lists.items()}  # fmt: skip
+
+    out: dict[str, Any] = parts(description, "")
+    if "leg" in description:
+        leg, hip = description["leg"], description.get("hip")
+        out["leg"] = parts(leg, "leg.") if isinstance(leg, dict) else leg
+        out["hip"] = {**({"name": hip["name"]} if isinstance(hip, dict) and "name" in hip else {}), WRITTEN_AS: "hip"}
+    return out

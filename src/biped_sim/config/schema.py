@@ -271,6 +271,7 @@ class Config(Strict):
             raise ValueError(f"simulation.pushes: the {self.walker.kind} walker takes no pushes")
         if self.ground.profile.kind != "flat" and (reason := self.profile_refusal()):
             raise ValueError(f"ground.profile: {reason}")
+        self._described_walker_checks()  # the walker before its start: a start's keys follow from its form
         self._initial_keys_match()
         if any(push.time >= self.simulation.t_end for push in self.simulation.pushes):
             raise ValueError("simulation.pushes: a push's time is not before simulation.t_end")
@@ -285,7 +286,6 @@ class Config(Strict):
         hertz = self.contact.materials is not None or self.dynamics == "compliant"
         if self.contact.stiffness is None and hertz and self.walker.point_feet:
             raise ValueError("contact.stiffness: required for point feet (every foot's radius is 0), Hertz needs R > 0")
-        self._described_walker_checks()
         if self.friction.model != "none" and math.tan(abs(self.ground.slope)) > max(
             self.friction.mu_static, self.friction.mu_kinetic
         ):

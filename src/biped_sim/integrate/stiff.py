@@ -2,7 +2,8 @@
 
 Pick these when the contact is very stiff (hard materials, small friction regularisation
 velocities): explicit methods are then limited by stability, not accuracy, and take steps far
-smaller than the accuracy needs. The Jacobian is a compiled forward-difference Jacobian. Contact
+smaller than the accuracy needs. The Jacobian is a compiled forward-difference Jacobian; the Newton matrices are
+factored by LAPACK directly (:mod:`~biped_sim.integrate.newton_lu`, scipy's solvers otherwise). Contact
 events are scipy terminal events on the same event functions as the explicit loop; at each event
 the integration restarts after the discrete update, and the same compiled bookkeeping
 (:func:`~biped_sim.integrate.recorder.apply_events`) logs touchdowns and heel strikes.
@@ -18,11 +19,12 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import OdeSolver, solve_ivp
 
 from biped_sim.config import IntegratorConfig
 from biped_sim.contact.response import ContactBuffers
 from biped_sim.integrate import blowup
+from biped_sim.integrate.newton_lu import DirectBDF, DirectRadau
 from biped_sim.integrate.recorder import (
     COMPLETED,
     DIVERGED,
@@ -142,7 +144,7 @@ def integrate_stiff(
             last_state[0] = contiguous.tobytes()
         g[:] = last_values
 
-    method = "Radau" if integrator.method == "radau" else "BDF"
+    method = DirectRadau if integrator.method == "radau" else DirectBDF
     rec = integrate_scipy(
         system, rec, y, modes, contact_buffers(system), method, integrator.rtol, integrator.atol, integrator.max_step,
         t_end, interval, max_strikes, progress, fun, jac=jac, checks=checks, work=work,
@@ -158,7 +160,7 @@ def integrate_scipy(
     y: np.ndarray,
     modes: np.ndarray,
     contact: ContactBuffers,
-    method: str,
+    method: str | type[OdeSolver],
     rtol: float,
     atol: float,
     max_step: float,

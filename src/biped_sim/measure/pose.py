@@ -23,6 +23,19 @@ from biped_sim.io.trajectory import RunData
 from biped_sim.walkers.describe import describe
 
 STOP_TOLERANCE = 1e-3  # rad: a joint within this of its stop (or past it) is drawn at its stop
+FOOT_ARC_HALF_ANGLE = 0.8  # rad: the most of a planar foot's arc drawn on each side of its body's axis (a rocker)
+FOOT_HALF_WIDTH = 0.4  # leg lengths: the widest a round foot is drawn on each side of its bottom
+
+
+def foot_arc_half_angle(radius: float, leg_length: float) -> float:
+    """The half-angle [rad] of the arc of a round foot of ``radius`` drawn about its bottom, the foot that exists (a
+    description gives no span of a foot's arc): the whole circle (pi) of a foot no wider than FOOT_HALF_WIDTH leg
+    lengths on each side of its bottom, else the arc of that half-width, R sin(theta) = FOOT_HALF_WIDTH l, so that a
+    foot of large radius (the 3D kneed walker's, 1.5 m sideways on a 1 m leg) is drawn as a foot, not as a circle
+    around the walker. The arc holds the contact point while the foot has rolled less than theta from its bottom
+    (0.41 rad for a foot as round as the leg is long: a leg's swing, some 0.3 rad, stays on it)."""
+    reach = FOOT_HALF_WIDTH * leg_length
+    return math.pi if radius <= reach else math.asin(reach / radius)
 
 
 @dataclass(frozen=True)
@@ -36,8 +49,9 @@ class Skeleton:
     joint_at: np.ndarray  # (nb, 2) the body's origin in its parent's frame
     ends: list[np.ndarray]  # per body (k, 2): the points its segment reaches, in its frame
     foot_body: np.ndarray  # (nf,) int
-    foot_centre: np.ndarray  # (nf, 2) in the body frame
-    foot_radius: np.ndarray  # (nf,)
+    foot_centre: np.ndarray  # (nf, 2) in the body frame: the centre of the arc the foot rolls on in the sagittal plane
+    foot_radius: np.ndarray  # (nf,) that arc's radius
+    foot_half_angle: np.ndarray  # (nf,) the arc drawn on each side of the body's axis [rad] (foot_arc_half_angle)
     stops: list[tuple[int, int, str, float]]  # (parent, child, side, limit) of every joint stop
     total_mass: float  # kg (the bodies and point masses)
 
@@ -56,14 +70,16 @@ def skeleton(description: WalkerDescription) -> Skeleton:
         if any(joint.at):  # a joint at the parent's origin (the hip) adds nothing to its segment
             ends[p].append(joint.at)
         stops += [(p, c, stop.side, stop.angle) for stop in joint.stops]
-    for foot in description.feet:
-        ends[index[foot.body]].append(foot.centre)
+    arcs = [foot.sagittal_arc() for foot in description.feet]  # a ring off the sagittal plane: its sagittal section
+    for foot, (centre, _) in zip(description.feet, arcs, strict=True):
+        ends[index[foot.body]].append(centre)
     for k, body in enumerate(description.bodies):
         if not ends[k]:  # a body off the legs (a torso): up to its centre of mass, its point masses folded in
             parts = [(body.mass, body.com)] + [(p.mass, p.at) for p in description.point_masses if p.body == body.name]
             mass = sum(m for m, _ in parts)
             ends[k].append(tuple(sum(m * np.array(at) for m, at in parts) / mass) if mass > 0 else body.com)
     masses = [b.mass for b in description.bodies] + [p.mass for p in description.point_masses]
+    leg_length = description.leg_length()
     return Skeleton(
         names=names,
         parent=parent,
@@ -71,8 +87,9 @@ def skeleton(description: WalkerDescription) -> Skeleton:
         joint_at=joint_at,
         ends=[np.array(points, dtype=float).reshape(-1, 2) for points in ends],
         foot_body=np.array([index[f.body] for f in description.feet], dtype=np.int64),
-        foot_centre=np.array([f.centre for f in description.feet], dtype=float).reshape(-1, 2),
-        foot_radius=np.array([f.radius for f in description.feet], dtype=float),
+        foot_centre=np.array([centre for centre, _ in arcs], dtype=float).reshape(-1, 2),
+        foot_radius=np.array([radius for _, radius in arcs], dtype=float),
+        foot_half_angle=np.array([min(FOOT_ARC_HALF_ANGLE, foot_arc_half_angle(r, leg_length)) for _, r in arcs]),
         stops=stops,
         total_mass=float(sum(masses)),
     )

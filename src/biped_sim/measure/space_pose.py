@@ -5,20 +5,25 @@ Each leg is drawn as the polyline from the hinge's midpoint to its hip point, ou
 and down to its foot's centre, and its foot as the shape the contact rolls on (:func:`foot_outline`), each curve
 through the foot's lowest point: a ring as itself; a torus as its outer equator and its tube's section at the
 bottom; a sphere or an ellipsoid as its three principal sections and its outline seen from the side (along the
-slope's lateral axis, as the sagittal view sees it); a point foot as its centre. The points come from the run's state
-(each leg's centre of mass and Euler parameters, the spatial formulation's bodies) and the leg geometry of its
-description (:func:`~biped_sim.walkers.space_geometry.leg_geometry`, the hip mass folded into the left leg as the
-compliant builder does), in the slope frame (x downhill, y the slope's normal, z = x cross y: the walker's right).
+slope's lateral axis, as the sagittal view sees it); a point foot as its centre. A ring or an equator wider than a
+foot is drawn (:func:`~biped_sim.measure.pose.foot_arc_half_angle`; the 3D kneed walker's, 1.5 m round sideways)
+is drawn as the arc of it that a foot is, about its bottom on the leg, which holds the contact point while the leg
+has rolled less than its half-angle. The points come from the run's state (each leg's centre of mass and Euler
+parameters, the spatial formulation's bodies) and the leg geometry of its description
+(:func:`~biped_sim.walkers.space_geometry.leg_geometry`, the hip mass folded into the left leg as the compliant
+builder does), in the slope frame (x downhill, y the slope's normal, z = x cross y: the walker's right).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from biped_sim.config.space_description import SpaceDescription
 from biped_sim.io.trajectory import RunData
+from biped_sim.measure.pose import foot_arc_half_angle
 from biped_sim.rigid.space_cycle import space_walker_model
 from biped_sim.rigid.space_model import foot_bottom
 from biped_sim.walkers.space_geometry import (
@@ -41,7 +46,9 @@ class SpacePoses:
     """A run's 3D poses in the slope frame [m]: per sample and leg, its polyline and its foot's outline."""
 
     time: np.ndarray  # (ns,)
-    legs: np.ndarray  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot centre
+    legs: (
+        np.ndarray
+    )  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot centre (_walker_points)
     feet: np.ndarray  # (ns, 2, k, 3): the foot's closed curves of CIRCLE_POINTS, a row of NaN between two (k by shape)
     hip: np.ndarray  # (ns, 3): the hinge's midpoint
 
@@ -62,10 +69,10 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def _ellipse(centre: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(ns, CIRCLE_POINTS, 3): centre + cos(s) a + sin(s) b per sample (a, b: (ns, 3) or one (3,) for all), from
-    s = 0, the point centre + a."""
-    c, s = np.cos(ANGLES)[None, :, None], np.sin(ANGLES)[None, :, None]
+def _ellipse(centre: np.ndarray, a: np.ndarray, b: np.ndarray, angles: np.ndarray = ANGLES) -> np.ndarray:
+    """(ns, CIRCLE_POINTS, 3): centre + cos(s) a + sin(s) b per sample (a, b: (ns, 3) or one (3,) for all), s over
+    ``angles`` (by default the closed curve from s = 0, the point centre + a)."""
+    c, s = np.cos(angles)[None, :, None], np.sin(angles)[None, :, None]
     return centre[:, None, :] + c * a[..., None, :] + s * b[..., None, :]
 
 
@@ -75,13 +82,13 @@ def _joined(curves: list[np.ndarray]) -> np.ndarray:
     return np.concatenate([part for curve in curves for part in (gap, curve)][1:], axis=1)
 
 
-def foot_outline(leg: LegGeometry, rotation: np.ndarray) -> np.ndarray:
+def foot_outline(leg: LegGeometry, rotation: np.ndarray, leg_length: float) -> np.ndarray:
     """(ns, k, 3) the foot drawn from the walker frame's origin, its leg turned by ``rotation`` (ns, 3, 3: walker
     frame -> rigid slope frame, z the slope's normal), from the ``LegGeometry`` the contact rolls on
     (:func:`~biped_sim.walkers.space_geometry.lowest_point`): every curve but a torus's equator starts at the foot's
-    lowest point. A ring: itself; a torus: its outer equator (radius + tube, in its plane: its outline seen along
-    its axis) and its tube's section at the bottom; a sphere or an ellipsoid: :func:`_quadric_outline`; a point: its
-    centre."""
+    lowest point. A ring: itself; a torus: its outer equator (radius + tube, in its plane: its outline seen along its
+    axis) and its tube's section at the bottom; either ring wider than a foot is drawn as :func:`ring_arc`'s arc; a
+    sphere or an ellipsoid: :func:`_quadric_outline`; a point: its centre."""
     centre = rotation @ leg.foot_centre
     quadric = _quadric(leg)
     if quadric is not None:
@@ -91,11 +98,32 @@ def foot_outline(leg: LegGeometry, rotation: np.ndarray) -> np.ndarray:
     n = rotation @ leg.foot_normal
     down = _unit(-(EZ - n[:, 2:] * n))  # in the plane, most against the normal: toward the lowest point
     along = np.cross(n, down)
+    outer, arc = leg.foot_radius + leg.foot_tube, ring_arc(leg, leg_length)
+    if arc is None:
+        ring = _ellipse(centre, outer * down, outer * along)
+    else:
+        bottom = rotation @ arc[1]
+        ring = _ellipse(
+            centre, outer * bottom, outer * np.cross(n, bottom), np.linspace(-arc[0], arc[0], CIRCLE_POINTS)
+        )
     if leg.foot_tube == 0.0:
-        return _ellipse(centre, leg.foot_radius * down, leg.foot_radius * along)
-    outer = leg.foot_radius + leg.foot_tube
+        return ring
     section = _ellipse(centre + leg.foot_radius * down, -leg.foot_tube * EZ, leg.foot_tube * np.cross(along, -EZ))
-    return _joined([_ellipse(centre, outer * down, outer * along), section])
+    return _joined([ring, section])
+
+
+def ring_arc(leg: LegGeometry, leg_length: float) -> tuple[float, np.ndarray] | None:
+    """The arc drawn of a ring (a torus's outer equator) wider than a foot is drawn
+    (:func:`~biped_sim.measure.pose.foot_arc_half_angle` below pi): its half-angle and its middle, the ring's bottom on
+    the leg (a unit vector of the walker frame in the ring's plane, furthest down the leg, fixed in the leg as the
+    foot is); None for a ring drawn whole and for the other shapes."""
+    if leg.foot_normal is None:
+        return None
+    half = foot_arc_half_angle(leg.foot_radius + leg.foot_tube, leg_length)
+    if half == math.pi:
+        return None
+    down_the_leg = -(EZ - (EZ @ leg.foot_normal) * leg.foot_normal)
+    return half, down_the_leg / np.linalg.norm(down_the_leg)
 
 
 def _quadric(leg: LegGeometry) -> np.ndarray | None:
@@ -144,9 +172,12 @@ def space_poses(run: RunData) -> SpacePoses:
 
 def _walker_points(space: SpaceDescription, leg: LegGeometry, side: float) -> np.ndarray:
     """A leg's polyline in the walker frame: the hinge's midpoint, its hip point (the left leg's at +y), centre of
-    mass, hip point again, foot centre."""
+    mass, hip point again, foot centre (a ring drawn as its arc: the arc's middle, its bottom on the leg, so that the
+    leg reaches its foot, whose centre may be above the hip)."""
     hip_point = np.array([0.0, 0.5 * side * space.hip_width, 0.0])
-    return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, leg.foot_centre])
+    arc = ring_arc(leg, space.leg_length())
+    end = leg.foot_centre if arc is None else leg.foot_centre + (leg.foot_radius + leg.foot_tube) * arc[1]
+    return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, end])
 
 
 def _poses(
@@ -161,7 +192,7 @@ def _poses(
     for k, (leg, (origin, rotation)) in enumerate(zip(legs, placed, strict=True)):
         body = _walker_points(space, leg, 1.0 - 2.0 * k)
         polylines.append((origin[:, None, :] + np.einsum("sij,kj->ski", rotation, body)) @ TO_SPATIAL.T)
-        feet.append((origin[:, None, :] + foot_outline(leg, rotation)) @ TO_SPATIAL.T)
+        feet.append((origin[:, None, :] + foot_outline(leg, rotation, space.leg_length())) @ TO_SPATIAL.T)
     legs_3d = np.stack(polylines, axis=1)
     return SpacePoses(time, legs_3d, np.stack(feet, axis=1), legs_3d[:, 0, 0])
 

@@ -131,7 +131,7 @@ def _prepare_dense(p: np.ndarray, tab: Tableau, sc: Scratch, h: float, y: np.nda
     dop853_coefficients(tab, h, y, sc)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined, as _accepted: a kernel of its own would emit both trees' code again
 def _first_event(
     p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, fall_height: float, t: float, h: float, y: np.ndarray
 ) -> tuple[int, float]:
@@ -160,7 +160,7 @@ def _attempt(p: np.ndarray, tab: Tableau, sc: Scratch, h: float, y: np.ndarray) 
     return error_norm(tab, h, y, sc, RTOL, ATOL)
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined in the phase (one call site), for the same reason
 def _accepted(
     p: np.ndarray, tab: Tableau, sc: Scratch, phase: int, fall_height: float, rate: float, k: int, t: float, h: float,
     y: np.ndarray, rec: PhaseRecord,

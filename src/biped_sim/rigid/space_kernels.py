@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from biped_sim.kernel import kernel
 from biped_sim.multibody.linalg import cholesky_solve
@@ -118,7 +119,7 @@ def bottom(p: np.ndarray, foot: int, rotation: np.ndarray) -> tuple[np.ndarray, 
     return lowest, d
 
 
-@kernel
+@njit(cache=True, inline="always")  # inlined in its two callers: a kernel of its own compiled three times
 def ellipsoid_quadric(p: np.ndarray, o: int, rotation: np.ndarray) -> np.ndarray:
     """The ellipsoid foot at parameter offset ``o``: its quadric turned into the slope frame, R Q R^T."""
     q = np.ascontiguousarray(p[o + 9 : o + 18]).reshape((3, 3))

@@ -11,9 +11,10 @@ events' (the fall function, the clearance, the guard, their root on the dense ou
 compiles the rotations first (:func:`first_callee`; loaded on a warm cache, which starts no process), then a second
 process compiles the flow's tree (:func:`flow_share`) while this one compiles the events' (:func:`events_share`, the
 stance foot's lowest point first: the flow's compile reaches it after a leg's terms and the contact point's rate)
-and the clearance's twin (:func:`clearance_twin`). The phase's twin, compiled once both are done, compiles only the
-accepted step's bookkeeping (which calls both trees) and itself. The arguments are stand-ins of the types the
-callers pass (the model is a flat parameter vector: every walker in space compiles the same code); none is called.
+and the clearance's twin (:func:`clearance_twin`). The phase's twin, compiled once both are done, compiles only
+itself, the accepted step's bookkeeping (which calls both trees) inlined in it. The arguments are stand-ins of the
+types the callers pass (the model is a flat parameter vector: every walker in space compiles the same code); none is
+called.
 
 The run's measures (its samples in the run's frame, the step table, the files) are plain numpy: they compile nothing.
 """
