@@ -5,8 +5,8 @@ Each leg is drawn as the polyline from the hinge's midpoint to its hip point, ou
 and down to its foot's centre, and its foot as the shape the contact rolls on (:func:`foot_outline`), each curve
 through the foot's lowest point: a ring as itself; a torus as its outer equator and its tube's section at the
 bottom; a sphere or an ellipsoid as its three principal sections and its outline seen from the side (along the
-slope's lateral axis, as the sagittal view sees it); a point foot as its centre. A ring or an equator wider than a
-foot is drawn (:func:`~biped_sim.measure.pose.foot_arc_half_angle`; the 3D kneed walker's, 1.5 m round sideways)
+slope's lateral axis, as the sagittal view sees it); a point foot as its centre. A ring or an equator too wide to
+be drawn whole (:func:`~biped_sim.measure.pose.foot_arc_half_angle`; the 3D kneed walker's, 1.5 m round sideways)
 is drawn as the arc of it that a foot is, about its bottom on the leg, which holds the contact point while the leg
 has rolled less than its half-angle. The points come from the run's state (each leg's centre of mass and Euler
 parameters, the spatial formulation's bodies) and the leg geometry of its description
@@ -46,9 +46,7 @@ class SpacePoses:
     """A run's 3D poses in the slope frame [m]: per sample and leg, its polyline and its foot's outline."""
 
     time: np.ndarray  # (ns,)
-    legs: (
-        np.ndarray
-    )  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot centre (_walker_points)
+    legs: np.ndarray  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot end (_walker_points)
     feet: np.ndarray  # (ns, 2, k, 3): the foot's closed curves of CIRCLE_POINTS, a row of NaN between two (k by shape)
     hip: np.ndarray  # (ns, 3): the hinge's midpoint
 
@@ -113,7 +111,7 @@ def foot_outline(leg: LegGeometry, rotation: np.ndarray, leg_length: float) -> n
 
 
 def ring_arc(leg: LegGeometry, leg_length: float) -> tuple[float, np.ndarray] | None:
-    """The arc drawn of a ring (a torus's outer equator) wider than a foot is drawn
+    """The arc drawn of a ring (a torus's outer equator) too wide to be drawn whole
     (:func:`~biped_sim.measure.pose.foot_arc_half_angle` below pi): its half-angle and its middle, the ring's bottom on
     the leg (a unit vector of the walker frame in the ring's plane, furthest down the leg, fixed in the leg as the
     foot is); None for a ring drawn whole and for the other shapes."""
