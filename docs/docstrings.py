@@ -9,6 +9,7 @@ is shown as a literal block instead: verbatim, which is how it was written to be
 
 from __future__ import annotations
 
+import inspect
 import io
 from typing import Any
 
@@ -27,9 +28,21 @@ def is_clean(text: str, env: Any) -> bool:
     return not stream.getvalue()
 
 
+def foreign(obj: Any) -> bool:
+    """Whether ``obj`` is a class or function of another package (a name a module imports): autodoc asks for its
+    docstring while it sorts a module's members, but does not document it, and parsing it here would register what
+    it describes (numpydoc attributes: scipy's BDF and Radau list the same ones) in the page's module."""
+    module = getattr(obj, "__module__", None)
+    return (
+        (inspect.isclass(obj) or inspect.isroutine(obj))
+        and isinstance(module, str)
+        and module.split(".")[0] != "biped_sim"
+    )
+
+
 def literal_if_unclean(app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]) -> None:
     """``autodoc-process-docstring``: replace ``lines`` (in place) by a literal block when they are not clean."""
-    if not lines or is_clean("\n".join(lines), app.env):
+    if not lines or foreign(obj) or is_clean("\n".join(lines), app.env):
         return
     body = ["   " + line if line.strip() else "" for line in lines]
     lines[:] = ["::", "", *body, ""]
