@@ -3,6 +3,8 @@ to the bit as scipy's own, on a stiff problem with a known Jacobian."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -51,3 +53,16 @@ def test_the_complex_factorization_solves_a_complex_system() -> None:
     a = np.array([[2.0 + 1.0j, 1.0], [1.0, 3.0 - 1.0j]])
     b = np.array([1.0 + 0.0j, 2.0j])
     np.testing.assert_allclose(a @ lu_solve(lu_factor(a.copy()), b.copy()), b, rtol=1e-14)
+
+
+@pytest.mark.parametrize(("solver", "scipys"), [(DirectBDF, "BDF"), (DirectRadau, "Radau")])
+def test_a_jacobian_that_is_not_finite_fails_the_integration_with_a_status(solver: type, scipys: str) -> None:
+    """scipy's own solvers raise a ValueError there (its finiteness check), which the stiff driver re-raised as a
+    traceback; these reject the steps until the step size underflows: solve_ivp's status -1, which the driver reports
+    as a diverged run (the stiff solver failed)."""
+    with warnings.catch_warnings():  # numpy's overflow warnings on the way down
+        warnings.simplefilter("ignore", RuntimeWarning)
+        run = solve_ivp(lambda t, y: -1000.0 * y, (0.0, 1.0), [1.0], method=solver, jac=lambda t, y: [[np.nan]])
+    assert run.status == -1
+    with pytest.raises(ValueError, match="infs or NaNs"):
+        solve_ivp(lambda t, y: -1000.0 * y, (0.0, 1.0), [1.0], method=scipys, jac=lambda t, y: [[np.nan]])
