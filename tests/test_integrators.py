@@ -76,12 +76,12 @@ def test_a_stiff_run_whose_event_search_fails_ends_diverged_with_its_reason(monk
     """scipy's root search raising "f(a) and f(b) must have different signs" (its interpolant disagreeing in sign
     with its step's end states) is a status, not a crash: with no event at zero to hold, the run ends diverged, saying
     why."""
-    from biped_sim.integrate import stiff
+    from biped_sim.integrate import segment
 
     def failing_search(*args: object, **kwargs: object) -> None:
         raise ValueError("f(a) and f(b) must have different signs")
 
-    monkeypatch.setattr(stiff, "solve_ivp", failing_search)
+    monkeypatch.setattr(segment, "brentq", failing_search)
     result = simulate(default_walker("integrator.method=radau", t_end=0.05))
     assert result.status == "diverged"
     assert result.status_reason == "the stiff solver's event search failed (an event function within round-off of zero)"

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from scipy.integrate import OdeSolver, solve_ivp
+from scipy.integrate import OdeSolver
 
 from biped_sim.config import IntegratorConfig
 from biped_sim.contact.response import ContactBuffers
@@ -40,6 +40,7 @@ from biped_sim.integrate.recorder import (
     record_sample,
     with_room,
 )
+from biped_sim.integrate.segment import SegmentEvents, ivp_segment, sample_steps, stepped_segment
 from biped_sim.kernel import kernel
 from biped_sim.multibody.dispatch import contact_buffers, make_workspace, system_fall, system_rhs
 from biped_sim.multibody.events import event_count, system_event_functions
@@ -148,7 +149,7 @@ def integrate_stiff(
     rec = integrate_scipy(
         system, rec, y, modes, contact_buffers(system), method, integrator.rtol, integrator.atol, integrator.max_step,
         t_end, interval, max_strikes, progress, fun, jac=jac, checks=checks, work=work,
-        event_values=event_values,
+        event_values=event_values, segment=stepped_segment,
     )  # fmt: skip
     rec.state[0].rhs_evals += counts["jac"] * (ny + 1)
     return rec
@@ -175,8 +176,10 @@ def integrate_scipy(
     apply_events: Callable[..., bool] = apply_events,
     checks: blowup.Scales = blowup.NO_CHECKS,
     work: tuple | None = None,
+    segment: Callable[..., Any] = ivp_segment,
 ) -> Recorder:
-    """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events; returns the recorder.
+    """Drive ``solve_ivp(method)`` over ``fun`` with the events as terminal events (``segment``: one segment of it,
+    :func:`~biped_sim.integrate.segment.ivp_segment` or its stepped twin); returns the recorder.
 
     Each event stops the integration; the discrete update (``apply_events``) then runs on the
     state just past the event and the integration restarts. ``fun`` reads ``modes``, which the
@@ -191,7 +194,7 @@ def integrate_scipy(
     nf = modes.shape[0]
     touching_before = np.zeros(nf)
     watched = WatchedEvents(system, event_values)
-    options = {"jac": jac} if jac is not None else {}
+    options = {"rtol": rtol, "atol": atol, "max_step": max_step, **({"jac": jac} if jac is not None else {})}
     st = rec.state[0]
     t = float(st.time)
     if st.n_samples == 0:
@@ -202,10 +205,8 @@ def integrate_scipy(
             st.status = COMPLETED
             break
         try:
-            sol = solve_ivp(
-                fun, (t, t_end), y, method=method, rtol=rtol, atol=atol, max_step=max_step, events=watched.events,
-                dense_output=True, **options,
-            )  # fmt: skip
+            wanted = sample_steps(int(st.n_samples), interval)
+            sol = segment(fun, t, t_end, y, method, options, SegmentEvents(watched.events, watched.values_at, wanted))
         except StoppedError as stop:
             st.status, st.reason, st.stop_time = stop.status, stop.reason, t
             break
@@ -258,6 +259,12 @@ class WatchedEvents:
         self.system, self.event_values = system, event_values
         self.values, self.held = np.empty(n), np.zeros(n)
         self.events = [self._event(j) for j in range(n)]
+
+    def values_at(self, t: float, state: np.ndarray) -> np.ndarray:
+        """Every event's value at ``state``, as each of :attr:`events` gives it."""
+        self.event_values(state, self.system, self.values)
+        held = (self.held != 0.0) & (np.abs(self.values) < EVENT_NOISE)
+        return np.where(held, self.held * EVENT_NOISE, self.values)
 
     def _event(self, j: int) -> Callable[[float, np.ndarray], float]:
         def event(t: float, state: np.ndarray) -> float:

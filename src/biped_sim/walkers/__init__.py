@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from biped_sim.config import Config, InitialState
 from biped_sim.walkers.describe import describe
-from biped_sim.walkers.described import build_described
+from biped_sim.walkers.described_start import build_described
 from biped_sim.walkers.model import BuiltModel, minimal_model
 from biped_sim.walkers.space_walker import build_space_walker
 from biped_sim.walkers.spatial_described import spatial_described

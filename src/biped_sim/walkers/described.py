@@ -4,41 +4,36 @@
 The description (:class:`~biped_sim.config.description.WalkerDescription`) gives bodies in frames whose origin is the
 joint to the parent (the root's: the hip), joints placing a child's origin in its parent's frame, one-sided joint stops
 and passive elements (springs, dampers), feet on bodies and the legs. :func:`resolve_tree` folds the point masses into
-their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first; :func:`build_described`
-makes the planar absolute-coordinate system of it (each body at its centre of mass, a revolute joint per child, the hip
-joint first, each stop a compliant contact of :mod:`biped_sim.contact.stop` with the law, stiffness and restitution it
-names and ``contact.exponent``, a latching stop released by its leg's foot; each joint element a row of
-:mod:`biped_sim.contact.joint_element`) and starts it rolling on its stance leg's foot (:func:`tree_start`), the stance
-leg's latches engaged as the rigid model's stance knee is locked. ``formulation.kind: minimal`` converts that system
-(:func:`~biped_sim.walkers.model.minimal_model`), so both formulations describe one walker.
+their bodies (mass, centre of mass, parallel-axis inertia) and orders the bodies parents first;
+:func:`planar_tree_system` makes the planar absolute-coordinate system of it (each body at its centre of mass, a
+revolute joint per child, the hip joint first, each stop a compliant contact of :mod:`biped_sim.contact.stop` with the
+law, stiffness and restitution it names and ``contact.exponent``, a latching stop released by its leg's foot; each
+joint element a row of :mod:`biped_sim.contact.joint_element`), which
+:func:`~biped_sim.walkers.described_start.build_described` starts rolling on its stance leg's foot.
+``formulation.kind: minimal`` converts that system (:func:`~biped_sim.walkers.model.minimal_model`), so both
+formulations describe one walker.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from biped_sim.config import Config, InitialState
+from biped_sim.config import Config
 from biped_sim.config.description import LATERAL, WalkerDescription
 from biped_sim.config.feet import FootSpec
 from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, JointElements, element_parameters, make_elements
 from biped_sim.contact.normal import NORMAL_LAWS, normal_parameters
 from biped_sim.contact.profile import profile_ground
-from biped_sim.contact.response import BODY_TOO_FAR, IMPACT_SPEED, LEG_TOO_FAR, NO_BODY_FALLS, TOUCHING
-from biped_sim.contact.stop import FOOT, HELD, LATCHED, NOT_LATCHING, Stops, make_stops
+from biped_sim.contact.response import BODY_TOO_FAR, LEG_TOO_FAR, NO_BODY_FALLS
+from biped_sim.contact.stop import NOT_LATCHING, Stops, make_stops
 from biped_sim.errors import ConfigError
 from biped_sim.multibody.planar import PlanarSystem
-from biped_sim.walkers.describe import describe
 from biped_sim.walkers.model import (
-    BuiltModel,
     contact_arrays,
     contact_limits,
-    contact_stiffness,
-    standing_start,
-    static_contact_penetration,
 )
 
 
@@ -189,12 +184,12 @@ def _axis(description: WalkerDescription, name: str) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
-def _rotate(phi: float, v: np.ndarray) -> np.ndarray:
+def rotate(phi: float, v: np.ndarray) -> np.ndarray:
     c, s = math.cos(phi), math.sin(phi)
     return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
 
 
-def _leg_feet(tree: Tree) -> list[list[int]]:
+def leg_feet(tree: Tree) -> list[list[int]]:
     """The feet of each leg."""
     return [[i for i, b in enumerate(tree.foot_body) if b in leg] for leg in tree.legs]
 
@@ -202,10 +197,10 @@ def _leg_feet(tree: Tree) -> list[list[int]]:
 def stance_feet(tree: Tree) -> tuple[int, ...]:
     """The feet the walker starts on: the first foot of the stance leg's last body and each of that body's feet at
     the same sagittal place (the four-legged machine's pair stands on two feet, which share its weight)."""
-    first = next(i for i in _leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
+    first = next(i for i in leg_feet(tree)[0] if tree.foot_body[i] == tree.legs[0][-1])
     return tuple(
         i
-        for i in _leg_feet(tree)[0]
+        for i in leg_feet(tree)[0]
         if tree.foot_body[i] == tree.foot_body[first]
         and tree.foot_radius[i] == tree.foot_radius[first]
         and np.array_equal(tree.foot_centre[i], tree.foot_centre[first])
@@ -216,7 +211,7 @@ def foot_partners(tree: Tree) -> np.ndarray:
     """Each foot's partner: the other leg's foot of the same rank on its leg (the four-legged machine's foot on the
     same side), else its first; -1 without two legs or for a foot off the legs."""
     partner = np.full(len(tree.foot_names), -1, dtype=np.int64)
-    feet = _leg_feet(tree)
+    feet = leg_feet(tree)
     if len(tree.legs) == 2 and all(feet):
         for leg, other in ((0, 1), (1, 0)):
             for k, foot in enumerate(feet[leg]):
@@ -272,24 +267,13 @@ def latch_feet(tree: Tree) -> np.ndarray:
     """(ns, 2): each latching stop's FOOT, the first of the leg holding its joint (whose toe-off begins the
     release), and PARTNER, the other leg's first foot (whose strike the release waits out); NOT_LATCHING for a
     plain stop (the description checks that a latching stop's leg has a foot, and that there are two legs)."""
-    feet = _leg_feet(tree)
+    feet = leg_feet(tree)
     leg_of = {b: k for k, leg in enumerate(tree.legs) for b in leg}
     rows = [
         [feet[leg_of[c]][0], feet[1 - leg_of[c]][0]] if latch else [NOT_LATCHING, NOT_LATCHING]
         for _, c, *_, latch in tree.stops
     ]
     return np.array(rows, dtype=np.int64).reshape(-1, 2)
-
-
-def latch_stance(system: PlanarSystem, tree: Tree, modes0: np.ndarray, rate: float) -> None:
-    """Hold the stance leg's latches in ``modes0`` (the rigid model's straight stance knee at the start),
-    remembering ``rate`` [rad/s] as their approach rate."""
-    nf = system.foot_body.shape[0]
-    stance_feet = _leg_feet(tree)[0]
-    for s, foot in enumerate(system.stops.latch[:, FOOT]):
-        if foot in stance_feet:
-            modes0[nf + s, LATCHED], modes0[nf + s, TOUCHING] = HELD, 1.0
-            modes0[nf + s, IMPACT_SPEED] = rate
 
 
 def planar_tree_system(tree: Tree, config: Config, stiffness: float, length: float) -> PlanarSystem:
@@ -328,122 +312,4 @@ def planar_tree_system(tree: Tree, config: Config, stiffness: float, length: flo
         stops=planar_stops(tree, config, length),
         elements=planar_elements(tree),
         body_falls=body_falls(tree, config),
-    )
-
-
-def body_angles(tree: Tree, initial: InitialState | Mapping[str, float], keys: list[str]) -> np.ndarray:
-    """(nb, 2): each body's angle and rate from the initial-state ``keys`` (stance leg, then swing leg, hip down,
-    then the bodies off the legs, ``<name>_angle`` and ``<name>_rate``, 0 when not given)."""
-    values = initial.model_dump() if isinstance(initial, InitialState) else dict(initial)
-    state = np.zeros((len(tree.names), 2))
-    per_leg = 2 * len(tree.legs[0])
-    for leg, bodies in enumerate(tree.legs[:2]):
-        for k, b in enumerate(bodies):
-            offset = leg * per_leg + 2 * k
-            state[b] = values[keys[offset]], values[keys[offset + 1]]
-    on_legs = {b for leg in tree.legs for b in leg}
-    for b in (b for b in range(len(tree.names)) if b not in on_legs):
-        state[b] = values.get(f"{tree.names[b]}_angle", 0.0), values.get(f"{tree.names[b]}_rate", 0.0)
-    return state
-
-
-def angle_key(tree: Tree, keys: list[str], b: int) -> tuple[str, str]:
-    """(body b's initial angle key, the limit it is held to): a leg's body in ``keys``' order (stance leg, then swing
-    leg, hip down) against simulation.fall_leg_angle, a body off the legs its ``<name>_angle`` against its own."""
-    per_leg = 2 * len(tree.legs[0])
-    for leg, bodies in enumerate(tree.legs[:2]):
-        if b in bodies:
-            return keys[leg * per_leg + 2 * list(bodies).index(b)], "simulation.fall_leg_angle"
-    return f"{tree.names[b]}_angle", f"the fall_angle of the body {tree.names[b]!r}"
-
-
-def tree_start(
-    tree: Tree, angles: np.ndarray, static_penetration: float, config: Config, length: float, keys: list[str]
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """(coords (nb, 3), rates (nb, 3), hip speed) of the walker rolling on its stance foot.
-
-    The stance foot (the first of :func:`stance_feet`) touches the ground at x = 0, sunk by
-    ``static_penetration``; its body rolls about the contact point, and each body's origin follows up the
-    stance leg to the hip (the joints shared) and down the other bodies from their parents. ConfigError naming
-    the initial-state key (of ``keys``) of a body that would start fallen.
-    """
-    limits = fall_angles(tree, config)
-    for b in range(len(tree.names)):
-        if abs(angles[b, 0]) >= limits[b]:
-            key, limit = angle_key(tree, keys, b)
-            raise ConfigError(f"simulation.initial.{key}", f"beyond {limit}: the walker starts fallen")
-    foot = stance_feet(tree)[0]
-    contact = np.array([0.0, -static_penetration])
-    nb = len(tree.names)
-    origin, velocity = np.zeros((nb, 2)), np.zeros((nb, 2))
-    b = int(tree.foot_body[foot])
-    origin[b] = contact + np.array([0.0, tree.foot_radius[foot]]) - _rotate(angles[b, 0], tree.foot_centre[foot])
-    velocity[b] = angles[b, 1] * _perp(origin[b] - contact)
-    chain = [b]
-    while tree.parent[chain[-1]] >= 0:  # up the stance leg: the child's origin is the parent's joint point
-        child, p = chain[-1], int(tree.parent[chain[-1]])
-        origin[p] = origin[child] - _rotate(angles[p, 0], tree.joint_at[child])
-        velocity[p] = velocity[child] - angles[p, 1] * _perp(origin[child] - origin[p])
-        chain.append(p)
-    for c in range(nb):  # down the other bodies (parents first)
-        if c not in chain:
-            p = int(tree.parent[c])
-            arm = _rotate(angles[p, 0], tree.joint_at[c])
-            origin[c], velocity[c] = origin[p] + arm, velocity[p] + angles[p, 1] * _perp(arm)
-    if origin[0, 1] <= config.simulation.fall_hip_height * length:
-        raise ConfigError("simulation.initial", "the hip starts below simulation.fall_hip_height")
-    if not config.contact.scuffing_guard:
-        _check_swing_feet(tree, angles, origin)
-    arms = np.array([_rotate(angles[c, 0], tree.com[c]) for c in range(nb)])
-    coms = origin + arms
-    com_velocity = velocity + angles[:, 1:2] * np.array([_perp(a) for a in arms])
-    com_velocity[b] = angles[b, 1] * _perp(coms[b] - contact)  # the rolling body: about the contact point
-    coords = np.column_stack([coms, angles[:, 0]])
-    rates = np.column_stack([com_velocity, angles[:, 1]])
-    return coords, rates, float(np.hypot(*velocity[0]))
-
-
-def _check_swing_feet(tree: Tree, angles: np.ndarray, origin: np.ndarray) -> None:
-    """ConfigError when a foot off the stance leg starts below the ground (which no scuffing guard lifts)."""
-    for foot in (f for leg in _leg_feet(tree)[1:] for f in leg):
-        b = int(tree.foot_body[foot])
-        if origin[b, 1] + _rotate(angles[b, 0], tree.foot_centre[foot])[1] - tree.foot_radius[foot] < 0.0:
-            raise ConfigError(
-                "simulation.initial", "the swing foot starts below the ground (and contact.scuffing_guard is off)"
-            )
-
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    """The vector v turned by +90 degrees: omega x v is omega perp(v)."""
-    return np.array([-v[1], v[0]])
-
-
-def build_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
-    """Bodies, joints, stops and feet of the walker's description, started rolling on its stance foot, the stance
-    leg's latches engaged (their approach rate the stance foot's remembered impact speed over the leg length)."""
-    description = describe(config)
-    tree = resolve_tree(description)
-    length = description.leg_length()
-    radius = float(np.max(tree.foot_hertz))
-    stiffness = contact_stiffness(config, radius)
-    total_mass = float(np.sum(tree.mass))
-    system = planar_tree_system(tree, config, stiffness, length)
-    feet = stance_feet(tree)  # each carries its share of the weight
-    static_penetration = static_contact_penetration(config, total_mass / len(feet), stiffness, length)
-    keys = description.state_keys()
-    angles = body_angles(tree, initial, keys)
-    coords, rates, hip_speed = tree_start(tree, angles, static_penetration, config, length, keys)
-    impact = max(hip_speed, config.contact.impact_velocity_floor)
-    y0, modes0 = standing_start(system, coords, rates, feet, impact)
-    latch_stance(system, tree, modes0, impact / length)
-    return BuiltModel(
-        system=system,
-        y0=y0,
-        modes0=modes0,
-        body_names=tree.names,
-        foot_names=tree.foot_names,
-        leg_length=length,
-        total_mass=total_mass,
-        stiffness=stiffness,
-        meta={"static_penetration": static_penetration},
     )

@@ -27,7 +27,7 @@ _START_MODES_DEFERRED = ContextVar("start_modes_deferred", default=False)
 
 @contextmanager
 def start_modes_deferred() -> Iterator[None]:
-    """Inside the block, :func:`standing_start` leaves out the start's mode update, so that a build compiles
+    """Inside the block, :func:`update_start_modes` leaves out the start's mode update, so that a build compiles
     nothing: a model with the run's types, shapes and checks, whose only use is a compile's argument types (a
     first run's second process, :mod:`biped_sim.simulate.aside`, which starts before the update's compile), never
     a model to integrate."""
@@ -151,12 +151,14 @@ def standing_start(
     qd: np.ndarray,
     stance_feet: tuple[int, ...],
     impact_speed: float,
+    update_modes: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(y0, modes0) of a walker whose ``stance_feet`` "just struck": generalized coordinates ``q`` and rates ``qd``
     (absolute coordinates: one row per body), bristles relaxed, no work dissipated yet.
 
     The stance feet are armed and touching and remember ``impact_speed`` as their approach velocity; the mode
-    update then arms each other foot that is ahead of its partner and in the air.
+    update (:func:`update_start_modes`; ``update_modes=False``: left to the caller) then arms each other foot that
+    is ahead of its partner and in the air.
     """
     layout = formulation_of(system).layout_of(system)
     y0 = np.zeros(layout.size)
@@ -167,9 +169,16 @@ def standing_start(
         modes0[foot, ARMED] = 1.0
         modes0[foot, TOUCHING] = 1.0
         modes0[foot, IMPACT_SPEED] = impact_speed
+    if update_modes:
+        update_start_modes(system, y0, modes0)
+    return y0, modes0
+
+
+def update_start_modes(system: PlanarSystem | SpatialSystem, y0: np.ndarray, modes0: np.ndarray) -> None:
+    """The start's mode update of ``system`` at ``y0`` on ``modes0`` (in place): each foot ahead of its partner and
+    in the air armed, each stop's contact state; left out under :func:`start_modes_deferred`."""
     if not _START_MODES_DEFERRED.get():
         system_update_modes(0.0, y0, system, modes0, contact_buffers(system))
-    return y0, modes0
 
 
 def minimal_model(planar: BuiltModel) -> BuiltModel:

@@ -1,7 +1,7 @@
 """The start of a described walker in space whose joints turn about other axes than the lateral (hip roll, hip yaw).
 
-The planar start (:func:`~biped_sim.walkers.described.build_described`) knows only sagittal angles. A body hung on a
-joint about another axis reads its initial-state keys as that joint's angle and rate about its axis, relative to
+The planar start (:func:`~biped_sim.walkers.described_start.build_described`) knows only sagittal angles. A body hung
+on a joint about another axis reads its initial-state keys as that joint's angle and rate about its axis, relative to
 its parent (:class:`~biped_sim.config.description.JointSpec`'s ``axis``): the planar start takes it along with its
 parent (:func:`held_initial`: the joint at 0), and :func:`turn_joints` then turns the body and everything below it
 about the joint's axis through the joint's point by that angle and gives them that rate, parents first, so that a
@@ -17,7 +17,8 @@ import numpy as np
 
 from biped_sim.config import InitialState
 from biped_sim.errors import ConfigError
-from biped_sim.walkers.described import Tree, angle_key, body_angles, stance_feet
+from biped_sim.walkers.described import Tree, stance_feet
+from biped_sim.walkers.described_start import angle_key, body_angles
 from biped_sim.walkers.space_geometry import cross, euler_parameters
 
 

@@ -31,7 +31,8 @@ from biped_sim.multibody.hinge import FRAME, hinge_index, make_hinge_elements, m
 from biped_sim.multibody.planar import PlanarSystem
 from biped_sim.multibody.spatial import IN_PLANE, PERPENDICULAR, SPHERICAL, SpatialSystem
 from biped_sim.walkers.describe import describe
-from biped_sim.walkers.described import Tree, build_described, resolve_tree
+from biped_sim.walkers.described import Tree, resolve_tree
+from biped_sim.walkers.described_start import described_start, settle_start_modes
 from biped_sim.walkers.model import BuiltModel
 from biped_sim.walkers.space_start import held_initial, turn_joints
 
@@ -105,13 +106,15 @@ def spatial_gravity(config: Config) -> np.ndarray:
 
 
 def spatial_described(config: Config, initial: InitialState | Mapping[str, float]) -> BuiltModel:
-    """The walker's description in Euler parameters: its planar model (:func:`build_described`, same bodies, feet
-    and start) lifted, each foot at its ``lateral`` place, each body with its spatial inertia, a revolute joint per
-    planar joint; a walker with every foot in its sagittal plane also held in it by a planar joint of its root to
-    the ground frame (a single disc foot is laterally unstable), one standing on feet apart free in roll and yaw."""
+    """The walker's description in Euler parameters: its planar model (:func:`~.described_start.described_start`, same
+    bodies, feet and start) lifted, each foot at its ``lateral`` place, each body with its spatial inertia, a
+    revolute joint per planar joint; a walker with every foot in its sagittal plane also held in it by a planar
+    joint of its root to the ground frame (a single disc foot is laterally unstable), one standing on feet apart
+    free in roll and yaw. The start's modes are settled in space, on the lifted start."""
     description = describe(config)
     tree = resolve_tree(description)
-    planar = build_described(config, held_initial(tree, initial, description.state_keys()))
+    start = described_start(config, held_initial(tree, initial, description.state_keys()))
+    planar = start.model
     ps = planar.system
     nb = planar.n_bodies
     points = joint_points(tree, ps)
@@ -158,7 +161,9 @@ def spatial_described(config: Config, initial: InitialState | Mapping[str, float
     q, qd = _spatial_state(planar, lateral + tree.com_lateral)
     on_parent = {int(b): np.array(s_a) for (_, b), (s_a, _) in zip(ps.joint_bodies, points, strict=True)}
     turn_joints(tree, description.state_keys(), initial, on_parent, q, qd)
-    return replace(planar, system=system, y0=_state_vector(planar, system, q, qd))
+    y0 = _state_vector(planar, system, q, qd)
+    settle_start_modes(start, system, y0)  # in space: the planar model's update would compile for it alone
+    return replace(planar, system=system, y0=y0)
 
 
 def joint_points(tree: Tree, planar: PlanarSystem) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
