@@ -134,16 +134,11 @@ def integrate_stiff(
         return out
 
     compiled_events = system_event_functions.entry_for(y, system, np.empty(event_count(system)))
-    last_values, last_state = np.empty(event_count(system)), [b""]
 
     def event_values(state: np.ndarray, system: tuple, g: np.ndarray) -> None:
-        """The event functions at ``state`` into ``g``; scipy asks each event in turn at a step's state, and the
-        functions depend on the state alone (the system's geometry is fixed), so one compiled call serves them all."""
-        contiguous = np.ascontiguousarray(state)
-        if contiguous.tobytes() != last_state[0]:
-            compiled_events(contiguous, system, last_values)
-            last_state[0] = contiguous.tobytes()
-        g[:] = last_values
+        """The event functions at ``state`` into ``g``: all of them, once per step (the stepped segment asks them
+        together; its root search asks one at each state it tries)."""
+        compiled_events(np.ascontiguousarray(state), system, g)
 
     method = DirectRadau if integrator.method == "radau" else DirectBDF
     rec = integrate_scipy(
