@@ -14,6 +14,10 @@ configure_optimisation()  # first: numba's reload of its settings resets the cac
 configure_cache_dir()
 lock_cache_writes()
 
+from biped_sim._symbol_calls import install as call_big_callees_by_symbol  # noqa: E402
+
+call_big_callees_by_symbol()
+
 from biped_sim.config import Config, config_from_dict, load_config  # noqa: E402
 from biped_sim.errors import ConfigError  # noqa: E402
 from biped_sim.simulate import RunResult, run, simulate  # noqa: E402
