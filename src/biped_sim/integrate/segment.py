@@ -68,8 +68,9 @@ def stepped_segment(
         t_old, t, y = solver.t_old, solver.t, solver.y
         g_new = events.values(t, y)
         active = np.nonzero(((g <= 0) & (g_new >= 0)) | ((g >= 0) & (g_new <= 0)))[0]
-        step_output = dense.of(solver) if active.size else None
+        step_output = None
         if active.size:  # scipy finds every active event's root, then stops at the first
+            step_output = solver.dense_output()
             t = min(_root(events.each[j], step_output, t_old, t) for j in active)
             y, status = step_output(t), 1
         g = g_new
@@ -93,10 +94,6 @@ class _DenseSteps:
 
     def __init__(self, wanted: Callable[[float, float], bool]) -> None:
         self.wanted, self.outputs = wanted, {}
-
-    def of(self, solver: OdeSolver) -> Callable[[float], np.ndarray]:
-        """The current step's dense output (made now)."""
-        return solver.dense_output()
 
     def keep(self, k: int, solver: OdeSolver, t_old: float, t: float, made: Any) -> None:
         """Keep step ``k``'s dense output when it was made or is wanted."""
