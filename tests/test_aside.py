@@ -374,3 +374,30 @@ def test_the_rigid_step_compiled_after_its_callees_finds_them_all_in_the_cache(t
     assert "biped_sim.rigid.compiled.step_kernel_python_entry" in compiled  # the step was compiled here
     assert "biped_sim.rigid.integration.stretch" in callees  # the second process's share
     assert len(callees) == 12 and not set(callees) & set(compiled)  # ... but none of its callees
+
+
+_COLD_PROBE = """
+import json
+from biped_sim._compiled_cache import recording_compilations
+from biped_sim.config import Config
+from biped_sim.kernel import compile_for
+from biped_sim.simulate import aside
+draft = aside._draft(Config())
+with recording_compilations() as compiled:
+    cold = aside._cold_loop(draft)
+compile_for(aside.events.system_is_leading, (draft.y0, draft.system, 0))
+print(json.dumps([cold, compiled]))
+"""
+
+
+@pytest.mark.slow
+def test_the_cold_cache_probe_looks_the_loop_up_without_compiling_it(tmp_path: Path) -> None:
+    """On an empty cache the probe says cold and compiles nothing (the second process starts at once); once another
+    process has compiled the probed callee, it says warm, loading nothing either."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    runs = []
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", _COLD_PROBE], env=env, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert runs == [[True, []], [False, []]]

@@ -71,7 +71,9 @@ def _called_by_symbol(kernel: object) -> set[str]:
 
 def test_the_rigid_phase_calls_its_flow_by_symbol_and_the_loop_inlines_its_right_hand_side() -> None:
     """The mechanism is on where it pays: the rigid stance phase in space calls its flow (a few array arguments) by
-    symbol; the compliant loop keeps its right-hand side (the system's arrays at every stage) linked and inlined."""
+    symbol; the compliant loop keeps its right-hand side (the system's arrays at every stage) linked and inlined, and
+    calls the kernels marked ``by_symbol`` (the checks' audit, the event's mode update) by symbol though their calls
+    pass the system's arrays too."""
     from biped_sim import load_config, simulate
     from biped_sim.integrate.explicit import advance
     from biped_sim.rigid.space_integration import space_phase
@@ -79,7 +81,9 @@ def test_the_rigid_phase_calls_its_flow_by_symbol_and_the_loop_inlines_its_right
     simulate(load_config(ROOT / "configs/space/tinkertoy.yaml", ["simulation.t_end=0.3"]))
     assert "space_flow" in _called_by_symbol(space_phase)
     simulate(default_walker(t_end=0.01))
-    assert not any(name.startswith("rhs") for name in _called_by_symbol(advance))
+    loop_calls = _called_by_symbol(advance)
+    assert not any(name.startswith("rhs") for name in loop_calls)
+    assert {"audit_overload", "system_update_modes"} <= loop_calls
 
 
 @pytest.mark.slow
@@ -106,3 +110,35 @@ def test_a_cold_runs_code_loads_warm_in_another_process_with_the_same_outputs(tm
     assert runs[0]["compiled"] > 0
     assert runs[1]["compiled"] == 0
     assert runs[1]["y"] == runs[0]["y"]
+
+
+_LINKING_A_CACHED_CALLEE = """
+import json, sys
+from biped_sim._symbol_calls import CalledBySymbol
+from biped_sim.config import Config
+from biped_sim.integrate import blowup
+from biped_sim.kernel import compile_for
+from biped_sim.simulate import aside
+fall, args = aside.loop_callees(Config(), aside._draft(Config())).check[0]
+if sys.argv[1] == "callee":
+    compile_for(blowup._check_now, args[:-1])
+else:
+    compile_for(fall, args)
+    (cres,) = fall.overloads.values()
+    print(json.dumps(sorted(c.qualname for c in cres.reload_init if isinstance(c, CalledBySymbol))))
+"""
+
+
+def test_a_caller_linking_a_cached_callee_lists_the_callees_it_calls_by_symbol(tmp_path: Path) -> None:
+    """One process caches the checks (which call the audit by symbol); another compiles the fall kernel, which links
+    the cached checks: the fall kernel lists the audit too, so a third process loading it loads the audit first (numba
+    leaves a cached entry's list off its library: a segmentation fault at address 0, before the fix)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    outputs = [
+        subprocess.run(
+            [sys.executable, "-c", _LINKING_A_CACHED_CALLEE, role], cwd=ROOT, env=env, capture_output=True, text=True
+        )
+        for role in ("callee", "caller")
+    ]
+    assert all(out.returncode == 0 for out in outputs), outputs[-1].stderr
+    assert "audit_overload" in json.loads(outputs[-1].stdout.splitlines()[-1])

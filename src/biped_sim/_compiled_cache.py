@@ -122,6 +122,17 @@ def lock_cache_writes() -> None:
     IndexDataCacheFile.save = _save_locked
 
 
+def in_cache(function: Any, args: tuple[Any, ...]) -> bool:
+    """Whether ``function`` (a dispatcher) is compiled for the types of ``args`` in this process or in the on-disk
+    cache's index: a lookup, which neither compiles nor loads it (a probe of a cold cache costs milliseconds, not the
+    function's compile). numba's own key of the entry (signature, target, the function's bytecode and closure)."""
+    signature = tuple(numba.typeof(arg) for arg in args)
+    if signature in function.overloads:
+        return True
+    cache = function._cache
+    return cache._index_key(signature, function.targetdescr.target_context.codegen()) in cache._cache_file._load_index()
+
+
 @contextmanager
 def recording_compilations() -> Iterator[list[str]]:
     """Inside the block, the names (module.qualname) of the functions numba compiles, in order.

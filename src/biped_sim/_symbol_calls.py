@@ -7,7 +7,10 @@ callee whose module holds at least :data:`MIN_CALLED_BY_SYMBOL` LLVM instruction
 declaration of it is renamed to a stable symbol (:func:`stable_symbol`: the callee's module, qualified name and
 argument types), which :func:`install`'s hook on numba's ``add_overload`` maps to the callee's machine code
 (``llvmlite.binding.add_symbol``) whenever a dispatcher adds it, compiled or loaded from the cache. Small callees stay
-linked, so LLVM still inlines them (calling every callee by symbol doubles the default walker's integration).
+linked, so LLVM still inlines them (calling every callee by symbol doubles the default walker's integration), and so
+do callees whose call passes many machine words for their size (:data:`INSTRUCTIONS_PER_ARGUMENT`: a system's arrays
+at every stage of a step), unless they are kernels marked ``by_symbol`` (:func:`biped_sim.kernel.kernel`), which
+a loop reaches far less often than it steps.
 
 numba's own symbol names carry a per-process counter, so a caller cached by one process could not find its callee
 compiled by another under them; the stable symbol is the same in every process. A cached caller lists its callees
@@ -70,6 +73,7 @@ class _Callee:
 
     called: CalledBySymbol
     name: str  # numba's symbol of the function in the library
+    marked: bool  # a kernel(by_symbol=True) or its overload implementation: by symbol whatever its calls pass
     size: int | None = None  # LLVM instructions of its module for linking, counted once
 
 
@@ -147,7 +151,8 @@ def _add_overload(self: Any, cres: Any) -> None:
     address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
     if address:
         llvm.add_symbol(symbol, address)
-        _CALLEES[cres.library] = _Callee(CalledBySymbol(*origin, args, symbol), cres.fndesc.llvm_func_name)
+        marked = getattr(_resolve(origin[1], origin[2].removesuffix(OVERLOAD_SUFFIX)), "by_symbol", False)
+        _CALLEES[cres.library] = _Callee(CalledBySymbol(*origin, args, symbol), cres.fndesc.llvm_func_name, marked)
 
 
 def _called_by_symbol(caller: Any, library: Any) -> CalledBySymbol | None:
@@ -165,7 +170,7 @@ def _called_by_symbol(caller: Any, library: Any) -> CalledBySymbol | None:
     declared = _function(module, callee.name)
     if declared is None or not declared.is_declaration:
         return None
-    if callee.size < INSTRUCTIONS_PER_ARGUMENT * sum(1 for _ in declared.arguments):
+    if not callee.marked and callee.size < INSTRUCTIONS_PER_ARGUMENT * sum(1 for _ in declared.arguments):
         return None  # a call passing a system's arrays costs more than such a callee saves linked (a loop's stage)
     declared.name = callee.called.symbol
     return callee.called
@@ -204,11 +209,19 @@ def _finalize(self: Any) -> None:
 
 
 def _load_overload(self: Any, sig: Any, target_context: Any) -> Any:
-    """numba's cache lookup; a cached caller whose callee cannot be had is not in the cache."""
+    """numba's cache lookup; a cached caller whose callee cannot be had is not in the cache.
+
+    numba's rebuild of a cached entry runs its ``reload_init`` but leaves it off the rebuilt library, so a caller
+    compiled in this process that links the entry would not list the entry's callees by symbol: cached, that caller
+    would then call a symbol no one mapped (address 0) in a process that had not loaded them otherwise. They are put
+    back on the library."""
     try:
-        return _numba_load_overload(self, sig, target_context)
+        cres = _numba_load_overload(self, sig, target_context)
     except StaleCalleeError:
         return None
+    if cres is not None and cres.library is not None and cres.reload_init:
+        cres.library._reload_init.update(cres.reload_init)
+    return cres
 
 
 _numba_add_overload = dispatcher.Dispatcher.add_overload

@@ -58,6 +58,7 @@ class Kernel(CPUDispatcher):
 
     _python_entry: CPUDispatcher | None = None
     literal_arguments = True  # kernel(literal_arguments=False): constants passed by compiled callers typed by type
+    by_symbol = False  # kernel(by_symbol=True): compiled callers call it by symbol (biped_sim._symbol_calls)
 
     def get_call_template(self, args: tuple, kws: dict) -> Any:
         """numba's typing of a compiled caller's call; without ``literal_arguments``, a constant argument (``True``,
@@ -116,7 +117,11 @@ OVERLOAD_OPTIONS = {**kernel_options(), "cache": True}
 
 
 def kernel(
-    function: Callable[..., Any] | None = None, *, reference_counts: bool = True, literal_arguments: bool = True
+    function: Callable[..., Any] | None = None,
+    *,
+    reference_counts: bool = True,
+    literal_arguments: bool = True,
+    by_symbol: bool = False,
 ) -> Any:
     """Compile ``function`` as an engine kernel (``@kernel`` or ``@kernel(reference_counts=False)``).
 
@@ -124,8 +129,11 @@ def kernel(
     numba's reference counting is off inside it (numba's ``_nrt`` option): for a function that allocates
     nothing and returns no array. With ``literal_arguments=False`` a compiled caller's constant arguments do not
     make specialisations of their own (numba otherwise compiles the kernel, and everything it calls, once per
-    constant value: a kernel called with ``True`` and with ``False`` twice). Under ``NUMBA_DISABLE_JIT`` the
-    function is returned as it is.
+    constant value: a kernel called with ``True`` and with ``False`` twice). With ``by_symbol=True`` its
+    compiled callers call it by symbol however many machine words the call passes (:mod:`biped_sim._symbol_calls`),
+    rather than compile it again inside themselves: for a kernel a loop reaches far less often than it steps (a
+    check every millisecond of simulated time, an event). Under ``NUMBA_DISABLE_JIT`` the function is returned as
+    it is.
     """
 
     def compile_kernel(python_function: Callable[..., Any]) -> Any:
@@ -133,6 +141,7 @@ def kernel(
             return python_function
         dispatcher = Kernel(py_func=python_function, locals={}, targetoptions=kernel_options(reference_counts))
         dispatcher.literal_arguments = literal_arguments
+        dispatcher.by_symbol = by_symbol
         dispatcher.enable_caching()
         return dispatcher
 
@@ -213,7 +222,7 @@ def inlined(kernel: Dispatcher, calls: frozenset[str] = frozenset()) -> Dispatch
 def missing_numba_internals() -> list[str]:
     """What this module relies on in numba that the installed numba lacks (empty: everything is there)."""
     from numba.core import event
-    from numba.core.caching import IndexDataCacheFile
+    from numba.core.caching import Cache, IndexDataCacheFile
     from numba.core.typing import templates
 
     options = CPUDispatcher.targetdescr.options
@@ -230,6 +239,9 @@ def missing_numba_internals() -> list[str]:
         "numba.core.config.reload_config (the optimisation level)": hasattr(config, "reload_config"),
         "IndexDataCacheFile's index and data methods (the cache's write lock)": all(
             hasattr(IndexDataCacheFile, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name")
+        ),
+        "Cache._index_key and the dispatcher's target context (the cold-cache probe, _compiled_cache.in_cache)": (
+            hasattr(Cache, "_index_key") and hasattr(CPUDispatcher.targetdescr, "target_context")
         ),
     }
     return [what for what, present in needs.items() if not present]

@@ -95,7 +95,7 @@ def check(
         _check_now(t, y, system, modes, work, state, scales)
 
 
-@kernel(reference_counts=False)
+@kernel(reference_counts=False, by_symbol=True)  # about once per CHECK_INTERVAL
 def _check_now(
     t: float, y: np.ndarray, system: tuple, modes: np.ndarray, work: tuple, state: np.ndarray, scales: Scales
 ) -> None:

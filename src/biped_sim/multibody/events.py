@@ -102,7 +102,7 @@ def system_is_leading(y: np.ndarray, system: tuple, foot: int) -> bool:
     return system_foot_contact(y, system, foot)[2] > system_foot_contact(y, system, partner)[2]
 
 
-@kernel
+@kernel(by_symbol=True)  # at a start and at events
 def system_update_modes(t: float, y: np.ndarray, system: tuple, modes: np.ndarray, contact: ContactBuffers) -> bool:
     """Scuffing guard and contact bookkeeping at an event at time t (feet, then joint stops); sets contact.onset
     (the feet's touchdowns); True when a mode changed."""

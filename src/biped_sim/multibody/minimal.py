@@ -331,7 +331,7 @@ def rhs(
     _rhs_of(t, y, system, modes, work, ydot, system.topology)
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def mechanical_energy(y: np.ndarray, system: MinimalSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet and the pressed stops (a
     star's too by the tree's sum: its origins are the hip)."""
@@ -351,7 +351,7 @@ def fall(y: np.ndarray, system: MinimalSystem) -> int:
     return STANDING
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def audit(y: np.ndarray, system: MinimalSystem, modes: np.ndarray, work: tuple) -> tuple[float, float]:
     """(mechanical energy [J], 0): the coordinates hold the hip joints exactly, so there is no drift."""
     kinetic, potential, elastic = mechanical_energy(y, system, modes)

@@ -262,7 +262,7 @@ def rhs(t: float, y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: 
     _constrained_accelerations(y, system, work, ydot[n : 2 * n])
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; elastic = the springs of the touching feet, the pressed stops and the
     joint elements."""
@@ -290,7 +290,7 @@ def mechanical_energy(y: np.ndarray, system: PlanarSystem, modes: np.ndarray) ->
     )
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def constraint_violation(y: np.ndarray, system: PlanarSystem) -> tuple[float, float]:
     """Euclidean norms ||Phi|| and ||Phidot|| over all joints."""
     pos = 0.0
@@ -318,7 +318,7 @@ def fall(y: np.ndarray, system: PlanarSystem) -> int:
     return STANDING
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def audit(y: np.ndarray, system: PlanarSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
     """(mechanical energy [J], ||Phi|| [m]) of a state, for the loops' blow-up checks."""
     kinetic, potential, elastic = mechanical_energy(y, system, modes)

@@ -301,7 +301,7 @@ def constrained_accelerations(y: np.ndarray, system: SpatialSystem, work: Worksp
         qdd[c] = v
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def constraint_violation(y: np.ndarray, system: SpatialSystem, phi_q: np.ndarray) -> tuple[float, float, float]:
     """||Phi|| and ||Phidot|| over the joints, and ||p.p - 1|| over the bodies (Euler normalisation)."""
     pos = 0.0

@@ -104,7 +104,7 @@ def rhs(t: float, y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work:
 # ---------------------------------------------------------------- energy and falls
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def mechanical_energy(y: np.ndarray, system: SpatialSystem, modes: np.ndarray) -> tuple[float, float, float]:
     """(kinetic, potential, elastic) energy; kinetic = m rdot^2/2 + omega'.J' omega'/2, omega' = 2 G pdot."""
     nb = system.body_mass.shape[0]
@@ -143,7 +143,7 @@ def fall(y: np.ndarray, system: SpatialSystem) -> int:
     return STANDING
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def audit(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspace) -> tuple[float, float]:
     """(mechanical energy [J], ||Phi|| [m]) of a state, for the loops' blow-up checks (the Jacobian is not filled)."""
     kinetic, potential, elastic = mechanical_energy(y, system, modes)
@@ -153,7 +153,7 @@ def audit(y: np.ndarray, system: SpatialSystem, modes: np.ndarray, work: Workspa
 # ---------------------------------------------------------------- post-processing (Python side)
 
 
-@kernel
+@kernel(by_symbol=True)  # a measure: per check or sample
 def violation(y: np.ndarray, system: SpatialSystem) -> tuple[float, float, float]:
     """:func:`~biped_sim.multibody.spatial.constraint_violation`'s norms (residuals only: no Jacobian is filled)."""
     return constraint_violation(y, system, np.zeros((1, 1)))

@@ -40,7 +40,7 @@ from typing import NamedTuple
 import numpy as np
 from numba.core.dispatcher import Dispatcher
 
-from biped_sim._compiled_cache import recording_compilations, signalling_lowering
+from biped_sim._compiled_cache import in_cache, recording_compilations, signalling_lowering
 from biped_sim.config import Config, derive
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
@@ -332,9 +332,9 @@ def prepare_compiling_aside(config: Config) -> tuple[BuiltModel | RigidStart | S
 
 def _cold_loop(model: BuiltModel) -> bool:
     """Whether the compile cache lacks ``model``'s loop (for its formulation and ground): one of the loop's small
-    callees, :func:`~biped_sim.multibody.events.system_is_leading` (with the feet's kinematics below it, which the
-    start's mode update and the right-hand side both call), compiled rather than loaded."""
-    return _compiled(events.system_is_leading, (model.y0, model.system, 0))
+    callees, :func:`~biped_sim.multibody.events.system_is_leading`, missing from it (looked up, not compiled: the
+    second process starts at once, and whichever process reaches it first compiles it)."""
+    return not in_cache(events.system_is_leading, (model.y0, model.system, 0))
 
 
 def _compiled(function: Dispatcher, args: tuple[object, ...]) -> bool:
