@@ -164,7 +164,9 @@ def test_a_run_started_on_the_compliant_fixed_point_stays_there_and_settles_at_t
     assert np.max(np.abs(on_cycle - z_star)) < 1e-9  # measured 8.6e-11
     perturbed, _ = touchdowns(z_star + 1e-4 * np.eye(len(z_star))[2], 14)
     deviations = perturbed[3:] - z_star  # from step 4 on, the contact modes and the 0.11 pair have died out
-    identified = np.linalg.lstsq(deviations[:-1], deviations[1:], rcond=None)[0].T
+    # the deviations span the few slow directions still excited; what lies under 1e-6 of the largest is the
+    # integration's rounding, whose least-squares fit gave spurious multipliers (-0.70 on numpy 2.4.6): left out
+    identified = np.linalg.lstsq(deviations[:-1], deviations[1:], rcond=1e-6)[0].T
     dominant = max(np.linalg.eigvals(identified), key=lambda m: (abs(m), m.imag))
     newton = max(default_compliant.multipliers, key=lambda m: (abs(m), m.imag))
     assert abs(dominant - newton) < 1e-4  # measured 2e-5
