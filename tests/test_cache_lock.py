@@ -34,3 +34,19 @@ def test_concurrent_writers_keep_every_entry_pointing_at_its_own_data(tmp_path: 
     cache_file = _cache_file(str(tmp_path))
     kept = {(w, e): cache_file.load((w, e)) for w in range(WRITERS) for e in range(ENTRIES)}
     assert {key: data for key, data in kept.items() if data != f"code of {key[0]}, {key[1]}"} == {}
+
+
+def test_a_damaged_index_or_data_file_reads_as_missing_and_is_written_anew(tmp_path: Path) -> None:
+    """A truncated or overwritten cache file (a disk full, a killed writer) is compiled again, not a failing run."""
+    import biped_sim  # noqa: F401  (installs the readers)
+
+    cache_file = _cache_file(str(tmp_path))
+    cache_file.save("key", "code")
+    data_file = next(p for p in tmp_path.iterdir() if p.suffix == ".nbc")
+    data_file.write_bytes(b"garbage")
+    assert cache_file.load("key") is None
+    index = next(p for p in tmp_path.iterdir() if p.suffix == ".nbi")
+    index.write_bytes(b"garbage")
+    assert cache_file.load("key") is None
+    cache_file.save("key", "code again")
+    assert cache_file.load("key") == "code again"

@@ -117,9 +117,33 @@ def _save_locked(cache_file: IndexDataCacheFile, key: Any, data: Any) -> None:
         cache_file._save_index(overloads)
 
 
+def _index_or_empty(cache_file: IndexDataCacheFile) -> dict[Any, str]:
+    """numba's ``_load_index``, a damaged index (truncated, overwritten: it does not unpickle) read as empty, as numba
+    reads a stale one: its functions are compiled again and the index written anew, rather than every run failing."""
+    try:
+        return _numba_load_index(cache_file)
+    except Exception:  # pickle raises several kinds at damaged data
+        return {}
+
+
+def _data_or_none(cache_file: IndexDataCacheFile, key: Any) -> Any:
+    """numba's ``load``, a damaged data file read as missing (compiled again and saved anew)."""
+    try:
+        return _numba_load(cache_file, key)
+    except Exception:  # pickle raises several kinds at damaged data
+        return None
+
+
+_numba_load_index = IndexDataCacheFile._load_index
+_numba_load = IndexDataCacheFile.load
+
+
 def lock_cache_writes() -> None:
-    """Make numba's cache writes go through :func:`_save_locked` (idempotent); must run before any compile."""
+    """Make numba's cache writes go through :func:`_save_locked`, and its reads take a damaged file for a missing one
+    (idempotent); must run before any compile."""
     IndexDataCacheFile.save = _save_locked
+    IndexDataCacheFile._load_index = _index_or_empty
+    IndexDataCacheFile.load = _data_or_none
 
 
 def in_cache(function: Any, args: tuple[Any, ...]) -> bool:

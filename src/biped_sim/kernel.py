@@ -237,8 +237,9 @@ def missing_numba_internals() -> list[str]:
         "numba.core.event.install_listener (compile events)": hasattr(event, "install_listener"),
         "numba.config.CACHE_DIR (the cache keyed by source hash)": hasattr(numba.config, "CACHE_DIR"),
         "numba.core.config.reload_config (the optimisation level)": hasattr(config, "reload_config"),
-        "IndexDataCacheFile's index and data methods (the cache's write lock)": all(
-            hasattr(IndexDataCacheFile, name) for name in ("_load_index", "_save_index", "_save_data", "_data_name")
+        "IndexDataCacheFile's index and data methods (the cache's write lock, its damaged files read as missing)": all(
+            hasattr(IndexDataCacheFile, name)
+            for name in ("_load_index", "_save_index", "_save_data", "_data_name", "load")
         ),
         "Cache._index_key and the dispatcher's target context (the cold-cache probe, _compiled_cache.in_cache)": (
             hasattr(Cache, "_index_key") and hasattr(CPUDispatcher.targetdescr, "target_context")
