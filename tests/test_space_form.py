@@ -9,6 +9,7 @@ import copy
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import yaml
 
@@ -95,10 +96,14 @@ def _torso(d: dict[str, Any]) -> None:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        (_kneed, "walker.description.legs: the rigid model in space takes two one-body legs"),
+        (
+            _kneed,
+            "walker.description.leg.joints.knee.stops: the rigid model in space takes two legs on a hip hinge: a "
+            "knee with one stop, at the straight knee (angle 0)",
+        ),
         (
             _torso,
-            "walker.description.bodies.torso: the rigid model in space takes two one-body legs on a hip hinge, "
+            "walker.description.bodies.torso: the rigid model in space takes two legs on a hip hinge, "
             "no body off the legs",
         ),
         (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.hip.stops"),
@@ -108,11 +113,6 @@ def _torso(d: dict[str, Any]) -> None:
         ),
         (lambda d: d["hip"].update(axis=[1.0, 0.0, 0.0]), "walker.description.hip.axis"),
         (lambda d: d["hip"].update(at=[0.0, -0.1]), "walker.description.hip.at"),
-        (
-            lambda d: d.update(point_masses=[{"name": "hip", "body": "leg_1", "mass": 1.0}]),
-            "walker.description.point_masses.hip: the rigid model in space takes two one-body legs on a hip hinge: a "
-            "point mass only on the hinge's midpoint (at: [0, 0], lateral: -0.1812)",
-        ),
         (lambda d: d["leg"]["feet"][0].update(centre=[0.0, 0.5]), "walker.description.leg.feet.foot.centre"),
     ],
 )
@@ -120,15 +120,29 @@ def test_what_the_rigid_model_in_space_lacks_is_one_line_naming_the_field(change
     assert _refused(change).startswith(message)
 
 
-def test_a_kneed_walker_in_space_made_rigid_is_refused_for_its_legs_not_its_start() -> None:
-    """The bundled 3D kneed walker with ``dynamics: rigid``: its start (the compliant run's body angles) does not
-    fit the rigid model's keys, but what the user must change is the walker (or the dynamics), so that is named."""
+def test_a_kneed_walker_in_space_made_rigid_is_refused_for_its_start_not_its_legs() -> None:
+    """The bundled 3D kneed walker with ``dynamics: rigid``: the rigid model takes its legs (thigh and shank on a
+    latching knee), not its start (the compliant run's body angles), which is named with the keys it takes."""
     data = yaml.safe_load((CONFIGS / "space" / "kneed_walker_3d.yaml").read_text())
     data["dynamics"] = "rigid"
     del data["formulation"]
     with pytest.raises(ConfigError) as error:
         config_from_dict(data)
-    assert str(error.value).startswith("walker.description.legs: the rigid model in space takes two one-body legs")
+    assert str(error.value).startswith("simulation.initial: expected the keys heading, bank, pitch")
+
+
+def test_a_point_mass_on_a_leg_off_the_hinge_is_lumped_into_its_body() -> None:
+    """A point mass on the leg's hip point (off the hinge's midpoint, the legs 0.3624 apart; written once, on both
+    legs): the leg's mass, centre of mass and inertia by parallel axes, the hip mass unchanged."""
+    bare, data = load_config(TOY).walker.space, toy()
+    data["walker"]["description"]["leg"]["point_masses"] = [{"name": "m", "body": "leg", "mass": 1.0}]
+    lumped = config_from_dict(data).walker.space
+    assert lumped.hip_mass == bare.hip_mass and lumped.leg.mass == pytest.approx(bare.leg.mass + 1.0)
+    np.testing.assert_allclose(lumped.leg.com, np.array(bare.leg.com) * bare.leg.mass / lumped.leg.mass)
+    offset = np.array(bare.leg.com) - np.array(lumped.leg.com)
+    shift = lambda r, m: m * (r @ r * np.eye(3) - np.outer(r, r))  # noqa: E731
+    expected = bare.leg.inertia.matrix() + shift(offset, bare.leg.mass) + shift(np.array(lumped.leg.com), 1.0)
+    np.testing.assert_allclose(lumped.leg.inertia.matrix(), expected, atol=1e-15)
 
 
 def test_legs_that_are_not_mirror_images_are_refused() -> None:
@@ -149,11 +163,11 @@ def test_legs_that_are_not_mirror_images_are_refused() -> None:
         config_from_dict(data)
 
 
-def test_the_cli_refuses_a_kneed_walker_in_rigid_space_with_exit_2(tmp_path: Path) -> None:
+def test_the_cli_refuses_a_knee_without_its_stop_in_rigid_space_with_exit_2(tmp_path: Path) -> None:
     data = toy()
     _kneed(data["walker"]["description"])
     path = tmp_path / "kneed_in_space.yaml"
     path.write_text(yaml.safe_dump(data))
     result = invoke("limit-cycle", str(path))
     assert result.exit_code == 2
-    assert one_line_error(result.stderr).startswith("error: walker.description.legs: the rigid model in space")
+    assert one_line_error(result.stderr).startswith("error: walker.description.leg.joints.knee.stops: the rigid model")

@@ -305,7 +305,11 @@ class Config(Strict):
         if described is None:
             return
         if self.in_space:  # the rigid model's form in space (its one-line refusal naming the field)
-            space_form(described)
+            if space_form(described).leg.knee is not None and self.dynamics == "compliant":
+                raise ValueError(
+                    "simulation.initial: a kneed walker in space starts its compliant run from its bodies' angles "
+                    "(the rigid gait's start takes one-body legs)"
+                )
             return
         in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
         if not in_space and (features := described.features_in_space()):

@@ -131,14 +131,31 @@ class SpaceFoot(Strict):
         return np.diag(np.square(self.axes)) if self.axes is not None else np.zeros((3, 3))
 
 
+class SpaceKnee(Strict):
+    """A knee: the leg's lower body (the shank, which carries the foot) hinged to its upper body about the leg's y
+    axis at ``at``, with one stop at the straight knee, which it strikes plastically and where it then stays locked
+    (the rigid model's knee: McGeer 1990, Chen 2007). The shank's numbers are in the leg's frame with the knee
+    straight."""
+
+    at: Vector3 = Field(..., description="The knee's point on the hinge axis y, from the hip point [m].")
+    flexion: Literal[1, -1] = Field(
+        1, description="+1: the knee bends with the foot swinging behind (about +y); -1: ahead."
+    )
+    mass: float = Field(..., gt=0, description="The shank's mass [kg].")
+    com: Vector3 = Field(..., description="The shank's centre of mass from the hip point, the knee straight [m].")
+    inertia: InertiaSpec = Field(..., description="The shank's inertia tensor about its centre of mass [kg m^2].")
+
+
 class SpaceLeg(Strict):
     """The left leg in its frame (x forward, y along the hinge away from the other leg, z up; origin at the hip
-    point): its mass, centre of mass, inertia about the centre of mass, and foot."""
+    point): its mass, centre of mass, inertia about the centre of mass, and foot; with a knee, those are the upper
+    body's (the thigh's) and the foot is on the shank."""
 
-    mass: float = Field(..., gt=0, description="Mass [kg].")
+    mass: float = Field(..., gt=0, description="Mass [kg] (with a knee: the thigh's).")
     com: Vector3 = Field(..., description="Centre of mass from the hip point [m].")
     inertia: InertiaSpec = Field(..., description="Inertia tensor about the centre of mass [kg m^2].")
     foot: SpaceFoot = Field(..., description="The foot.")
+    knee: SpaceKnee | None = Field(None, description="A knee and the shank below it (none: a rigid leg).")
 
 
 class SpaceDescription(Strict):

@@ -2,13 +2,14 @@
 space model's data (:class:`~biped_sim.config.space_description.SpaceDescription`), and when a described walker
 takes it.
 
-The rigid model in space (:mod:`biped_sim.rigid.space_model`) takes two legs, each one rigid body, joined by one
-hinge about the lateral axis z' at their hip points (``hip_width`` apart along it), the second leg the first's
-mirror image, a foot per leg (a point, a ring, a sphere, a torus or an ellipsoid), and a mass on the hinge's
-midpoint. A description of that form (its leg written once, ``walker.description.leg``, and ``hip: {lateral:
--hip_width}``; a point mass on the hip bodies at ``at: [0, 0]``, ``lateral: -hip_width / 2`` is the hip's mass)
-is turned into it here; what the model lacks (knees, a torso, stops or springs on the hip, point masses off the
-hinge) is refused naming the field.
+The rigid model in space (:mod:`biped_sim.rigid.space_model`) takes two legs joined by one hinge about the lateral
+axis z' at their hip points (``hip_width`` apart along it), the second leg the first's mirror image, each one rigid
+body or a thigh and a shank on a knee about z' with one stop at the straight knee, a foot per leg on its lowest
+body (a point, a ring, a sphere, a torus or an ellipsoid), and a mass on the hinge's midpoint. A description of
+that form (its leg written once, ``walker.description.leg``, and ``hip: {lateral: -hip_width}``; a point mass on
+the hip bodies at ``at: [0, 0]``, ``lateral: -hip_width / 2`` is the hip's mass, one elsewhere on a leg's body is
+lumped into that body) is turned into it here; what the model lacks (a torso, stops or springs on the hip, a knee
+stop elsewhere than straight) is refused naming the field.
 
 Frames: a body's frame is x' forward, y' up the leg, z' the walker's right; the rigid model's leg frame is x
 forward, y along the hinge away from the other leg, z up the leg. The first leg (the root) lies on the side away
@@ -16,7 +17,9 @@ from the second (the hip's ``lateral`` < 0: the second to its left, so the first
 > 0: y = -z'); its numbers, so mapped, are the left leg's that the rigid model writes (the right leg being its
 mirror image, the permutation (x', z', y') of the right leg is the left leg's (x, y, z)); a ring's plane normal is so
 mapped too, its sign fixed (``feet.canonical_normal``: the mirrored leg's, its z' component negated, is the same
-plane). Splay is plain geometry in the description (each leg's numbers turned about x', docs/guide/rigid.md).
+plane). Splay is plain geometry in the description (each leg's numbers turned about x', docs/guide/rigid.md). A
+rotation about the lateral axis is the same on a leg and on its mirror image, and a planar angle (about z', the
+walker's right, + with the distal end forward) is minus the rigid model's about y (+ with the foot behind).
 """
 
 from __future__ import annotations
@@ -25,10 +28,10 @@ import numpy as np
 from pydantic import ValidationError
 
 from biped_sim.config.description import BodySpec, WalkerDescription
-from biped_sim.config.space_description import InertiaSpec, SpaceDescription, SpaceLeg
+from biped_sim.config.space_description import InertiaSpec, SpaceDescription, SpaceKnee, SpaceLeg, Vector3
 
 WHERE = "walker.description"
-FORM = "the rigid model in space takes two one-body legs on a hip hinge"
+FORM = "the rigid model in space takes two legs on a hip hinge"
 
 
 class FormError(ValueError):
@@ -55,12 +58,12 @@ def in_space(description: WalkerDescription) -> bool:
 def space_form(description: WalkerDescription) -> SpaceDescription:
     """The rigid model's data of a description of its form; :class:`FormError` naming the first field it cannot
     take."""
-    if len(description.legs) != 2 or any(len(leg) != 1 for leg in description.legs):
-        raise FormError(f"{WHERE}.legs", f"{FORM} (knees: dynamics: compliant)")
-    legs = {name for (name,) in description.legs}
+    if len(description.legs) != 2 or any(len(leg) not in (1, 2) for leg in description.legs):
+        raise FormError(f"{WHERE}.legs", f"{FORM}, each one body or a thigh and a shank on a knee")
+    legs = {name for leg in description.legs for name in leg}
     if extra := [b.name for b in description.bodies if b.name not in legs]:
         raise FormError(f"{WHERE}.bodies.{extra[0]}", f"{FORM}, no body off the legs (a torso: dynamics: compliant)")
-    hip = description.joints[0]  # the one joint of a two-body tree
+    hip = next(j for j in description.joints if {j.parent, j.child} == {leg[0] for leg in description.legs})
     first, second = hip.parent, hip.child
     if not hip.lateral_axis:
         raise FormError(f"{WHERE}.joints.{hip.name}.axis", f"{FORM} about z' (the lateral axis)")
@@ -74,40 +77,94 @@ def space_form(description: WalkerDescription) -> SpaceDescription:
     hip_mass = 0.0
     for mass in description.point_masses:
         at = midpoint if mass.body == first else -midpoint  # the second leg's origin is at hip.lateral
-        if mass.at != (0.0, 0.0) or mass.lateral != at:
-            raise FormError(
-                f"{WHERE}.point_masses.{mass.name}",
-                f"{FORM}: a point mass only on the hinge's midpoint (at: [0, 0], lateral: {at:g})",
-            )
-        hip_mass += mass.mass
-    left, right = (_leg(description, name, s) for name, s in ((first, side), (second, -side)))
+        if mass.body in (first, second) and mass.at == (0.0, 0.0) and mass.lateral == at:
+            hip_mass += mass.mass  # on the hinge's midpoint: the model's hip mass
+    roots = {first: side, second: -side}
+    left, right = (_leg(description, leg, roots[leg[0]], midpoint if leg[0] == first else -midpoint)
+                   for leg in description.legs)  # fmt: skip
     if left != right:
         raise FormError(f"{WHERE}.legs", f"{FORM}, the second the first's mirror image (write it once: {WHERE}.leg)")
     try:
         return SpaceDescription(hip_width=abs(hip.lateral), hip_mass=hip_mass, leg=left)
     except ValidationError:
-        foot = next(f.name for f in description.feet if f.body == first)
+        foot = next(f.name for f in description.feet if f.body == description.legs[0][-1])
         raise FormError(f"{WHERE}.feet.{foot}.centre", "the foot's bottom must be below the hip") from None
 
 
-def _leg(description: WalkerDescription, name: str, side: float) -> SpaceLeg:
-    """Body ``name`` and its foot as the rigid model's left leg, its y = ``side`` z'."""
+def _leg(description: WalkerDescription, names: list[str], side: float, midpoint: float) -> SpaceLeg:
+    """Leg ``names`` (its thigh and shank, or its one body) and its foot as the rigid model's left leg, its
+    y = ``side`` z'; the point masses on its bodies (but the hip's, on the hinge's midpoint at lateral
+    ``midpoint``) lumped into them."""
+    bodies = [_body(description, name, side, midpoint if k == 0 else None) for k, name in enumerate(names)]
+    feet = [f for f in description.feet if f.body in names]
+    if len(feet) != 1 or feet[0].body != names[-1]:
+        raise FormError(f"{WHERE}.feet", f"{FORM}, one foot on each leg's lowest body ({names[-1]!r})")
+    foot = feet[0].in_space(side)
+    if len(names) == 1:
+        mass, com, inertia = bodies[0]
+        return SpaceLeg(mass=mass, com=com, inertia=inertia, foot=foot)
+    at, flexion = _knee(description, names, side)
+    mass, com, inertia = bodies[1]
+    knee = SpaceKnee(at=at, flexion=flexion, mass=mass, com=_shifted(com, at), inertia=inertia)
+    foot = foot.model_copy(update={"centre": _shifted(foot.centre, at)})
+    mass, com, inertia = bodies[0]
+    return SpaceLeg(mass=mass, com=com, inertia=inertia, foot=foot, knee=knee)
+
+
+def _shifted(point: Vector3, by: Vector3) -> Vector3:
+    """``point`` + ``by``: a shank's point from the knee, from the hip point."""
+    return (point[0] + by[0], point[1] + by[1], point[2] + by[2])
+
+
+def _knee(description: WalkerDescription, names: list[str], side: float) -> tuple[Vector3, int]:
+    """The knee joining thigh ``names[0]`` to shank ``names[1]``: its point in the leg frame (the shank's
+    frame's origin) and its flexion's sign (:class:`~biped_sim.config.space_description.SpaceKnee`)."""
+    knee = next((j for j in description.joints if (j.parent, j.child) == tuple(names)), None)
+    if knee is None:
+        raise FormError(f"{WHERE}.joints", f"{FORM}: the shank {names[1]!r} a child of its thigh on a knee")
+    where = f"{WHERE}.joints.{knee.name}"
+    if not knee.lateral_axis:
+        raise FormError(f"{where}.axis", f"{FORM}: a knee about z' (the lateral axis)")
+    if len(knee.stops) != 1 or knee.stops[0].angle != 0.0:
+        raise FormError(f"{where}.stops", f"{FORM}: a knee with one stop, at the straight knee (angle 0)")
+    if knee.elements:
+        raise FormError(f"{where}.elements", f"{FORM}: a knee with no elements (they are compliant's)")
+    # a planar angle about z' is minus the angle about y (module docstring): an upper stop lets the foot swing behind
+    flexion = 1 if knee.stops[0].side == "upper" else -1
+    return (knee.at[0], side * knee.lateral, knee.at[1]), flexion
+
+
+def _body(
+    description: WalkerDescription, name: str, side: float, midpoint: float | None
+) -> tuple[float, Vector3, InertiaSpec]:
+    """Body ``name``'s mass, centre of mass and inertia in the leg frame (from its frame's origin, y = ``side``
+    z'), the point masses on it lumped in (parallel axes), but a hip mass on the hinge's midpoint (at lateral
+    ``midpoint`` of a thigh)."""
     body = next(b for b in description.bodies if b.name == name)
-    feet = [f for f in description.feet if f.body == name]
-    if len(feet) != 1:
-        raise FormError(f"{WHERE}.feet", f"{FORM}, one foot on each (body {name!r} has {len(feet)})")
-    if body.mass <= 0.0:
-        raise FormError(f"{WHERE}.bodies.{name}.mass", f"{FORM}, each of mass > 0")
     turn = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, side], [0.0, 1.0, 0.0]])  # (x', y', z') -> (x, y, z)
+    mass, com = body.mass, np.array([body.com[0], side * body.com_lateral, body.com[1]])
     tensor = turn @ _tensor(body) @ turn.T
-    com = (body.com[0], side * body.com_lateral, body.com[1])
+    lumped = [
+        (m.mass, np.array([m.at[0], side * m.lateral, m.at[1]]))
+        for m in description.point_masses
+        if m.body == name and not (m.at == (0.0, 0.0) and m.lateral == midpoint)
+    ]
+    if lumped:  # else the body's own numbers, to the bit
+        parts = [(mass, com), *lumped]
+        mass = sum(m for m, _ in parts)
+        com = sum(m * at for m, at in parts) / mass
+        for m, at in parts:
+            offset = at - com
+            tensor = tensor + m * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+    if mass <= 0.0:
+        raise FormError(f"{WHERE}.bodies.{name}.mass", f"{FORM}, each body of mass > 0")
     try:
         inertia = InertiaSpec(
             xx=tensor[0, 0], yy=tensor[1, 1], zz=tensor[2, 2], xy=tensor[0, 1], xz=tensor[0, 2], yz=tensor[1, 2]
         )
     except ValidationError:
         raise FormError(f"{WHERE}.bodies.{name}.spatial_inertia", "not an inertia tensor") from None
-    return SpaceLeg(mass=body.mass, com=com, inertia=inertia, foot=feet[0].in_space(side))
+    return mass, (float(com[0]), float(com[1]), float(com[2])), inertia
 
 
 def _tensor(body: BodySpec) -> np.ndarray:

@@ -25,7 +25,7 @@ from biped_sim.config.space_description import SpaceDescription
 from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import foot_arc_half_angle
 from biped_sim.rigid.space_cycle import space_walker_model
-from biped_sim.rigid.space_model import foot_bottom
+from biped_sim.rigid.space_model import KNEE_ANGLE, MIRROR, foot_bottom
 from biped_sim.walkers.space_geometry import (
     EZ,
     TO_SPATIAL,
@@ -170,27 +170,39 @@ def space_poses(run: RunData) -> SpacePoses:
 
 def _walker_points(space: SpaceDescription, leg: LegGeometry, side: float) -> np.ndarray:
     """A leg's polyline in the walker frame: the hinge's midpoint, its hip point (the left leg's at +y), centre of
-    mass, hip point again, foot centre (a ring drawn as its arc: the arc's middle, its bottom on the leg, so that the
-    leg reaches its foot, whose centre may be above the hip)."""
+    mass (a kneed leg's: its knee, twice), hip point again, foot centre (a ring drawn as its arc: the arc's middle,
+    its bottom on the leg, so that the leg reaches its foot, whose centre may be above the hip)."""
     hip_point = np.array([0.0, 0.5 * side * space.hip_width, 0.0])
     arc = ring_arc(leg, space.leg_length())
     end = leg.foot_centre if arc is None else leg.foot_centre + (leg.foot_radius + leg.foot_tube) * arc[1]
+    if space.leg.knee is not None:
+        knee = np.diag([1.0, side, 1.0]) @ (np.array([0.0, 0.5 * space.hip_width, 0.0]) + space.leg.knee.at)
+        return np.vstack([np.zeros(3), hip_point, knee, knee, end])
     return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, end])
+
+
+Placement = tuple[np.ndarray, np.ndarray]  # a frame's origin (ns, 3) and rotation (ns, 3, 3), rigid slope frame
 
 
 def _poses(
     time: np.ndarray,
     space: SpaceDescription,
     legs: tuple[LegGeometry, LegGeometry],
-    placed: list[tuple[np.ndarray, np.ndarray]],
+    placed: list[Placement],
+    shanks: list[Placement] | None = None,
 ) -> SpacePoses:
     """The poses of both legs, each ``placed`` at its walker frame's origin (ns, 3) and turned by its rotation
-    (ns, 3, 3) in the rigid slope frame, in the spatial formulation's slope frame."""
+    (ns, 3, 3) in the rigid slope frame, in the spatial formulation's slope frame; the polyline's last point (the
+    foot's end) and the foot placed by ``shanks`` (a kneed leg's shank; default ``placed``)."""
     polylines, feet = [], []
-    for k, (leg, (origin, rotation)) in enumerate(zip(legs, placed, strict=True)):
+    for k, (leg, (origin, rotation), (low_origin, low_rotation)) in enumerate(
+        zip(legs, placed, shanks or placed, strict=True)
+    ):
         body = _walker_points(space, leg, 1.0 - 2.0 * k)
-        polylines.append((origin[:, None, :] + np.einsum("sij,kj->ski", rotation, body)) @ TO_SPATIAL.T)
-        feet.append((origin[:, None, :] + foot_outline(leg, rotation, space.leg_length())) @ TO_SPATIAL.T)
+        points = origin[:, None, :] + np.einsum("sij,kj->ski", rotation, body)
+        points[:, -1] = low_origin + np.einsum("sij,j->si", low_rotation, body[-1])
+        polylines.append(points @ TO_SPATIAL.T)
+        feet.append((low_origin[:, None, :] + foot_outline(leg, low_rotation, space.leg_length())) @ TO_SPATIAL.T)
     legs_3d = np.stack(polylines, axis=1)
     return SpacePoses(time, legs_3d, np.stack(feet, axis=1), legs_3d[:, 0, 0])
 
@@ -198,15 +210,23 @@ def _poses(
 def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> SpacePoses:
     """The 3D poses of a rigid run (:mod:`biped_sim.simulate.space_rigid`): its state holds the stance leg's
     attitude, the hinge angle and the stance contact point in the rigid model's slope frame (x downhill, y left,
-    z the normal); the stance leg is the left until the first strike, then the leg of the last strike (the step
-    table's ``foot``). The hinge's midpoint sits above the contact point by the stance foot's bottom."""
-    space, feet = run.config.walker.space, space_walker_model(run.config).feet  # type: ignore[union-attr]
+    z the normal), a kneed walker's swing knee angle after them; the stance leg is the left until the first strike,
+    then the leg of the last strike (the step table's ``foot``). The hinge's midpoint sits above the contact point
+    by the stance foot's bottom; a swing shank turns about its knee."""
+    space, model = run.config.walker.space, space_walker_model(run.config)  # type: ignore[union-attr]
     stance = np.zeros(len(run.time), dtype=int)
     for at, foot in zip(run.steps["strike_time"], run.steps["foot"], strict=True):
         stance[run.time >= at] = int(foot)
     hinge, turns = np.zeros((len(run.time), 3)), np.zeros((2, len(run.time), 3, 3))
+    shank_origins, shank_turns = np.zeros((2, len(run.time), 3)), np.zeros((2, len(run.time), 3, 3))
     for i, (x, leg) in enumerate(zip(run.state, stance, strict=True)):
         rotation = attitude(x[0], x[1], x[2])
         turns[leg, i], turns[1 - leg, i] = rotation, rotation @ rot_y(x[3])
-        hinge[i] = np.array([x[8], x[9], 0.0]) - foot_bottom(feet[leg], rotation)[0]
-    return _poses(run.time, space, legs, [(hinge, turns[0]), (hinge, turns[1])])
+        hinge[i] = np.array([x[8], x[9], 0.0]) - foot_bottom(model.feet[leg], rotation)[0]
+        shank_origins[:, i], shank_turns[:, i] = hinge[i], turns[:, i]
+        if model.knee is not None:
+            knee = np.diag([1.0, 1.0 - 2.0 * (1 - leg), 1.0]) @ (MIRROR @ model.knee.point)  # the swing leg's side
+            shank_turns[1 - leg, i] = turns[1 - leg, i] @ rot_y(x[KNEE_ANGLE])
+            shank_origins[1 - leg, i] += (turns[1 - leg, i] - shank_turns[1 - leg, i]) @ knee
+    placed = [(hinge, turns[0]), (hinge, turns[1])]
+    return _poses(run.time, space, legs, placed, [(shank_origins[k], shank_turns[k]) for k in (0, 1)])

@@ -85,8 +85,8 @@ def space_samples(
     sample_step = np.concatenate(trace.sample_step)
     frames = trace.frames
     signs = np.array([frames[k].sign for k in sample_step])
-    world = np.where(signs[:, None] < 0, states * MIRRORED, states)
-    world[:, 8:] += np.array([frames[k].contact[:2] for k in sample_step])
+    world = np.where(signs[:, None] < 0, states * MIRRORED[: states.shape[1]], states)
+    world[:, 8:10] += np.array([frames[k].contact[:2] for k in sample_step])
     hip = np.array(
         [frames[k].point(ground_point(x) + pose(model, x).origin) for k, x in zip(sample_step, states, strict=True)]
     )
@@ -96,6 +96,8 @@ def space_samples(
         for k, (pre, post) in enumerate(zip(trace.strike_pre, trace.strike_post, strict=True))
     ]
     dissipated = np.concatenate([[0.0], np.cumsum(losses)])[sample_step]
+    for at, loss in trace.stop_losses:  # the knee strikes; a sample at one's time holds the state after it
+        dissipated[times >= at] += loss
     push_work = np.zeros(len(times))
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it

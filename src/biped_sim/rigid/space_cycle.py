@@ -36,7 +36,7 @@ from biped_sim.rigid.limit_cycle import (
 )
 from biped_sim.rigid.space_integration import space_clearance, space_scratch
 from biped_sim.rigid.space_kernels import space_params
-from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, space_model
+from biped_sim.rigid.space_model import STATE_NAMES, SpaceModel, space_model
 from biped_sim.rigid.space_step import SpaceStep, space_step
 from biped_sim.rigid.step import RTOL
 
@@ -66,12 +66,12 @@ class SpaceSection:
 
     def of_keys(self, keys: dict[str, float]) -> np.ndarray:
         """The section coordinates of a post-strike state given by its keys (those missing 0)."""
-        return self.to_section(np.array([keys.get(name, 0.0) for name in STATE_NAMES]))
+        return self.to_section(np.array([keys.get(name, 0.0) for name in self.model.state_names]))
 
     def from_section(self, z: np.ndarray) -> np.ndarray:
         """The post-strike state of section coordinates ``z``: the hinge angle that puts the trailing foot on the
         ground (secant iterations from minus twice the pitch)."""
-        x = np.zeros(N_STATE)
+        x = np.zeros(self.model.n_state)
         x[list(self.indices)] = z
         a, b = -2.0 * x[2], -1.9 * x[2]
         fa, fb = self._clearance(x, a), self._clearance(x, b)
@@ -100,7 +100,7 @@ class SpaceMap:
         self.model = model
         self.section = SpaceSection(model)
         self.params = self.section.params
-        self.scratch = space_scratch()
+        self.scratch = space_scratch(0, model.n_state)
 
     def step(self, z: np.ndarray) -> tuple[np.ndarray, SpaceStep]:
         """The next section point and the step."""
@@ -120,7 +120,7 @@ def scan(model: SpaceModel, section: SpaceSection) -> list[tuple[str, np.ndarray
     starts = []
     for k in SCAN_RATES:
         for angle in SCAN_ANGLES:
-            x = np.zeros(N_STATE)
+            x = np.zeros(model.n_state)
             x[2], x[5], x[7] = -0.5 * angle, k * scale, SWING_RATE_RATIO * k * scale
             starts.append((f"scan pitch {-0.5 * angle:g}, omega_y {k * scale:.4g}", section.to_section(x)))
     return starts
@@ -131,14 +131,23 @@ def sagittal_twin(space: SpaceDescription, share: float) -> SpaceDescription:
     foot offsets, the products of inertia that couple y, and a ring's plane's tilt off the planes the mirror keeps
     (its normal's x and z components when its y outweighs its x, else its y: never a flat ring), a splayed leg's
     alike (0: its sagittal twin, a planar walker in space, whose gait the sagittal scan finds; 1: the walker
-    itself)."""
+    itself); a knee's point, its shank's centre of mass and products alike."""
     leg, (nx, ny, nz) = space.leg, space.leg.foot.normal
     inertia = leg.inertia.model_copy(update={"xy": share * leg.inertia.xy, "yz": share * leg.inertia.yz})
     com = (leg.com[0], share * leg.com[1], leg.com[2])
     centre = (leg.foot.centre[0], share * leg.foot.centre[1], leg.foot.centre[2])
     normal = (share * nx, ny, share * nz) if abs(ny) >= abs(nx) else (nx, share * ny, nz)
     foot = leg.foot.model_copy(update={"centre": centre, "normal": normal})
-    scaled = leg.model_copy(update={"com": com, "inertia": inertia, "foot": foot})
+    knee = leg.knee and leg.knee.model_copy(
+        update={
+            "at": (leg.knee.at[0], share * leg.knee.at[1], leg.knee.at[2]),
+            "com": (leg.knee.com[0], share * leg.knee.com[1], leg.knee.com[2]),
+            "inertia": leg.knee.inertia.model_copy(
+                update={"xy": share * leg.knee.inertia.xy, "yz": share * leg.knee.inertia.yz}
+            ),
+        }
+    )
+    scaled = leg.model_copy(update={"com": com, "inertia": inertia, "foot": foot, "knee": knee})
     return space.model_copy(update={"hip_width": share * space.hip_width, "leg": scaled})
 
 
@@ -276,6 +285,7 @@ def _cycle(
             "section just after heel strike, mirrored to the left leg's stance; coordinates "
             + ", ".join(section.names),
             "the hinge angle is fixed by the trailing foot on the ground (not a coordinate)"
+            + ("; the swing knee starts straight and at rest (not a coordinate)" if step_map.model.knee else "")
             + ("" if section.heading else "; level ground: heading left out, its multiplier 1 appended"),
             f"step map: compiled DOP853, rtol {RTOL:g}",
             f"multipliers: central differences, relative step {FD_STEP:g}",

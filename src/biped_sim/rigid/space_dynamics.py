@@ -1,6 +1,8 @@
 """The rigid walker in space: Kane's equations of the stance phase and the plastic heel strike.
 
-Generalized speeds u = (omega, beta'): the stance leg's angular velocity (slope frame) and the hinge rate. The
+Generalized speeds u = (omega, beta'): the stance leg's angular velocity (slope frame) and the hinge rate (with
+knees, then the swing knee's rate kappa': its axis is the hinge's, through the knee point; while the knee is
+locked, its rate is 0 and its column left out of the equations). The
 stance foot's material point at contact has zero velocity (pinned point foot; a sphere or ring rolling without
 slip: a nonholonomic constraint, the contact point moving over the ground and over the foot), so every point's
 velocity is linear in u: v = A u, and every part's angular velocity w = B u. With the accelerations
@@ -14,7 +16,8 @@ The strike is plastic: the landing foot sticks (and then rolls), the trailing fo
 new contact and the hinge's have no moment about the new contact point (whole walker) nor about the hinge axis
 (trailing leg), and with the new configuration's partial velocities A', B' these balances are
 M' u+ = sum A'^T m v- + B'^T I w-. The walker is then mirrored (y -> -y) so that the new stance leg is the
-left leg again.
+left leg again. The knee strike is the same balance in one configuration: the locked walker's speeds keep their
+generalized momentum, (M u+)_i = (M u-)_i for the four speeds that stay (:func:`knee_strike`).
 """
 
 from __future__ import annotations
@@ -26,8 +29,9 @@ import numpy as np
 from biped_sim.rigid.space_model import (
     ELLIPSOID,
     EZ,
+    KNEE_ANGLE,
+    KNEE_RATE,
     MIRROR,
-    N_STATE,
     Pose,
     SpaceModel,
     attitude_angles,
@@ -70,55 +74,75 @@ def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) ->
     return cross(omega, foot.tube * EZ - scale * where.stance_d) + scale * d_dot
 
 
+def speeds(model: SpaceModel, x: np.ndarray) -> np.ndarray:
+    """The generalized speeds u: the stance leg's angular velocity, the hinge rate (and the swing knee's rate)."""
+    return np.append(x[4:8], x[KNEE_RATE]) if model.knee else x[4:8]
+
+
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
-    """Every part's motion in state ``x`` (:class:`PartMotion`)."""
+    """Every part's motion in state ``x`` (:class:`PartMotion`), over every speed (a locked knee's rate is 0)."""
     where = pose(model, x)
-    omega, rate, axis = x[4:7], x[7], where.hinge
+    omega, axis, u = x[4:7], where.hinge, speeds(model, x)
     p_dot = contact_point_velocity(model, where, omega)
+    spin = cross(omega, axis)  # both joints' axes turn with the stance leg
+    joints = [(where.origin, 3)] + ([(where.point(1, model.knee.point), 4)] if model.knee else [])
     motions = []
     for part in model.parts:
-        turn = where.rotations[part.frame]
         r = where.point(part.frame, part.com)
-        a_matrix = np.zeros((3, 4))
-        b_matrix = np.zeros((3, 4))
-        a_matrix[:, :3] = -_skew(r)
-        b_matrix[:, :3] = np.eye(3)
-        v = cross(omega, r)
-        e = np.zeros(3)
-        swing_terms = np.zeros(3)
-        if part.frame == 1:  # the hinge turns it about the axis through the origin
-            s = r - where.origin
-            a_matrix[:, 3] = cross(axis, s)
-            b_matrix[:, 3] = axis
-            v = v + rate * a_matrix[:, 3]
-            w_swing = omega + rate * axis
-            swing_terms = rate * (cross(cross(omega, axis), s) + cross(axis, cross(w_swing, s)))
-            e = rate * cross(omega, axis)
-        b = cross(omega, v - p_dot) + swing_terms
+        a_matrix, b_matrix = np.zeros((3, len(u))), np.zeros((3, len(u)))
+        a_matrix[:, :3], b_matrix[:, :3] = -_skew(r), np.eye(3)
+        path = joints[: part.frame]  # the hinge turns the swing leg, the knee its shank too
+        for at, k in path:
+            a_matrix[:, k], b_matrix[:, k] = cross(axis, r - at), axis
+        v, w = a_matrix @ u, b_matrix @ u
+        b, e = cross(omega, v - p_dot), np.zeros(3)
+        for at, k in path:  # d/dt of rate_k axis x (r - at), the joint's point moving with the parts above it
+            v_at = cross(omega, at) + (u[3] * cross(axis, at - where.origin) if k == 4 else 0.0)
+            b += u[k] * (cross(spin, r - at) + cross(axis, v - v_at))
+            e += u[k] * spin
+        turn = where.rotations[part.frame]
         inertia = turn @ part.inertia @ turn.T
-        motions.append(PartMotion(part.mass, r, inertia, a_matrix, b_matrix, v, b_matrix @ x[4:8], b, e))
+        motions.append(PartMotion(part.mass, r, inertia, a_matrix, b_matrix, v, w, b, e))
     return motions
 
 
 def mass_matrix(motions: list[PartMotion]) -> np.ndarray:
-    """Kane's generalized mass matrix sum m A^T A + B^T I B (4 x 4, symmetric positive definite)."""
+    """Kane's generalized mass matrix sum m A^T A + B^T I B (symmetric positive definite)."""
     return sum(m.mass * m.a_matrix.T @ m.a_matrix + m.b_matrix.T @ m.inertia @ m.b_matrix for m in motions)
 
 
-def flow(model: SpaceModel, x: np.ndarray) -> np.ndarray:
-    """dx/dt of the stance phase (:mod:`biped_sim.rigid.space_model`'s state)."""
+def flow(model: SpaceModel, x: np.ndarray, knee_free: bool = False) -> np.ndarray:
+    """dx/dt of the stance phase (:mod:`biped_sim.rigid.space_model`'s state), the swing knee free or locked."""
     motions = part_motions(model, x)
     gravity = model.gravity_vector
-    force = np.zeros(4)
+    n = 5 if model.knee and knee_free else 4
+    force = np.zeros(motions[0].a_matrix.shape[1])
     for m in motions:
         force += m.a_matrix.T @ (m.mass * (gravity - m.b))
         force -= m.b_matrix.T @ (m.inertia @ m.e + cross(m.w, m.inertia @ m.w))
-    x_dot = np.empty(N_STATE)
+    x_dot = np.zeros(model.n_state)
     x_dot[:3] = np.linalg.solve(rate_matrix(x[0], x[1]), x[4:7])
     x_dot[3] = x[7]
-    x_dot[4:8] = np.linalg.solve(mass_matrix(motions), force)
-    x_dot[8:] = contact_point_velocity(model, pose(model, x), x[4:7])[:2]
+    accelerations = np.linalg.solve(mass_matrix(motions)[:n, :n], force[:n])
+    x_dot[4:8] = accelerations[:4]
+    x_dot[8:10] = contact_point_velocity(model, pose(model, x), x[4:7])[:2]
+    if model.knee:
+        x_dot[KNEE_ANGLE] = x[KNEE_RATE]
+        x_dot[KNEE_RATE] = accelerations[4] if knee_free else 0.0
     return x_dot
+
+
+def knee_strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
+    """The state just after the swing knee's plastic strike: locked straight, the impulse at the knee and at the
+    stance contact keeping the generalized momentum of the locked system's speeds (``(M u-)`` of its first four,
+    the configuration unchanged: Kane's impulsive balance, as :func:`strike`)."""
+    x = np.array(x_minus, dtype=float)
+    x[KNEE_ANGLE] = 0.0  # located to rounding: the lock holds it exactly
+    mass = mass_matrix(part_motions(model, x))
+    momentum = mass @ speeds(model, x_minus)
+    x[4:8] = np.linalg.solve(mass[:4, :4], momentum[:4])
+    x[KNEE_RATE] = 0.0
+    return x
 
 
 def ground_point(x: np.ndarray) -> np.ndarray:
@@ -147,8 +171,8 @@ def angular_momentum(motions: list[PartMotion], about: np.ndarray) -> np.ndarray
 
 def swing_foot_point(model: SpaceModel, x: np.ndarray) -> np.ndarray:
     """The swing foot's lowest point from the stance contact point."""
-    where = pose(model, x)
-    return where.origin + foot_bottom(model.feet[1], where.rotations[1])[0]
+    where, frame = pose(model, x), model.swing_foot_frame
+    return where.origins[frame] + foot_bottom(model.feet[1], where.rotations[frame])[0]
 
 
 def landed(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
@@ -156,36 +180,42 @@ def landed(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
     where = pose(model, x_minus)
     psi, phi, theta = attitude_angles(MIRROR @ where.rotations[1] @ MIRROR)
     contact = MIRROR @ (ground_point(x_minus) + swing_foot_point(model, x_minus))
-    x = np.zeros(N_STATE)
+    x = np.zeros(model.n_state)
     x[:4] = psi, phi, theta, -x_minus[3]
-    x[8:] = contact[:2]
+    x[8:10] = contact[:2]
     return x
 
 
 def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
-    """The state just after the plastic strike, mirrored (the landing leg the left, stance leg)."""
+    """The state just after the plastic strike, mirrored (the landing leg the left, stance leg). The knees are
+    locked through it (the new swing knee unlocks after it, at rest: its rate 0)."""
     before = part_motions(model, x_minus)
-    before = [before[1], before[0], *before[2:]]  # the landing leg is the new stance leg
+    before = [before[k] for k in model.swapped]  # the landing leg is the new stance leg
     x_plus = landed(model, x_minus)
     after = part_motions(model, x_plus)
-    momentum = np.zeros(4)
+    momentum = np.zeros(len(speeds(model, x_plus)))
     for old, new in zip(before, after, strict=True):
         momentum += new.a_matrix.T @ (old.mass * (MIRROR @ old.v))
         momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
-    x_plus[4:8] = np.linalg.solve(mass_matrix(after), momentum)
+    x_plus[4:8] = np.linalg.solve(mass_matrix(after)[:4, :4], momentum[:4])
     return x_plus
 
 
-def hip_push(model: SpaceModel, x: np.ndarray, impulse: np.ndarray) -> tuple[np.ndarray, float]:
+def hip_push(
+    model: SpaceModel, x: np.ndarray, impulse: np.ndarray, knee_free: bool = False
+) -> tuple[np.ndarray, float]:
     """(the state just after an impulse on the hinge's midpoint, the ground's normal impulse). The stance foot and
-    the hinge hold: Kane's impulsive balance M du = A_hip^T p, A_hip the midpoint's partial velocities (it is on
-    the hinge axis: the hinge rate does not move it); the ground's impulse is the walker's momentum change minus p
-    (its normal part negative: the push would lift the stance foot)."""
+    the hinge hold (and a locked knee): Kane's impulsive balance M du = A_hip^T p, A_hip the midpoint's partial
+    velocities (it is on the hinge axis: the joints' rates do not move it); the ground's impulse is the walker's
+    momentum change minus p (its normal part negative: the push would lift the stance foot)."""
     motions = part_motions(model, x)
-    a_hip = np.zeros((3, 4))
+    n = 5 if model.knee and knee_free else 4
+    a_hip = np.zeros((3, n))
     a_hip[:, :3] = -_skew(pose(model, x).origin)
-    du = np.linalg.solve(mass_matrix(motions), a_hip.T @ impulse)
+    du = np.linalg.solve(mass_matrix(motions)[:n, :n], a_hip.T @ impulse)
     after = np.array(x, dtype=float)
-    after[4:8] += du
-    momentum = sum(m.mass * m.a_matrix @ du for m in motions)
+    after[4:8] += du[:4]
+    if n == 5:
+        after[KNEE_RATE] += du[4]
+    momentum = sum(m.mass * m.a_matrix[:, :n] @ du for m in motions)
     return after, float(momentum[2] - impulse[2])

@@ -11,8 +11,9 @@ whose Python between the flow's calls took most of a step's time (the flow a ten
 and event times to rounding, not bit for bit (numpy's BLAS sums the stages in another order).
 
 Guards (:func:`space_guard`): phase 0 ends when the hinge angle falls through zero (the swing foot passes the
-stance foot), phase 1 when the swing foot's lowest point reaches the slope (:func:`space_clearance`). The fall
-function is the smaller of the hip's height above ``fall_height`` and the bank's margin to ``FALL_BANK``.
+stance foot), phase 1 when the swing foot's lowest point reaches the slope (:func:`space_clearance`), phase 2
+(``KNEE_PHASE``, a kneed walker's first) when the swing knee's flexion falls through zero (the knee strike). The
+fall function is the smaller of the hip's height above ``fall_height`` and the bank's margin to ``FALL_BANK``.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from biped_sim.integrate.stepper import (
 from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.integration import MIN_STEP, copy_into, event_root, first_sample
-from biped_sim.rigid.space_kernels import bottom, rotations, space_flow
+from biped_sim.rigid.space_kernels import KNEE_FLEXION, bottom, knee_frame, rotations, space_flow
 from biped_sim.rigid.space_model import N_STATE
 from biped_sim.rigid.step import ATOL, RTOL
 
@@ -50,6 +51,7 @@ GUARD, FELL, STALLED, REACHED = 0, 1, 2, 3  # how a phase ends (:func:`space_pha
 PHASE_NAMES = ("guard", "fell", "stalled", "until")
 FALL_BANK = 1.2  # [rad] a bank past it is a fall
 N_SPACE_EVENTS = 2  # the phase's guard, the fall function
+KNEE_PHASE = 2  # the phase that ends at the swing knee's strike
 SAMPLED, FLOWS, ACCEPTED = 0, 1, 2  # PhaseRecord.counts: samples taken, flow calls, accepted steps
 
 
@@ -59,7 +61,7 @@ class PhaseRecord(NamedTuple):
 
     counts: np.ndarray  # (3,) int64: samples, flow calls, accepted steps
     samples_t: np.ndarray  # (m,)
-    samples_x: np.ndarray  # (m, N_STATE)
+    samples_x: np.ndarray  # (m, the state's length)
 
 
 class SpaceScratch(NamedTuple):
@@ -70,10 +72,11 @@ class SpaceScratch(NamedTuple):
     record: PhaseRecord
 
 
-def space_scratch(samples: int = 0) -> SpaceScratch:
-    """The integration's tableau, buffers and a record with room for ``samples`` samples a step."""
-    record = PhaseRecord(np.zeros(3, dtype=np.int64), np.empty(samples), np.empty((samples, N_STATE)))
-    return SpaceScratch(tableau("dop853"), make_scratch(N_STATE, 0, N_SPACE_EVENTS), record)
+def space_scratch(samples: int = 0, n_state: int = N_STATE) -> SpaceScratch:
+    """The integration's tableau, buffers and a record with room for ``samples`` samples a step, for states of
+    ``n_state`` (the model's ``n_state``)."""
+    record = PhaseRecord(np.zeros(3, dtype=np.int64), np.empty(samples), np.empty((samples, n_state)))
+    return SpaceScratch(tableau("dop853"), make_scratch(n_state, 0, N_SPACE_EVENTS), record)
 
 
 @kernel
@@ -81,13 +84,17 @@ def space_clearance(p: np.ndarray, x: np.ndarray) -> float:
     """The swing foot's lowest point above the slope (the stance foot's is on it)."""
     stance, swing = rotations(x)
     stance_bottom, _ = bottom(p, 0, stance)
-    swing_bottom, _ = bottom(p, 1, swing)
-    return swing_bottom[2] - stance_bottom[2]
+    shank, shift = knee_frame(p, x, swing)
+    swing_bottom, _ = bottom(p, 1, shank)
+    return swing_bottom[2] + shift[2] - stance_bottom[2]
 
 
 @kernel
 def space_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
-    """The guard of ``phase``: the hinge angle (phase 0), the swing foot's clearance (phase 1)."""
+    """The guard of ``phase``: the hinge angle (phase 0), the swing foot's clearance (phase 1), the swing knee's
+    flexion (``KNEE_PHASE``)."""
+    if phase == KNEE_PHASE:
+        return p[KNEE_FLEXION] * x[10]
     return x[3] if phase == 0 else space_clearance(p, x)
 
 

@@ -4,9 +4,10 @@ hinge rate) over a flat parameter vector, for the integrator's many calls. The p
 :func:`~biped_sim.rigid.space_dynamics.flow` is their reference (tests compare them to rounding).
 
 Parameter vector (:func:`space_params`): gravity (3, slope frame), the number of parts, then per part its frame
-(0 stance leg, 1 swing leg), mass, centre of mass (3) and inertia (9, row-major; the walker frame, hinge at zero),
-then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3), tube radius and an ellipsoid's
-quadric (9, row-major).
+(0 stance leg, 1 swing leg, 2 swing shank), mass, centre of mass (3) and inertia (9, row-major; the walker frame,
+hinge at zero), then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3), tube radius and
+an ellipsoid's quadric (9, row-major), then the swing knee's: whether it is free (1.0; the step map sets it), its
+flexion's sign and its point (3). A state of 12 (with knees) has the knee's angle and rate last.
 """
 
 from __future__ import annotations
@@ -20,12 +21,14 @@ from biped_sim.kernel import kernel
 from biped_sim.multibody.linalg import cholesky_solve
 from biped_sim.rigid.space_model import ELLIPSOID, RING, SPHERE, TORUS, SpaceModel
 
-MAX_PARTS = 3
+MAX_PARTS = 5  # two legs of a thigh and a shank each, a hip mass
 PART_SIZE = 14
 FOOT_SIZE = 18
 PARTS = 4
 FEET = PARTS + MAX_PARTS * PART_SIZE
-N_PARAMS = FEET + 2 * FOOT_SIZE
+KNEE = FEET + 2 * FOOT_SIZE
+KNEE_FREE, KNEE_FLEXION, KNEE_POINT = KNEE, KNEE + 1, KNEE + 2
+N_PARAMS = KNEE + 5
 
 
 def space_params(model: SpaceModel) -> np.ndarray:
@@ -39,6 +42,9 @@ def space_params(model: SpaceModel) -> np.ndarray:
     for k, foot in enumerate(model.feet):
         o = FEET + k * FOOT_SIZE
         p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal, foot.tube, *foot.quadric.ravel()]
+    if model.knee:
+        p[KNEE_FLEXION] = model.knee.flexion
+        p[KNEE_POINT : KNEE_POINT + 3] = model.knee.point
     return p
 
 
@@ -161,38 +167,59 @@ def contact_rate(p: np.ndarray, rotation: np.ndarray, d: np.ndarray, omega: np.n
 
 
 @kernel
+def knee_frame(p: np.ndarray, x: np.ndarray, swing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The swing shank's rotation (the swing leg's turned by the knee angle about y) and its frame's shift from
+    the hinge's midpoint, R_swing k - R_shank k for the knee's point k (so that the shank turns about the knee);
+    the swing leg's and zero without knees."""
+    if x.shape[0] == 10:
+        return swing, np.zeros(3)
+    c, s = math.cos(x[10]), math.sin(x[10])
+    shank = mat_mat(swing, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
+    knee = p[KNEE_POINT : KNEE_POINT + 3].copy()
+    return shank, mat_vec(swing, knee) - mat_vec(shank, knee)
+
+
+@kernel
 def _add_part(
-    p: np.ndarray, o: int, x: np.ndarray, turn: np.ndarray, origin: np.ndarray, axis: np.ndarray, p_dot: np.ndarray,
-    mass: np.ndarray, force: np.ndarray,
+    p: np.ndarray, o: int, u: np.ndarray, turn: np.ndarray, at: np.ndarray, axis: np.ndarray, joints: np.ndarray,
+    p_dot: np.ndarray, mass: np.ndarray, force: np.ndarray,
 ) -> None:  # fmt: skip
-    """The part at parameter offset ``o`` (on the leg turned by ``turn``) added to Kane's M (m A^T A + B^T I B) and
-    F (A^T m (g - b) - B^T (I e + w x I w)), in place."""
-    omega, rate, m = x[4:7], x[7], p[o + 1]
-    r = origin + mat_vec(turn, p[o + 2 : o + 5])
+    """The part at parameter offset ``o`` (turned by ``turn``, its frame's origin ``at``) added to Kane's M
+    (m A^T A + B^T I B) and F (A^T m (g - b) - B^T (I e + w x I w)), in place, over the speeds ``u``; ``joints``
+    holds the hinge's midpoint and the knee's point, of which the part's frame (p[o]: 0, 1, 2) says how many turn
+    it (both about ``axis``)."""
+    omega, m, n, frame = u[:3], p[o + 1], u.shape[0], int(p[o])
+    r = at + mat_vec(turn, p[o + 2 : o + 5])
     inertia = mat_mat(mat_mat(turn, np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3))), turn.T)
-    a_matrix = np.zeros((3, 4))
-    b_matrix = np.zeros((3, 4))
+    a_matrix = np.zeros((3, n))
+    b_matrix = np.zeros((3, n))
     for i in range(3):  # omega x r = -[r]x omega
         a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
         a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
         b_matrix[i, i] = 1.0
-    v, w = cross(omega, r), omega.copy()
-    e, extra = np.zeros(3), np.zeros(3)
-    if p[o] == 1.0:  # the swing leg: the hinge turns it about the axis through the origin
-        s = r - origin
-        lever = cross(axis, s)
+    for j in range(frame):  # the hinge turns the swing leg, the knee its shank too
+        lever = cross(axis, r - joints[j])
         for i in range(3):  # not a slice assignment: its shape check's message compiles numba's string functions
-            a_matrix[i, 3] = lever[i]
-            b_matrix[i, 3] = axis[i]
-        v += rate * a_matrix[:, 3]
-        w += rate * axis
-        extra = rate * (cross(cross(omega, axis), s) + cross(axis, cross(w, s)))
-        e = rate * cross(omega, axis)
-    linear = m * (p[:3] - cross(omega, v - p_dot) - extra)
+            a_matrix[i, 3 + j] = lever[i]
+            b_matrix[i, 3 + j] = axis[i]
+    v, w = np.zeros(3), np.zeros(3)
+    for i in range(3):
+        for j in range(n):
+            v[i] += a_matrix[i, j] * u[j]
+            w[i] += b_matrix[i, j] * u[j]
+    spin = cross(omega, axis)  # both axes turn with the stance leg
+    b, e = cross(omega, v - p_dot), np.zeros(3)
+    for j in range(frame):  # d/dt of rate_j axis x (r - joint_j), the joint moving with the parts above it
+        v_at = cross(omega, joints[j])
+        if j == 1:
+            v_at += u[3] * cross(axis, joints[1] - joints[0])
+        b += u[3 + j] * (cross(spin, r - joints[j]) + cross(axis, v - v_at))
+        e += u[3 + j] * spin
+    linear = m * (p[:3] - b)
     torque = mat_vec(inertia, e) + cross(w, mat_vec(inertia, w))
     inertia_b = mat_mat(inertia, b_matrix)
-    for i in range(4):
-        for j in range(4):
+    for i in range(n):
+        for j in range(n):
             for k in range(3):
                 mass[i, j] += m * a_matrix[k, i] * a_matrix[k, j] + b_matrix[k, i] * inertia_b[k, j]
         for k in range(3):
@@ -201,23 +228,42 @@ def _add_part(
 
 @kernel
 def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """dx/dt of the stance phase: Kane's M u' = F (a Cholesky solve: M is symmetric positive definite) and the
-    attitude's and contact point's rates."""
+    """dx/dt of the stance phase: Kane's M u' = F (a Cholesky solve over the free speeds: M is symmetric positive
+    definite) and the attitude's and contact point's rates; a state of 12 has the swing knee, free while
+    p[KNEE_FREE] is 1."""
     stance, swing = rotations(x)
     foot, d = bottom(p, 0, stance)
     axis = stance[:, 1].copy()
     p_dot = contact_rate(p, stance, d, x[4:7].copy())
-    mass = np.zeros((4, 4))
-    force = np.zeros(4)
+    shank, shift = knee_frame(p, x, swing)
+    knees = x.shape[0] > 10
+    n = 5 if knees else 4
+    u = np.empty(n)
+    for i in range(4):
+        u[i] = x[4 + i]
+    joints = np.empty((2, 3))
+    for i in range(3):
+        joints[0, i] = -foot[i]
+        joints[1, i] = -foot[i]
+    if knees:
+        u[4] = x[11]
+        joints[1] += mat_vec(swing, p[KNEE_POINT : KNEE_POINT + 3].copy())
+    mass = np.zeros((n, n))
+    force = np.zeros(n)
     for k in range(int(p[3])):
         o = PARTS + k * PART_SIZE
-        _add_part(p, o, x, swing if p[o] == 1.0 else stance, -foot, axis, p_dot, mass, force)
-    cholesky_solve(mass, force, 4)
+        turn = stance if p[o] == 0.0 else (swing if p[o] == 1.0 else shank)
+        _add_part(p, o, u, turn, joints[0] + shift if p[o] == 2.0 else joints[0], axis, joints, p_dot, mass, force)
+    free = 5 if knees and p[KNEE_FREE] == 1.0 else 4
+    cholesky_solve(mass, force, free)
     rates = attitude_rates(x)
-    x_dot = np.empty(10)
+    x_dot = np.zeros(x.shape[0])
     # not slice assignments: their shape check's message compiles numba's string functions
     x_dot[0], x_dot[1], x_dot[2], x_dot[3] = rates[0], rates[1], rates[2], x[7]
     for i in range(4):
         x_dot[4 + i] = force[i]
     x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
+    if knees:
+        x_dot[10] = x[11]
+        x_dot[11] = force[4] if free == 5 else 0.0
     return x_dot

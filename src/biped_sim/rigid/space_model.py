@@ -3,12 +3,15 @@
 The walker frame is the stance leg's: origin at the hinge's midpoint, x forward, y along the hinge (to the
 left), z up the leg. The stance leg is always the left leg (the description's): the step map mirrors the walker
 (y -> -y) after each strike, so the right leg's step is the left leg's mirror image. The swing leg is the
-stance leg's frame turned by the hinge angle ``beta`` about y (positive: the swing foot behind).
+stance leg's frame turned by the hinge angle ``beta`` about y (positive: the swing foot behind). A leg with a knee
+is a thigh and a shank (frame 2 of the swing leg) turned from it by the knee angle about y through the knee point
+(positive: the foot behind); the stance knee stays locked straight (Chen 2007, McGeer 1990), the swing knee is
+locked but for the step's first phase, from the strike that unlocks it to the knee strike.
 
 State ``x`` (the slope frame: x downhill, y left, z along the slope normal): heading psi, bank phi, pitch theta of
 the stance leg, R = Rz(psi) Rx(phi) Ry(theta) (pitch positive with the leg's top downhill), the hinge angle
 beta, the stance leg's angular velocity (slope frame), the hinge rate, and the stance contact point (x, y) on
-the ground: ``STATE_NAMES``.
+the ground: ``STATE_NAMES``; with knees, then the swing knee's angle and rate (``KNEE_NAMES``).
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, cross, rot_x,
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
+KNEE_NAMES = ("swing_knee", "swing_knee_rate")
+KNEE_ANGLE, KNEE_RATE = N_STATE, N_STATE + 1
 POINT, SPHERE, RING, TORUS, ELLIPSOID = 0, 1, 2, 3, 4
 SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING, "torus": TORUS, "ellipsoid": ELLIPSOID}
 
@@ -43,8 +48,8 @@ def rate_matrix(psi: float, phi: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Part:
-    """A rigid part: on the stance leg (frame 0) or the swing leg (frame 1); mass, centre of mass and inertia
-    about it, in the walker frame with the hinge at zero."""
+    """A rigid part: on the stance leg (frame 0), the swing leg (frame 1; with a knee its thigh) or the swing shank
+    (frame 2); mass, centre of mass and inertia about it, in the walker frame with the hinge and knee at zero."""
 
     frame: int
     mass: float
@@ -67,41 +72,83 @@ class Foot:
 
 
 @dataclass(frozen=True)
+class Knee:
+    """The swing leg's knee: its point in the walker frame with the hinge at zero (the right leg's, the mirror of
+    the description's) and its flexion's sign (+1: the knee bends with the foot behind, a positive angle)."""
+
+    point: np.ndarray
+    flexion: float
+
+
+@dataclass(frozen=True)
 class SpaceModel:
-    """The walker in its frame: parts (stance leg, swing leg, a hip mass), the two feet, gravity and slope."""
+    """The walker in its frame: parts (the stance leg's, the swing leg's, a hip mass), the two feet, gravity and
+    slope, and the swing knee if the legs have knees."""
 
     parts: tuple[Part, ...]
     feet: tuple[Foot, Foot]
     gravity: float
     slope: float
     leg_length: float
+    knee: Knee | None = None
 
     @property
     def gravity_vector(self) -> np.ndarray:
         """Gravity in the slope frame (x downhill, z along the normal)."""
         return self.gravity * np.array([math.sin(self.slope), 0.0, -math.cos(self.slope)])
 
+    @property
+    def n_state(self) -> int:
+        """The state's length: ``STATE_NAMES``, and ``KNEE_NAMES`` with knees."""
+        return N_STATE + (2 if self.knee else 0)
 
-def _leg(space: SpaceDescription, frame: int) -> tuple[Part, Foot]:
-    """The left leg (frame 0) or its mirror image, the right leg (frame 1), in the walker frame."""
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """The state's names."""
+        return STATE_NAMES + (KNEE_NAMES if self.knee else ())
+
+    @property
+    def swapped(self) -> list[int]:
+        """The parts' order after a strike: each leg's parts take the other's places (the hip's stay)."""
+        per_leg = 2 if self.knee else 1
+        legs = list(range(2 * per_leg))
+        return legs[per_leg:] + legs[:per_leg] + list(range(2 * per_leg, len(self.parts)))
+
+    @property
+    def swing_foot_frame(self) -> int:
+        """The frame the swing foot turns with: the shank's with a knee."""
+        return 2 if self.knee else 1
+
+
+def _leg(space: SpaceDescription, frame: int) -> tuple[list[Part], Foot]:
+    """The left leg (frame 0) or its mirror image, the right leg (frame 1), in the walker frame: its parts (a
+    knee's shank on frame 2 of the swing leg) and foot."""
     leg, foot = space.leg, space.leg.foot
     hip = np.array([0.0, 0.5 * space.hip_width, 0.0])
     mirror = MIRROR if frame == 1 else np.eye(3)
-    com = mirror @ (hip + np.array(leg.com))
-    inertia = mirror @ leg.inertia.matrix() @ mirror
+    bodies = [(frame, leg.mass, leg.com, leg.inertia)]
+    if leg.knee:
+        bodies.append((2 * frame, leg.knee.mass, leg.knee.com, leg.knee.inertia))
+    parts = [
+        Part(f, m, mirror @ (hip + np.array(com)), mirror @ inertia.matrix() @ mirror) for f, m, com, inertia in bodies
+    ]
     normal = mirror @ (np.array(foot.normal) / np.linalg.norm(foot.normal))
     quadric = mirror @ foot.quadric() @ mirror
     centre = mirror @ (hip + np.array(foot.centre))
-    shape = SHAPES[foot.shape]
-    return Part(frame, leg.mass, com, inertia), Foot(shape, centre, foot.radius, normal, foot.tube, quadric)
+    return parts, Foot(SHAPES[foot.shape], centre, foot.radius, normal, foot.tube, quadric)
 
 
 def space_model(space: SpaceDescription, gravity: float, slope: float) -> SpaceModel:
     """The model of a description in space on a slope of ``slope`` rad under ``gravity``."""
     stance, stance_foot = _leg(space, 0)
     swing, swing_foot = _leg(space, 1)
-    parts = (stance, swing) + ((Part(0, space.hip_mass, np.zeros(3), np.zeros((3, 3))),) if space.hip_mass else ())
-    return SpaceModel(parts, (stance_foot, swing_foot), gravity, slope, space.leg_length())
+    hip = [Part(0, space.hip_mass, np.zeros(3), np.zeros((3, 3)))] if space.hip_mass else []
+    knee = space.leg.knee
+    at = MIRROR @ (np.array([0.0, 0.5 * space.hip_width, 0.0]) + np.array(knee.at)) if knee else None
+    return SpaceModel(
+        tuple(stance + swing + hip), (stance_foot, swing_foot), gravity, slope, space.leg_length(),
+        Knee(at, float(knee.flexion)) if knee else None,
+    )  # fmt: skip
 
 
 def foot_bottom(foot: Foot, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -147,17 +194,23 @@ def bottom_direction_rate(foot: Foot, rotation: np.ndarray, omega: np.ndarray) -
 
 @dataclass(frozen=True)
 class Pose:
-    """Where the walker is, from its stance contact point (slope frame): the legs' rotations, the hinge axis, the
-    hinge's midpoint, and the stance foot's d (:func:`foot_bottom`)."""
+    """Where the walker is, from its stance contact point (slope frame): the frames' rotations (stance leg, swing
+    leg, swing shank) and origins (where their walker-frame points are measured from: the hinge's midpoint, a
+    shank's shifted so that it turns about the knee), the hinge axis, and the stance foot's d (:func:`foot_bottom`)."""
 
-    rotations: tuple[np.ndarray, np.ndarray]
+    rotations: tuple[np.ndarray, np.ndarray, np.ndarray]
+    origins: tuple[np.ndarray, np.ndarray, np.ndarray]
     hinge: np.ndarray
-    origin: np.ndarray
     stance_d: np.ndarray
 
+    @property
+    def origin(self) -> np.ndarray:
+        """The hinge's midpoint."""
+        return self.origins[0]
+
     def point(self, frame: int, local: np.ndarray) -> np.ndarray:
-        """A point of leg ``frame`` given in the walker frame, from the stance contact point."""
-        return self.origin + self.rotations[frame] @ local
+        """A point of ``frame`` given in the walker frame, from the stance contact point."""
+        return self.origins[frame] + self.rotations[frame] @ local
 
 
 def pose(model: SpaceModel, x: np.ndarray) -> Pose:
@@ -165,11 +218,16 @@ def pose(model: SpaceModel, x: np.ndarray) -> Pose:
     stance = attitude(x[0], x[1], x[2])
     swing = stance @ rot_y(x[3])
     bottom, d = foot_bottom(model.feet[0], stance)
-    return Pose((stance, swing), stance[:, 1], -bottom, d)
+    origin = -bottom
+    if model.knee is None:
+        return Pose((stance, swing, swing), (origin, origin, origin), stance[:, 1], d)
+    shank = swing @ rot_y(x[KNEE_ANGLE])
+    knee = model.knee.point
+    return Pose((stance, swing, shank), (origin, origin, origin + swing @ knee - shank @ knee), stance[:, 1], d)
 
 
 def swing_clearance(model: SpaceModel, x: np.ndarray) -> float:
     """The swing foot's lowest point above the slope (the stance foot's is on it)."""
-    where = pose(model, x)
-    bottom, _ = foot_bottom(model.feet[1], where.rotations[1])
-    return float(where.origin[2] + bottom[2])
+    where, frame = pose(model, x), model.swing_foot_frame
+    bottom, _ = foot_bottom(model.feet[1], where.rotations[frame])
+    return float(where.origins[frame][2] + bottom[2])

@@ -29,16 +29,19 @@ from biped_sim.rigid.space_integration import (
     ACCEPTED,
     FLOWS,
     GUARD,
+    KNEE_PHASE,
     PHASE_NAMES,
     REACHED,
     SAMPLED,
     SpaceScratch,
     space_phase,
 )
+from biped_sim.rigid.space_kernels import KNEE_FREE
 from biped_sim.rigid.space_model import MIRROR, SpaceModel
-from biped_sim.rigid.space_step import SpaceStep, step_time_limit, struck
+from biped_sim.rigid.space_step import SpaceStep, after_phase, begin_step, step_time_limit, struck
 
-MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0])  # a state's signs under the mirror
+MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0, 1.0, 1.0])  # a state's signs under
+# the mirror (the knee's angle and rate last, a kneed walker's)
 
 
 @dataclass(frozen=True)
@@ -56,8 +59,9 @@ class Frame:
 
     def world(self, x: np.ndarray) -> np.ndarray:
         """A model state (or states, rows) in the run's frame: attitude, rates, the contact point (module docstring)."""
-        out = np.array(x, dtype=float) * (MIRRORED if self.sign < 0 else 1.0)
-        out[..., 8:] += self.contact[:2]
+        out = np.array(x, dtype=float)
+        out *= MIRRORED[: out.shape[-1]] if self.sign < 0 else 1.0
+        out[..., 8:10] += self.contact[:2]
         return out
 
     def point(self, local: np.ndarray) -> np.ndarray:
@@ -85,13 +89,14 @@ def frame_energy(model: SpaceModel, frame: Frame, x: np.ndarray) -> tuple[float,
 @dataclass
 class WalkStep:
     """A step of a run: the step map's result, the samples on the step's clock (post-strike state first, the strike
-    or fall state not among them), the pushes applied (time on the step's clock, work, ground normal impulse) and
-    the integrator's counters."""
+    or fall state not among them), the pushes applied (time on the step's clock, work, ground normal impulse), the
+    knee strikes (time on the step's clock, kinetic energy lost) and the integrator's counters."""
 
     step: SpaceStep
     samples_t: np.ndarray
     samples_x: np.ndarray
     pushes: list[tuple[float, float, float]] = field(default_factory=list)
+    knee_strikes: list[tuple[float, float]] = field(default_factory=list)
     rhs_evals: int = 0
     accepted_steps: int = 0
 
@@ -109,24 +114,28 @@ def walk_step(
     stay pending), integrated as the step map's (``scratch``: :func:`~biped_sim.rigid.space_integration.space_scratch`
     with room for a step's samples)."""
     x = np.array(x_start, dtype=float)
-    x[8:] = 0.0
+    x[8:10] = 0.0
     limit, fall_height = step_time_limit(model), FALL_HIP_FRACTION * model.leg_length
     record = scratch.record
     record.counts[:] = 0
-    t, how, applied = 0.0, GUARD, []
-    for phase in (0, 1):
-        how = REACHED
+    t, how, applied, skip, knee_strikes = 0.0, GUARD, [], False, []
+    for phase in begin_step(model, params, x):
+        how = GUARD if skip else REACHED
         while how == REACHED:
             stop = min(pushes[len(applied)][0], limit) if len(applied) < len(pushes) else limit
             if stop > t:
                 how, t = space_phase(params, scratch, phase, t, stop, limit, fall_height, sample_rate, x)
             if how == REACHED:
                 before = energy(model, x)
-                x, normal = hip_push(model, x, pushes[len(applied)][1])
+                x, normal = hip_push(model, x, pushes[len(applied)][1], params[KNEE_FREE] == 1.0)
                 applied.append((t, energy(model, x) - before, normal))
         if how != GUARD:
             break
+        before = energy(model, x)
+        x, skip = after_phase(model, params, phase, x)
+        if phase == KNEE_PHASE:
+            knee_strikes.append((t, before - energy(model, x)))
     step = struck(model, x, t) if how == GUARD else SpaceStep(PHASE_NAMES[how], x, None, t, math.nan)  # type: ignore[arg-type]
     n = record.counts[SAMPLED]
     samples = record.samples_t[:n].copy(), record.samples_x[:n].copy()
-    return WalkStep(step, *samples, applied, int(record.counts[FLOWS]), int(record.counts[ACCEPTED]))
+    return WalkStep(step, *samples, applied, knee_strikes, int(record.counts[FLOWS]), int(record.counts[ACCEPTED]))

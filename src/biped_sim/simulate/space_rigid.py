@@ -40,7 +40,7 @@ from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_integration import FALL_BANK, space_scratch
 from biped_sim.rigid.space_kernels import space_params
-from biped_sim.rigid.space_model import N_STATE, STATE_NAMES, SpaceModel, pose
+from biped_sim.rigid.space_model import KNEE_NAMES, N_STATE, STATE_NAMES, SpaceModel, pose
 from biped_sim.rigid.space_step import SpaceStep, step_time_limit
 from biped_sim.rigid.space_walk import Frame, walk_step
 from biped_sim.rigid.step import MAX_STEP_TIME, RTOL
@@ -79,15 +79,16 @@ def check_space_run_size(config: Config) -> None:
     """The run's samples within the memory budget (ConfigError naming the field otherwise): the state, the state in
     the run's frame, the hip and the energy terms per sample. Before its start is sought (the limit cycle's search
     compiles the step map on a cold cache), so that a run too large fails at once."""
-    check_run_size(config, 2 * N_STATE + 8)
+    check_run_size(config, 2 * (N_STATE + len(KNEE_NAMES)) + 8)
 
 
 def space_start(config: Config) -> SpaceStart:
     """The model of ``config`` and its start (ConfigError naming simulation.initial when there is none)."""
     keys = check_initial(space_initial(config))
-    state = np.zeros(N_STATE)
+    model = space_walker_model(config)
+    state = np.zeros(model.n_state)  # a swing knee starts straight and at rest
     state[:8] = [keys[name] for name in STATE_NAMES[:8]]
-    return SpaceStart(space_walker_model(config), state)
+    return SpaceStart(model, state)
 
 
 @dataclass(repr=False)  # RunResult.__repr__: one line
@@ -161,7 +162,8 @@ class SpaceRunResult(RunResult):
         """Strike states in the run's frame (each in its step's frame: the one before the strike for the
         pre-impact states, offset 0; after it for the post-impact ones, offset 1)."""
         frames = self.trace.frames
-        return np.array([frames[k + frame_offset].world(x) for k, x in enumerate(states)]).reshape(-1, N_STATE)
+        n_state = self.start.model.n_state
+        return np.array([frames[k + frame_offset].world(x) for k, x in enumerate(states)]).reshape(-1, n_state)
 
     def trajectory(self) -> TrajectoryFile:
         channels = [Channel(f"energy/{name}", getattr(self.energy, name), "J") for name in RIGID_ENERGY_TERMS]
@@ -180,7 +182,8 @@ class SpaceRunResult(RunResult):
             Channel("strikes/post_impact", self._strike_states(self.trace.strike_post, 1), STATE_UNITS, False)
         )
         return TrajectoryFile(
-            self.time, "s", self.state, list(STATE_NAMES), STATE_UNITS, channels, root_attrs={"dynamics": "rigid"},
+            self.time, "s", self.state, list(self.start.model.state_names), STATE_UNITS, channels,
+            root_attrs={"dynamics": "rigid"},
             group_attrs={"attitude": {"bodies": BODY_NAMES}},
         )  # fmt: skip
 
@@ -189,6 +192,8 @@ def fall_reason(model: SpaceModel, step: SpaceStep) -> str:
     """Which criterion ended a step that did not strike: the stall, or the fall limit its end state is nearest."""
     if step.status == "stalled":
         return f"no heel strike within {MAX_STEP_TIME:g} sqrt(l / g): the walker rocked back or stopped"
+    if step.status == "tripped":
+        return "the swing foot met the ground not ahead of the stance foot: the walker rocked back"
     hip = pose(model, step.x_minus).origin[2] / model.leg_length - FALL_HIP_FRACTION
     if hip < FALL_BANK - abs(step.x_minus[1]):
         return f"the hip within {FALL_HIP_FRACTION:g} leg lengths of the ground"
@@ -200,7 +205,7 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
     model, params = start.model, space_params(start.model)
     t_end, max_steps, rate = config.simulation.t_end, config.simulation.max_steps, config.output.sample_rate
     deadline, pushes = wall_deadline(config), ordered_pushes(config)
-    scratch = space_scratch(math.ceil(step_time_limit(model) * rate) + 1)
+    scratch = space_scratch(math.ceil(step_time_limit(model) * rate) + 1, model.n_state)
     trace = SpaceTrace(frames=[Frame(np.zeros(3), 1.0)])
     t0, x, evals, accepted = 0.0, start.state, 0, 0
     while True:
@@ -215,6 +220,7 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
         pending = [(at - t0, frame.impulse(impulse)) for at, impulse in pushes[len(trace.pushes) :]]
         walked = walk_step(model, params, scratch, x, rate, pending)
         trace.pushes += [(t0 + at, work, normal) for at, work, normal in walked.pushes]
+        trace.stop_losses += [(t0 + at, loss) for at, loss in walked.knee_strikes if t0 + at <= t_end]
         evals, accepted = evals + walked.rhs_evals, accepted + walked.accepted_steps
         step, kept = walked.step, t0 + walked.samples_t <= t_end
         trace.add_samples(t0 + walked.samples_t[kept], walked.samples_x[kept], index)
@@ -229,7 +235,7 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
         trace.strike_pre.append(step.x_minus)
         trace.frames.append(frame.after(step.x_plus))
         x = np.array(step.x_plus)
-        x[8:] = 0.0  # in the next step's frame
+        x[8:10] = 0.0  # in the next step's frame
         trace.strike_post.append(x)
         trace.step_lengths.append(step.length)
         if progress is not None:
