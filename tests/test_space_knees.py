@@ -12,10 +12,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from biped_sim.config import config_from_dict, load_config
+from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
 from biped_sim.rigid import space_dynamics as dyn
-from biped_sim.rigid.limit_cycle import rigid_limit_cycle
-from biped_sim.rigid.space_cycle import space_cycle_from, space_walker_model
+from biped_sim.rigid.limit_cycle import StepFailedError, rigid_limit_cycle
+from biped_sim.rigid.space_cycle import SpaceMap, space_cycle_from, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import KNEE_FREE, space_flow, space_params
 from biped_sim.rigid.space_model import KNEE_ANGLE, KNEE_RATE, MIRROR, SpaceModel, pose
 from biped_sim.simulate import simulate
@@ -196,3 +197,35 @@ def test_a_rigid_run_of_the_3d_kneed_walker_closes_its_energy_balance_through_kn
     knee = list(result.trajectory().state_names).index("swing_knee")
     assert np.max(result.state[:, knee]) > 0.1  # the swing knee bends
     assert len(result.trace.stop_losses) >= 3 and all(loss > 0.0 for _, loss in result.trace.stop_losses)
+
+
+def degenerate_start() -> dict[str, Any]:
+    """The kneed walker in space with no inertia at all (every mass on the legs' common axis when they pass each
+    other: their spin about it unresisted) on a start whose legs come into line within the step."""
+    data = kneed_in_space()
+    for body in data["walker"]["description"]["leg"]["bodies"]:
+        body["inertia_tensor"] = {"xx": 0.0, "yy": 0.0, "zz": 0.0}
+    gait = {"pitch": -0.05, "swing_angle": 0.1, "omega_y": 3.13209195, "swing_rate": -1.87925517}
+    data["simulation"] = {"t_end": 2.0, "initial": dict.fromkeys(SPACE_STATE_KEYS, 0.0) | gait}
+    return data
+
+
+def test_singular_equations_end_a_run_diverged_and_a_search_step_failed() -> None:
+    config = config_from_dict(degenerate_start())
+    result = simulate(copy.deepcopy(config))
+    assert result.status == "diverged" and result.status_reason.startswith("the equations of motion became singular")
+    step_map = SpaceMap(space_walker_model(config))
+    with pytest.raises(StepFailedError, match="singular"):
+        step_map.step(step_map.section.of_keys(config.simulation.initial))
+
+
+@pytest.mark.slow
+def test_the_3d_kneed_walker_made_rigid_finds_a_gait_without_a_guess_laterally_unstable() -> None:
+    """The bundled 3D kneed walker in rigid dynamics: its gait found from its sagittal twin's (docs/guide/rigid.md's
+    figures), turned off the downhill heading (rolling without slip leaves the stance foot's spin free) and
+    unstable (a multiplier outside the unit circle)."""
+    cycle = space_limit_cycle(kneed_3d_rigid())
+    assert cycle.converged and cycle.start.startswith("the sagittal twin's gait")
+    assert cycle.step_period == pytest.approx(0.46366, abs=1e-5)
+    assert cycle.fixed_point["heading"] == pytest.approx(0.5392, abs=1e-4)
+    assert max(abs(cycle.multipliers)) == pytest.approx(4.788, abs=1e-3)

@@ -37,7 +37,7 @@ from biped_sim.rigid.limit_cycle import (
 from biped_sim.rigid.space_integration import space_clearance, space_scratch
 from biped_sim.rigid.space_kernels import space_params
 from biped_sim.rigid.space_model import STATE_NAMES, SpaceModel, space_model
-from biped_sim.rigid.space_step import SpaceStep, space_step
+from biped_sim.rigid.space_step import SINGULAR, SINGULAR_REASON, SpaceStep, space_step
 from biped_sim.rigid.step import RTOL
 
 CONTINUATION_STEP = 0.125  # the largest step of the homotopy's share (sagittal twin 0 -> walker 1)
@@ -104,7 +104,11 @@ class SpaceMap:
 
     def step(self, z: np.ndarray) -> tuple[np.ndarray, SpaceStep]:
         """The next section point and the step."""
-        step = space_step(self.model, self.section.from_section(np.asarray(z, dtype=float)), self.params, self.scratch)
+        start = self.section.from_section(np.asarray(z, dtype=float))
+        try:
+            step = space_step(self.model, start, self.params, self.scratch)
+        except SINGULAR:
+            raise StepFailedError(f"the rigid walker in space stopped: {SINGULAR_REASON}") from None
         if step.x_plus is None:
             raise StepFailedError(f"the rigid walker in space {step.status} during the step")
         return self.section.to_section(step.x_plus), step

@@ -41,6 +41,12 @@ from biped_sim.rigid.space_model import KNEE_RATE, SpaceModel
 from biped_sim.rigid.step import MAX_STEP_TIME, StepStatus
 
 ALIGNED = 1e-6  # [rad] a strike needs the swing foot ahead: the hinge angle below -ALIGNED
+# what a step raises when the walker's mass matrix is singular (a motion no mass resists: e.g. legs with no inertia
+# about their own axes, in line), and why a run so stopped
+SINGULAR = (ZeroDivisionError, np.linalg.LinAlgError)
+SINGULAR_REASON = (
+    "the equations of motion became singular: a motion no mass resists (a leg without inertia about its axis?)"
+)
 
 
 @dataclass

@@ -41,7 +41,7 @@ from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_integration import FALL_BANK, space_scratch
 from biped_sim.rigid.space_kernels import space_params
 from biped_sim.rigid.space_model import KNEE_NAMES, N_STATE, STATE_NAMES, SpaceModel, pose
-from biped_sim.rigid.space_step import SpaceStep, step_time_limit
+from biped_sim.rigid.space_step import SINGULAR, SINGULAR_REASON, SpaceStep, step_time_limit
 from biped_sim.rigid.space_walk import Frame, walk_step
 from biped_sim.rigid.step import MAX_STEP_TIME, RTOL
 from biped_sim.simulate.budget import check_run_size
@@ -97,7 +97,7 @@ class SpaceRunResult(RunResult):
 
     config: Config
     start: SpaceStart
-    status: str  # 'walking', 'fell' or 'timeout'
+    status: str  # 'walking', 'fell', 'diverged' (singular equations) or 'timeout'
     status_reason: str | None
     stop_time: float | None
     t_final: float
@@ -218,7 +218,11 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
                 status, None if finished else TIMEOUT_REASON, None if finished else t0, t0, evals, accepted
             )
         pending = [(at - t0, frame.impulse(impulse)) for at, impulse in pushes[len(trace.pushes) :]]
-        walked = walk_step(model, params, scratch, x, rate, pending)
+        try:
+            walked = walk_step(model, params, scratch, x, rate, pending)
+        except SINGULAR:
+            trace.add_samples(np.array([t0]), x, index)  # the step's start: the last state integrated
+            return trace, WalkEnd("diverged", SINGULAR_REASON, t0, t0, evals, accepted)
         trace.pushes += [(t0 + at, work, normal) for at, work, normal in walked.pushes]
         trace.stop_losses += [(t0 + at, loss) for at, loss in walked.knee_strikes if t0 + at <= t_end]
         evals, accepted = evals + walked.rhs_evals, accepted + walked.accepted_steps
