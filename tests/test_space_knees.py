@@ -16,7 +16,7 @@ from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
 from biped_sim.rigid import space_dynamics as dyn
 from biped_sim.rigid.limit_cycle import StepFailedError, rigid_limit_cycle
-from biped_sim.rigid.space_cycle import SpaceMap, space_cycle_from, space_limit_cycle, space_walker_model
+from biped_sim.rigid.space_cycle import SpaceMap, scan, space_cycle_from, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import KNEE_FREE, space_flow, space_params
 from biped_sim.rigid.space_model import KNEE_ANGLE, KNEE_RATE, MIRROR, SpaceModel, pose
 from biped_sim.simulate import simulate
@@ -229,3 +229,17 @@ def test_the_3d_kneed_walker_made_rigid_finds_a_gait_without_a_guess_laterally_u
     assert cycle.step_period == pytest.approx(0.46366, abs=1e-5)
     assert cycle.fixed_point["heading"] == pytest.approx(0.5392, abs=1e-4)
     assert max(abs(cycle.multipliers)) == pytest.approx(4.788, abs=1e-3)
+
+
+@pytest.mark.slow
+def test_nearly_singular_equations_end_a_step_stiff_not_a_hang() -> None:
+    """The legs without inertia about their own axes (but the forward one): the step map's hinge phase ends with
+    the legs in line, where their common spin is all but unresisted and the integrator's steps shrink without end;
+    the phase gives up after ``MAX_ATTEMPTS`` steps (the step ``stiff``, the search's step failed)."""
+    data = degenerate_start()
+    for body in data["walker"]["description"]["leg"]["bodies"]:
+        body["inertia_tensor"] = {"xx": 0.01, "yy": 0.0, "zz": 0.01}  # yy: about the leg's axis (y' up the leg)
+    step_map = SpaceMap(space_walker_model(config_from_dict(data)))
+    z = next(z for label, z in scan(step_map.model, step_map.section) if label.endswith("omega_y 3.132"))  # pitch -0.05
+    with pytest.raises(StepFailedError, match="stiff"):
+        step_map.step(z)

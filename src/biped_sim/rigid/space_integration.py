@@ -47,8 +47,10 @@ from biped_sim.rigid.space_kernels import KNEE_FLEXION, bottom, knee_frame, rota
 from biped_sim.rigid.space_model import N_STATE
 from biped_sim.rigid.step import ATOL, RTOL
 
-GUARD, FELL, STALLED, REACHED = 0, 1, 2, 3  # how a phase ends (:func:`space_phase`); REACHED: its stop time
-PHASE_NAMES = ("guard", "fell", "stalled", "until")
+GUARD, FELL, STALLED, REACHED, STIFF = 0, 1, 2, 3, 4  # how a phase ends (:func:`space_phase`); REACHED: its stop
+PHASE_NAMES = ("guard", "fell", "stalled", "until", "stiff")  # time; STIFF: MAX_ATTEMPTS steps tried
+MAX_ATTEMPTS = 20_000  # steps tried in one phase (a walking step's phase takes some tens to hundreds): more is a
+# flow the integrator cannot follow (a nearly singular mass matrix: a motion almost no mass resists)
 FALL_BANK = 1.2  # [rad] a bank past it is a fall
 N_SPACE_EVENTS = 2  # the phase's guard, the fall function
 KNEE_PHASE = 2  # the phase that ends at the swing knee's strike
@@ -195,7 +197,8 @@ def space_phase(
     rate: float, y: np.ndarray,
 ) -> tuple[int, float]:  # fmt: skip
     """Integrate the stance phase ``phase`` from (t, y) to its guard (GUARD), a fall (FELL), ``t_stop`` (REACHED, or
-    STALLED when it is the step's time limit ``t_limit``; also a step too short to take); y ends there (in place).
+    STALLED when it is the step's time limit ``t_limit``; also a step too short to take) or ``MAX_ATTEMPTS`` steps
+    tried (STIFF); y ends there (in place).
     Samples on the grid k / ``rate`` (0: none) of [t, its end) go to ``scratch.record``. A fresh start each call, as
     scipy's solve_ivp after a push: the starting step, the events' values at the start. Returns (how, t)."""
     tab, sc, rec = scratch
@@ -206,12 +209,15 @@ def space_phase(
     h = initial_step_size(tab, sc, h0, d1, t_stop - t)
     rec.counts[FLOWS] += 2
     _events(p, phase, fall_height, y, sc.g_old)
-    rejected, stalled = False, STALLED if t_stop >= t_limit else REACHED
+    rejected, stalled, attempts = False, STALLED if t_stop >= t_limit else REACHED, 0
     while t < t_stop:
         clipped = h >= t_stop - t
         h = min(h, t_stop - t)
         if h < MIN_STEP:
             return (stalled if clipped else STALLED), t
+        attempts += 1
+        if attempts > MAX_ATTEMPTS:
+            return STIFF, t
         accepted, factor = step_factor(_attempt(p, tab, sc, h, y), tab.error_order, rejected)
         rec.counts[FLOWS] += tab.stages
         rejected = not accepted

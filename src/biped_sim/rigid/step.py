@@ -17,7 +17,7 @@ ATOL = 1e-12
 MAX_STEP_TIME = 20.0  # in units of sqrt(l / g)
 GUARD_TOLERANCE = 1e-14
 
-StepStatus = Literal["strike", "fell", "stalled", "tripped"]
+StepStatus = Literal["strike", "fell", "stalled", "tripped", "stiff"]
 
 
 @dataclass

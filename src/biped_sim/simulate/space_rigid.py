@@ -38,7 +38,7 @@ from biped_sim.measure.space_rigid import SpaceSamples, SpaceTrace, leg_attitude
 from biped_sim.measure.steps import StepTable
 from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
-from biped_sim.rigid.space_integration import FALL_BANK, space_scratch
+from biped_sim.rigid.space_integration import FALL_BANK, MAX_ATTEMPTS, space_scratch
 from biped_sim.rigid.space_kernels import space_params
 from biped_sim.rigid.space_model import KNEE_NAMES, N_STATE, STATE_NAMES, SpaceModel, pose
 from biped_sim.rigid.space_step import SINGULAR, SINGULAR_REASON, SpaceStep, step_time_limit
@@ -192,6 +192,11 @@ def fall_reason(model: SpaceModel, step: SpaceStep) -> str:
     """Which criterion ended a step that did not strike: the stall, or the fall limit its end state is nearest."""
     if step.status == "stalled":
         return f"no heel strike within {MAX_STEP_TIME:g} sqrt(l / g): the walker rocked back or stopped"
+    if step.status == "stiff":
+        return (
+            f"{MAX_ATTEMPTS} integration steps tried in one phase: the equations of motion nearly singular, a motion "
+            "almost no mass resists (a leg with little inertia about its axis?)"
+        )
     if step.status == "tripped":
         return "the swing foot met the ground not ahead of the stance foot: the walker rocked back"
     hip = pose(model, step.x_minus).origin[2] / model.leg_length - FALL_HIP_FRACTION
@@ -233,7 +238,8 @@ def walk(config: Config, start: SpaceStart, progress: Callable[[float], None] | 
         if step.x_plus is None:
             trace.add_samples(np.array([t0 + step.period]), step.x_minus, index)
             t_fell = t0 + step.period
-            return trace, WalkEnd("fell", fall_reason(model, step), t_fell, t_fell, evals, accepted)
+            status = "diverged" if step.status == "stiff" else "fell"
+            return trace, WalkEnd(status, fall_reason(model, step), t_fell, t_fell, evals, accepted)
         t0 = t0 + step.period
         trace.strike_time.append(t0)
         trace.strike_pre.append(step.x_minus)
