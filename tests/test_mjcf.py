@@ -110,6 +110,9 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
     assert total_mass(root) == pytest.approx(2.0 * cfg.walker.space.leg.mass + cfg.walker.space.hip_mass)
 
 
+RIGID_GAIT = "rigid_limit_cycle"
+
+
 @pytest.mark.parametrize(
     ("name", "overrides", "message"),
     [
@@ -120,6 +123,11 @@ def test_ring_feet_are_flat_cylinders_about_the_rings_normal() -> None:
             "space/tinkertoy.yaml",
             ("walker.description.leg.feet.foot.shape=torus", "walker.description.leg.feet.foot.tube=0.05"),
             "walker.description.feet: a torus foot is not written as MJCF (MuJoCo has no torus)",
+        ),
+        (
+            "space/kneed_walker_3d.yaml",
+            ("dynamics=rigid", "formulation.kind=planar", "friction.spin_radius=0", f"simulation.initial={RIGID_GAIT}"),
+            "walker.description.legs: a walker in space is written as MJCF with one-body legs only",
         ),
     ],
 )

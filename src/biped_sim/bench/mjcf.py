@@ -198,6 +198,8 @@ def _path(tree: Tree, b: int) -> list[int]:
 def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK4") -> str:
     """MJCF of the walker in space of ``config`` on its slope (module docstring: how each part is written)."""
     space = config.walker.space  # type: ignore[union-attr]
+    if space.leg.knee is not None:
+        raise ConfigError("walker.description.legs", "a walker in space is written as MJCF with one-body legs only")
     if space.leg.foot.shape == "torus":
         raise ConfigError("walker.description.feet", "a torus foot is not written as MJCF (MuJoCo has no torus)")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))
