@@ -14,12 +14,15 @@ from scipy.integrate import solve_ivp
 from biped_sim.config import config_from_dict, load_config
 from biped_sim.config.space_description import SPACE_STATE_KEYS
 from biped_sim.errors import ConfigError
+from biped_sim.measure.space_pose import space_poses
 from biped_sim.rigid import space_dynamics as dyn
 from biped_sim.rigid.limit_cycle import StepFailedError, rigid_limit_cycle
 from biped_sim.rigid.space_cycle import SpaceMap, scan, space_cycle_from, space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_kernels import KNEE_FREE, space_flow, space_params
 from biped_sim.rigid.space_model import KNEE_ANGLE, KNEE_RATE, MIRROR, SpaceModel, pose
 from biped_sim.simulate import simulate
+from biped_sim.walkers.space_geometry import TO_SPATIAL
+from tests.test_space_pose import drawn_lowest, one_sample
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 KNEED_3D = CONFIGS / "space" / "kneed_walker_3d.yaml"
@@ -243,3 +246,18 @@ def test_nearly_singular_equations_end_a_step_stiff_not_a_hang() -> None:
     z = next(z for label, z in scan(step_map.model, step_map.section) if label.endswith("omega_y 3.132"))  # pitch -0.05
     with pytest.raises(StepFailedError, match="stiff"):
         step_map.step(z)
+
+
+def test_a_bent_swing_knee_is_drawn_with_its_foot_where_the_model_puts_it(model: SpaceModel) -> None:
+    """A rigid run's sample with the swing knee bent 0.5 rad: the swing foot drawn about the knee, its lowest drawn
+    point the model's swing foot bottom (the dynamics' pose), to rounding; the shank's drawn length kept."""
+    x = np.zeros(model.n_state)
+    x[2], x[3], x[5], x[7], x[KNEE_ANGLE] = -0.2, 0.4, 1.0, -0.5, 0.5
+    run = one_sample(kneed_3d_rigid(), "rigid", x, list(model.state_names))
+    poses = space_poses(run)
+    np.testing.assert_allclose(drawn_lowest(poses.feet[0])[1], TO_SPATIAL @ dyn.swing_foot_point(model, x), atol=1e-12)
+    straight = space_poses(one_sample(kneed_3d_rigid(), "rigid", x * (np.arange(len(x)) != KNEE_ANGLE), []))
+    shank = [np.linalg.norm(p.legs[0, 1, 4] - p.legs[0, 1, 3]) for p in (poses, straight)]
+    assert shank[0] == pytest.approx(shank[1], abs=1e-12) and not np.allclose(
+        poses.legs[0, 1, 4], straight.legs[0, 1, 4]
+    )

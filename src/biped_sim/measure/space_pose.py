@@ -25,7 +25,7 @@ from biped_sim.config.space_description import SpaceDescription
 from biped_sim.io.trajectory import RunData
 from biped_sim.measure.pose import foot_arc_half_angle
 from biped_sim.rigid.space_cycle import space_walker_model
-from biped_sim.rigid.space_model import KNEE_ANGLE, MIRROR, foot_bottom
+from biped_sim.rigid.space_model import KNEE_ANGLE, foot_bottom
 from biped_sim.walkers.space_geometry import (
     EZ,
     TO_SPATIAL,
@@ -176,9 +176,14 @@ def _walker_points(space: SpaceDescription, leg: LegGeometry, side: float) -> np
     arc = ring_arc(leg, space.leg_length())
     end = leg.foot_centre if arc is None else leg.foot_centre + (leg.foot_radius + leg.foot_tube) * arc[1]
     if space.leg.knee is not None:
-        knee = np.diag([1.0, side, 1.0]) @ (np.array([0.0, 0.5 * space.hip_width, 0.0]) + space.leg.knee.at)
+        knee = _knee_point(space, side)
         return np.vstack([np.zeros(3), hip_point, knee, knee, end])
     return np.vstack([np.zeros(3), hip_point, leg.com, hip_point, end])
+
+
+def _knee_point(space: SpaceDescription, side: float) -> np.ndarray:
+    """A kneed leg's knee in the walker frame: the left leg's (``side`` 1) or its mirror image's (-1)."""
+    return np.array([1.0, side, 1.0]) * (np.array([0.0, 0.5 * space.hip_width, 0.0]) + space.leg.knee.at)
 
 
 Placement = tuple[np.ndarray, np.ndarray]  # a frame's origin (ns, 3) and rotation (ns, 3, 3), rigid slope frame
@@ -225,7 +230,7 @@ def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> Sp
         hinge[i] = np.array([x[8], x[9], 0.0]) - foot_bottom(model.feet[leg], rotation)[0]
         shank_origins[:, i], shank_turns[:, i] = hinge[i], turns[:, i]
         if model.knee is not None:
-            knee = np.diag([1.0, 1.0 - 2.0 * (1 - leg), 1.0]) @ (MIRROR @ model.knee.point)  # the swing leg's side
+            knee = _knee_point(space, 1.0 - 2.0 * (1 - leg))  # the swing leg's
             shank_turns[1 - leg, i] = turns[1 - leg, i] @ rot_y(x[KNEE_ANGLE])
             shank_origins[1 - leg, i] += (turns[1 - leg, i] - shank_turns[1 - leg, i]) @ knee
     placed = [(hinge, turns[0]), (hinge, turns[1])]

@@ -131,7 +131,7 @@ def walk_step(
                 applied.append((t, energy(model, x) - before, normal))
         if how != GUARD:
             break
-        before = energy(model, x)
+        before = energy(model, x) if phase == KNEE_PHASE else 0.0
         x, skip = after_phase(model, params, phase, x)
         if phase == KNEE_PHASE:
             knee_strikes.append((t, before - energy(model, x)))
