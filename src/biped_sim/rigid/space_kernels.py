@@ -185,9 +185,9 @@ def _add_part(
     p_dot: np.ndarray, mass: np.ndarray, force: np.ndarray,
 ) -> None:  # fmt: skip
     """The part at parameter offset ``o`` (turned by ``turn``, its frame's origin ``at``) added to Kane's M
-    (m A^T A + B^T I B) and F (A^T m (g - b) - B^T (I e + w x I w)), in place, over the speeds ``u``; ``joints``
-    holds the hinge's midpoint and the knee's point, of which the part's frame (p[o]: 0, 1, 2) says how many turn
-    it (both about ``axis``)."""
+    (m A^T A + B^T I B) and F (A^T m (g - b) - B^T (I e + w x I w)), in place, over the speeds ``u``. ``joints``
+    rows: the hinge's midpoint and the knee's point, then their velocities, then omega x axis (both axes turn with
+    the stance leg); the part's frame (p[o]: 0, 1, 2) says how many of the joints turn it (both about ``axis``)."""
     omega, m, n, frame = u[:3], p[o + 1], u.shape[0], int(p[o])
     r = at + mat_vec(turn, p[o + 2 : o + 5])
     inertia = mat_mat(mat_mat(turn, np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3))), turn.T)
@@ -197,26 +197,29 @@ def _add_part(
         a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
         a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
         b_matrix[i, i] = 1.0
-    for j in range(frame):  # the hinge turns the swing leg, the knee its shank too
-        lever = cross(axis, r - joints[j])
-        for i in range(3):  # not a slice assignment: its shape check's message compiles numba's string functions
-            a_matrix[i, 3 + j] = lever[i]
+    for j in range(frame):  # the hinge turns the swing leg, the knee its shank too: axis x (r - joint_j)
+        dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
+        a_matrix[0, 3 + j] = axis[1] * dz - axis[2] * dy
+        a_matrix[1, 3 + j] = axis[2] * dx - axis[0] * dz
+        a_matrix[2, 3 + j] = axis[0] * dy - axis[1] * dx
+        for i in range(3):
             b_matrix[i, 3 + j] = axis[i]
     v, w = np.zeros(3), np.zeros(3)
     for i in range(3):
         for j in range(n):
             v[i] += a_matrix[i, j] * u[j]
             w[i] += b_matrix[i, j] * u[j]
-    spin = cross(omega, axis)  # both axes turn with the stance leg
-    b, e = cross(omega, v - p_dot), np.zeros(3)
-    for j in range(frame):  # d/dt of rate_j axis x (r - joint_j), the joint moving with the parts above it
-        v_at = cross(omega, joints[j])
-        if j == 1:
-            v_at += u[3] * cross(axis, joints[1] - joints[0])
-        b += u[3 + j] * (cross(spin, r - joints[j]) + cross(axis, v - v_at))
-        e += u[3 + j] * spin
+    b, turning = cross(omega, v - p_dot), 0.0
+    for j in range(frame):  # d/dt of rate_j axis x (r - joint_j): spin x (r - joint_j) + axis x (v - v_joint_j)
+        rate, spin = u[3 + j], joints[4]
+        dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
+        vx, vy, vz = v[0] - joints[2 + j, 0], v[1] - joints[2 + j, 1], v[2] - joints[2 + j, 2]
+        b[0] += rate * (spin[1] * dz - spin[2] * dy + axis[1] * vz - axis[2] * vy)
+        b[1] += rate * (spin[2] * dx - spin[0] * dz + axis[2] * vx - axis[0] * vz)
+        b[2] += rate * (spin[0] * dy - spin[1] * dx + axis[0] * vy - axis[1] * vx)
+        turning += rate
     linear = m * (p[:3] - b)
-    torque = mat_vec(inertia, e) + cross(w, mat_vec(inertia, w))
+    torque = turning * mat_vec(inertia, joints[4]) + cross(w, mat_vec(inertia, w))  # e = (sum of rates) spin
     inertia_b = mat_mat(inertia, b_matrix)
     for i in range(n):
         for j in range(n):
@@ -241,13 +244,18 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     u = np.empty(n)
     for i in range(4):
         u[i] = x[4 + i]
-    joints = np.empty((2, 3))
+    joints = np.empty((5, 3))  # _add_part's: the joints' points, their velocities, omega x axis
     for i in range(3):
         joints[0, i] = -foot[i]
         joints[1, i] = -foot[i]
     if knees:
         u[4] = x[11]
         joints[1] += mat_vec(swing, p[KNEE_POINT : KNEE_POINT + 3].copy())
+    omega = x[4:7]
+    rows = (cross(omega, joints[0]), cross(omega, joints[1]) + x[7] * cross(axis, joints[1] - joints[0]))
+    spin = cross(omega, axis)
+    for i in range(3):  # not slice assignments: their shape check's message compiles numba's string functions
+        joints[2, i], joints[3, i], joints[4, i] = rows[0][i], rows[1][i], spin[i]
     mass = np.zeros((n, n))
     force = np.zeros(n)
     for k in range(int(p[3])):
