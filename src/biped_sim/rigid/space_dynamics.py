@@ -79,6 +79,11 @@ def speeds(model: SpaceModel, x: np.ndarray) -> np.ndarray:
     return np.append(x[4:8], x[KNEE_RATE]) if model.knee else x[4:8]
 
 
+def free_speeds(model: SpaceModel, knee_free: bool) -> int:
+    """How many of the speeds (:func:`speeds`) are free: all but a locked knee's rate, the last."""
+    return 5 if model.knee and knee_free else 4
+
+
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
     """Every part's motion in state ``x`` (:class:`PartMotion`), over every speed (a locked knee's rate is 0)."""
     where = pose(model, x)
@@ -115,7 +120,7 @@ def flow(model: SpaceModel, x: np.ndarray, knee_free: bool = False) -> np.ndarra
     """dx/dt of the stance phase (:mod:`biped_sim.rigid.space_model`'s state), the swing knee free or locked."""
     motions = part_motions(model, x)
     gravity = model.gravity_vector
-    n = 5 if model.knee and knee_free else 4
+    n = free_speeds(model, knee_free)
     force = np.zeros(motions[0].a_matrix.shape[1])
     for m in motions:
         force += m.a_matrix.T @ (m.mass * (gravity - m.b))
@@ -140,7 +145,8 @@ def knee_strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
     x[KNEE_ANGLE] = 0.0  # located to rounding: the lock holds it exactly
     mass = mass_matrix(part_motions(model, x))
     momentum = mass @ speeds(model, x_minus)
-    x[4:8] = np.linalg.solve(mass[:4, :4], momentum[:4])
+    n = free_speeds(model, knee_free=False)
+    x[4:8] = np.linalg.solve(mass[:n, :n], momentum[:n])
     x[KNEE_RATE] = 0.0
     return x
 
@@ -197,7 +203,8 @@ def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
     for old, new in zip(before, after, strict=True):
         momentum += new.a_matrix.T @ (old.mass * (MIRROR @ old.v))
         momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
-    x_plus[4:8] = np.linalg.solve(mass_matrix(after)[:4, :4], momentum[:4])
+    n = free_speeds(model, knee_free=False)
+    x_plus[4:8] = np.linalg.solve(mass_matrix(after)[:n, :n], momentum[:n])
     return x_plus
 
 
@@ -209,7 +216,7 @@ def hip_push(
     velocities (it is on the hinge axis: the joints' rates do not move it); the ground's impulse is the walker's
     momentum change minus p (its normal part negative: the push would lift the stance foot)."""
     motions = part_motions(model, x)
-    n = 5 if model.knee and knee_free else 4
+    n = free_speeds(model, knee_free)
     a_hip = np.zeros((3, n))
     a_hip[:, :3] = -_skew(pose(model, x).origin)
     du = np.linalg.solve(mass_matrix(motions)[:n, :n], a_hip.T @ impulse)

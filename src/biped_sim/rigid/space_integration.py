@@ -44,7 +44,7 @@ from biped_sim.integrate.tableaus import Tableau, tableau
 from biped_sim.kernel import kernel
 from biped_sim.rigid.integration import MIN_STEP, copy_into, event_root, first_sample
 from biped_sim.rigid.space_kernels import KNEE_FLEXION, bottom, knee_frame, rotations, space_flow
-from biped_sim.rigid.space_model import N_STATE
+from biped_sim.rigid.space_model import KNEE_ANGLE, N_STATE
 from biped_sim.rigid.step import ATOL, RTOL
 
 GUARD, FELL, STALLED, REACHED, STIFF = 0, 1, 2, 3, 4  # how a phase ends (:func:`space_phase`); REACHED: its stop
@@ -96,7 +96,7 @@ def space_guard(p: np.ndarray, phase: int, x: np.ndarray) -> float:
     """The guard of ``phase``: the hinge angle (phase 0), the swing foot's clearance (phase 1), the swing knee's
     flexion (``KNEE_PHASE``)."""
     if phase == KNEE_PHASE:
-        return p[KNEE_FLEXION] * x[10]
+        return p[KNEE_FLEXION] * x[KNEE_ANGLE]
     return x[3] if phase == 0 else space_clearance(p, x)
 
 

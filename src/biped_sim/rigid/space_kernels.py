@@ -19,7 +19,7 @@ from numba import njit
 
 from biped_sim.kernel import kernel
 from biped_sim.multibody.linalg import cholesky_solve
-from biped_sim.rigid.space_model import ELLIPSOID, RING, SPHERE, TORUS, SpaceModel
+from biped_sim.rigid.space_model import ELLIPSOID, KNEE_ANGLE, KNEE_RATE, N_STATE, RING, SPHERE, TORUS, SpaceModel
 
 MAX_PARTS = 5  # two legs of a thigh and a shank each, a hip mass
 PART_SIZE = 14
@@ -171,9 +171,9 @@ def knee_frame(p: np.ndarray, x: np.ndarray, swing: np.ndarray) -> tuple[np.ndar
     """The swing shank's rotation (the swing leg's turned by the knee angle about y) and its frame's shift from
     the hinge's midpoint, R_swing k - R_shank k for the knee's point k (so that the shank turns about the knee);
     the swing leg's and zero without knees."""
-    if x.shape[0] == 10:
+    if x.shape[0] == N_STATE:
         return swing, np.zeros(3)
-    c, s = math.cos(x[10]), math.sin(x[10])
+    c, s = math.cos(x[KNEE_ANGLE]), math.sin(x[KNEE_ANGLE])
     shank = mat_mat(swing, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
     knee = p[KNEE_POINT : KNEE_POINT + 3].copy()
     return shank, mat_vec(swing, knee) - mat_vec(shank, knee)
@@ -239,7 +239,7 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     axis = stance[:, 1].copy()
     p_dot = contact_rate(p, stance, d, x[4:7].copy())
     shank, shift = knee_frame(p, x, swing)
-    knees = x.shape[0] > 10
+    knees = x.shape[0] > N_STATE
     n = 5 if knees else 4
     u = np.empty(n)
     for i in range(4):
@@ -249,7 +249,7 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
         joints[0, i] = -foot[i]
         joints[1, i] = -foot[i]
     if knees:
-        u[4] = x[11]
+        u[4] = x[KNEE_RATE]
         joints[1] += mat_vec(swing, p[KNEE_POINT : KNEE_POINT + 3].copy())
     omega = x[4:7]
     rows = (cross(omega, joints[0]), cross(omega, joints[1]) + x[7] * cross(axis, joints[1] - joints[0]))
@@ -272,6 +272,6 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
         x_dot[4 + i] = force[i]
     x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
     if knees:
-        x_dot[10] = x[11]
-        x_dot[11] = force[4] if free == 5 else 0.0
+        x_dot[KNEE_ANGLE] = x[KNEE_RATE]
+        x_dot[KNEE_RATE] = force[4] if free == 5 else 0.0
     return x_dot
