@@ -88,9 +88,12 @@ def _kneed(d: dict[str, Any]) -> None:
     d["leg"]["feet"][0]["body"] = "shank"
 
 
-def _torso(d: dict[str, Any]) -> None:
-    d["bodies"] = [{"name": "torso", "mass": 1.0, "com": [0.0, 0.3]}]
-    d["joints"] = [{"name": "waist", "parent": "leg_1", "child": "torso"}]
+def _torso_and_head(d: dict[str, Any]) -> None:
+    d["bodies"] = [{"name": "torso", "mass": 1.0, "com": [0.0, 0.3]}, {"name": "head", "mass": 0.5, "com": [0.0, 0.1]}]
+    d["joints"] = [
+        {"name": "waist", "parent": "leg_1", "child": "torso"},
+        {"name": "neck", "parent": "torso", "child": "head", "at": [0.0, 0.5]},
+    ]
 
 
 @pytest.mark.parametrize(
@@ -102,9 +105,9 @@ def _torso(d: dict[str, Any]) -> None:
             "knee with one stop, at the straight knee (angle 0)",
         ),
         (
-            _torso,
-            "walker.description.bodies.torso: the rigid model in space takes two legs on a hip hinge, "
-            "no body off the legs",
+            _torso_and_head,
+            "walker.description.bodies.torso: the rigid model in space takes two legs on a hip hinge, one body off "
+            "the legs: a torso",
         ),
         (lambda d: d["hip"].update(stops=[{"side": "upper", "angle": 1.0}]), "walker.description.hip.stops"),
         (

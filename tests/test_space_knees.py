@@ -104,7 +104,7 @@ def test_a_knee_the_rigid_model_lacks_is_refused_naming_the_field(override: str,
 def test_a_kneed_walker_in_space_starts_its_compliant_run_from_its_bodies_angles() -> None:
     with pytest.raises(ConfigError) as error:
         load_config(KNEED_3D, ["simulation.initial=rigid_limit_cycle"])
-    assert str(error.value).startswith("simulation.initial: a kneed walker in space starts its compliant run")
+    assert str(error.value).startswith("simulation.initial: a kneed walker or a torso in space starts its compliant")
 
 
 @pytest.mark.parametrize("free", [True, False])

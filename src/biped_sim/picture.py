@@ -108,12 +108,14 @@ class SpaceWalkerPicture:
         self.slope, self.sagittal = slope, sagittal
         style = {"alpha": alpha, "linewidth": lw, "solid_capstyle": "round"}
         ax3d.computed_zorder = False  # type: ignore[attr-defined]  # the walker over the ground, always
-        self.lines3d = [ax3d.plot([], [], [], color=f"C{k % 2}", zorder=2, **style)[0] for k in range(4)]
-        self.lines2d = [sagittal.plot([], [], color=f"C{k % 2}", **style)[0] for k in range(4)] if sagittal else []
+        colours = [f"C{k % 2}" for k in range(4)] + ["C2"]  # the legs and feet, then a torso
+        self.lines3d = [ax3d.plot([], [], [], color=c, zorder=2, **style)[0] for c in colours]
+        self.lines2d = [sagittal.plot([], [], color=c, **style)[0] for c in colours] if sagittal else []
 
     def place(self, poses: SpacePoses, i: int) -> None:
-        """Every artist at sample ``i`` of ``poses``: each leg's polyline, then each foot's curves."""
-        shapes = [poses.legs[i, 0], poses.legs[i, 1], poses.feet[i, 0], poses.feet[i, 1]]
+        """Every artist at sample ``i`` of ``poses``: each leg's polyline, then each foot's curves, then a torso's
+        line (NaN, not drawn, without one)."""
+        shapes = [poses.legs[i, 0], poses.legs[i, 1], poses.feet[i, 0], poses.feet[i, 1], poses.torso[i]]
         for k, points in enumerate(shapes):
             world = space_world(self.slope, points)
             self.lines3d[k].set_data_3d(world[:, 0], world[:, 1], world[:, 2])  # type: ignore[attr-defined]
@@ -138,7 +140,7 @@ def draw_space_walker(sagittal: Axes, ax3d: Axes, run: RunData, samples: np.ndar
     poses, slope = space_poses(run), run.config.ground.slope
     for i, alpha in zip(samples, np.linspace(0.3, 1.0, len(samples)), strict=True):
         SpaceWalkerPicture(ax3d, sagittal, slope, float(alpha), 1.2).place(poses, int(i))
-    points = np.concatenate([poses.legs[samples].reshape(-1, 3), poses.feet[samples].reshape(-1, 3)])
+    points = np.concatenate([getattr(poses, name)[samples].reshape(-1, 3) for name in ("legs", "feet", "torso")])
     low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)  # NaN: the break between two curves of a foot
     reach = float(np.max(high - low))
     draw_ground(sagittal, run.config, float(low[0]) - 0.2 * reach, float(high[0]) + 0.2 * reach, 0.1 * reach)

@@ -200,6 +200,8 @@ def space_mjcf(config: Config, timestep: float = TIMESTEP, integrator: str = "RK
     space = config.walker.space  # type: ignore[union-attr]
     if space.leg.knee is not None:
         raise ConfigError("walker.description.legs", "a walker in space is written as MJCF with one-body legs only")
+    if space.torso is not None:
+        raise ConfigError("walker.description.bodies", "a walker in space is written as MJCF without a torso")
     if space.leg.foot.shape == "torus":
         raise ConfigError("walker.description.feet", "a torus foot is not written as MJCF (MuJoCo has no torus)")
     legs = (with_point_mass(leg_geometry(space, 0), space.hip_mass), leg_geometry(space, 1))

@@ -16,7 +16,7 @@ from pydantic import (
 
 from biped_sim.config.base import IN_SPACE, FrictionModelName, NormalModelName, Strict
 from biped_sim.config.description import LEG_KEYS
-from biped_sim.config.space_description import SPACE_STATE_KEYS
+from biped_sim.config.space_description import SPACE_STATE_KEYS, SPACE_TORSO_KEYS
 from biped_sim.config.space_form import in_space as described_in_space
 from biped_sim.config.space_form import space_form
 from biped_sim.config.walker_registry import capabilities, profile_refusal, refusal
@@ -305,10 +305,11 @@ class Config(Strict):
         if described is None:
             return
         if self.in_space:  # the rigid model's form in space (its one-line refusal naming the field)
-            if space_form(described).leg.knee is not None and self.dynamics == "compliant":
+            form = space_form(described)
+            if (form.leg.knee is not None or form.torso is not None) and self.dynamics == "compliant":
                 raise ValueError(
-                    "simulation.initial: a kneed walker in space starts its compliant run from its bodies' angles "
-                    "(the rigid gait's start takes one-body legs)"
+                    "simulation.initial: a kneed walker or a torso in space starts its compliant run from its bodies' "
+                    "angles (the rigid gait's start takes one-body legs and no torso)"
                 )
             return
         in_space = self.dynamics == "compliant" and self.formulation.kind == "spatial"
@@ -370,13 +371,15 @@ class Config(Strict):
         README's four."""
         described = self.walker.description
         if self.in_space:
-            return SPACE_STATE_KEYS
+            return SPACE_STATE_KEYS + self.optional_initial_keys()
         return described.state_keys() if described is not None else LEG_KEYS
 
     def optional_initial_keys(self) -> tuple[str, ...]:
         """The keys of ``simulation.initial`` that may be left out: those of a described walker's bodies off the
         legs (a torso starts upright and at rest without them)."""
         described = self.walker.description
+        if self.in_space:  # a torso's, by the rigid model's names
+            return SPACE_TORSO_KEYS if space_form(described).torso is not None else ()  # type: ignore[arg-type]
         return described.off_leg_keys() if described is not None else ()
 
     def hash(self) -> str:

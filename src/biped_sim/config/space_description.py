@@ -1,6 +1,6 @@
-"""The rigid model's data of a walker in space: two legs, rigid bodies in three dimensions, joined by a lateral hinge
-(built from a described walker of that form by :func:`~biped_sim.config.space_form.space_form`; ``walker.space``
-of a described walker).
+"""The rigid model's data of a walker in space: two legs, rigid bodies in three dimensions, joined by a lateral hinge,
+and perhaps a torso on it (built from a described walker of that form by
+:func:`~biped_sim.config.space_form.space_form`; ``walker.space`` of a described walker).
 
 The leg is written once, as the left leg in its own frame (x forward, y along the hinge axis pointing away from
 the other leg, z from the foot up the leg; origin at its hip point), and the right leg is its mirror image
@@ -22,14 +22,19 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from biped_sim.config.base import Strict
+from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS
 
 Vector3 = tuple[float, float, float]
+ElementLaw = Literal[tuple(JOINT_ELEMENT_LAWS)]  # type: ignore[valid-type]
 # a thin rod's principal moments (0, I, I) meet the triangle inequality with equality: its published tensor, rounded
 # to 4 digits (Coleman et al.'s legs), misses it by a few 1e-4 of the largest moment, which is taken as rounding
 INERTIA_ROUNDING = 1e-3
 # simulation.initial of a walker in space: the rigid gait's post-strike state (the stance leg's attitude and angular
 # velocity in the slope frame, the hinge angle and rate; rigid.space_model's STATE_NAMES)
 SPACE_STATE_KEYS = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate")
+# and a torso's: its angle from the stance leg about y (+ with its top forward) and its rate (optional, 0 if left out)
+SPACE_TORSO_KEYS = ("torso_angle", "torso_rate")
+MAX_TORSO_ELEMENTS = 8  # a torso's elements (each acting against both legs): the compiled model's room for them
 
 
 class InertiaSpec(Strict):
@@ -158,12 +163,36 @@ class SpaceLeg(Strict):
     knee: SpaceKnee | None = Field(None, description="A knee and the shank below it (none: a rigid leg).")
 
 
+class SpaceElement(Strict):
+    """A torso's passive element, acting alike against each leg (:mod:`biped_sim.contact.joint_element`'s law
+    ``law``): its torque from the torso's angle relative to the leg about the lateral axis, in the planar sense
+    (about the walker's right: minus the angle about y)."""
+
+    law: ElementLaw = Field(..., description="The element's law: linear_spring or linear_damper.")
+    stiffness: float = Field(0.0, ge=0, description="A spring's stiffness [N m/rad].")
+    rest_angle: float = Field(0.0, description="A spring's rest angle [rad].")
+    damping: float = Field(0.0, ge=0, description="A damper's coefficient [N m s/rad].")
+
+
+class SpaceTorso(Strict):
+    """A torso: a body hinged to the legs at the hinge's midpoint about the hinge axis, symmetric about the
+    sagittal plane (the mirror after each strike leaves it unchanged), held by elements against both legs alike.
+    Its numbers are in the walker frame with the torso along the stance leg (its angle 0)."""
+
+    mass: float = Field(..., gt=0, description="Mass [kg].")
+    com: tuple[float, float] = Field(..., description="Centre of mass (x, z) from the hinge's midpoint [m].")
+    inertia: InertiaSpec = Field(..., description="Inertia tensor about the centre of mass (xy = yz = 0) [kg m^2].")
+    elements: tuple[SpaceElement, ...] = Field((), description="Elements, each acting against each leg.")
+
+
 class SpaceDescription(Strict):
-    """Two alike legs (the left written, the right its mirror) joined by one hinge along the lateral axis."""
+    """Two alike legs (the left written, the right its mirror) joined by one hinge along the lateral axis, and
+    perhaps a torso on the hinge."""
 
     hip_width: float = Field(0.0, ge=0, description="Distance between the two hip points along the hinge [m].")
     hip_mass: float = Field(0.0, ge=0, description="A point mass at the hinge's midpoint [kg].")
     leg: SpaceLeg = Field(..., description="The left leg (the right leg is its mirror image).")
+    torso: SpaceTorso | None = Field(None, description="A torso on the hinge (none: the legs alone).")
 
     @model_validator(mode="after")
     def _foot_below_hip(self) -> SpaceDescription:

@@ -5,11 +5,13 @@ takes it.
 The rigid model in space (:mod:`biped_sim.rigid.space_model`) takes two legs joined by one hinge about the lateral
 axis z' at their hip points (``hip_width`` apart along it), the second leg the first's mirror image, each one rigid
 body or a thigh and a shank on a knee about z' with one stop at the straight knee, a foot per leg on its lowest
-body (a point, a ring, a sphere, a torus or an ellipsoid), and a mass on the hinge's midpoint. A description of
-that form (its leg written once, ``walker.description.leg``, and ``hip: {lateral: -hip_width}``; a point mass on
-the hip bodies at ``at: [0, 0]``, ``lateral: -hip_width / 2`` is the hip's mass, one elsewhere on a leg's body is
-lumped into that body) is turned into it here; what the model lacks (a torso, stops or springs on the hip, a knee
-stop elsewhere than straight) is refused naming the field.
+body (a point, a ring, a sphere, a torus or an ellipsoid), a mass on the hinge's midpoint, and perhaps a torso: one
+body off the legs hinged about z' at the hinge's midpoint, symmetric about the sagittal plane, its springs and
+dampers paired alike against the two legs. A description of that form (its leg written once,
+``walker.description.leg``, and ``hip: {lateral: -hip_width}``; a point mass on the hip bodies at ``at: [0, 0]``,
+``lateral: -hip_width / 2`` is the hip's mass, one elsewhere on a body is lumped into that body) is turned into it
+here; what the model lacks (a second body off the legs, an unpaired or grounded torso element, stops or springs on
+the hip, a knee stop elsewhere than straight) is refused naming the field.
 
 Frames: a body's frame is x' forward, y' up the leg, z' the walker's right; the rigid model's leg frame is x
 forward, y along the hinge away from the other leg, z up the leg. The first leg (the root) lies on the side away
@@ -28,7 +30,16 @@ import numpy as np
 from pydantic import ValidationError
 
 from biped_sim.config.description import BodySpec, WalkerDescription
-from biped_sim.config.space_description import InertiaSpec, SpaceDescription, SpaceKnee, SpaceLeg, Vector3
+from biped_sim.config.space_description import (
+    MAX_TORSO_ELEMENTS,
+    InertiaSpec,
+    SpaceDescription,
+    SpaceElement,
+    SpaceKnee,
+    SpaceLeg,
+    SpaceTorso,
+    Vector3,
+)
 
 WHERE = "walker.description"
 FORM = "the rigid model in space takes two legs on a hip hinge"
@@ -60,9 +71,6 @@ def space_form(description: WalkerDescription) -> SpaceDescription:
     take."""
     if len(description.legs) != 2 or any(len(leg) not in (1, 2) for leg in description.legs):
         raise FormError(f"{WHERE}.legs", f"{FORM}, each one body or a thigh and a shank on a knee")
-    legs = {name for leg in description.legs for name in leg}
-    if extra := [b.name for b in description.bodies if b.name not in legs]:
-        raise FormError(f"{WHERE}.bodies.{extra[0]}", f"{FORM}, no body off the legs (a torso: dynamics: compliant)")
     hip = next(j for j in description.joints if {j.parent, j.child} == {leg[0] for leg in description.legs})
     first, second = hip.parent, hip.child
     if not hip.lateral_axis:
@@ -84,8 +92,9 @@ def space_form(description: WalkerDescription) -> SpaceDescription:
                    for leg in description.legs)  # fmt: skip
     if left != right:
         raise FormError(f"{WHERE}.legs", f"{FORM}, the second the first's mirror image (write it once: {WHERE}.leg)")
+    torso = _torso(description, {first: midpoint, second: -midpoint})
     try:
-        return SpaceDescription(hip_width=abs(hip.lateral), hip_mass=hip_mass, leg=left)
+        return SpaceDescription(hip_width=abs(hip.lateral), hip_mass=hip_mass, leg=left, torso=torso)
     except ValidationError:
         foot = next(f.name for f in description.feet if f.body == description.legs[0][-1])
         raise FormError(f"{WHERE}.feet.{foot}.centre", "the foot's bottom must be below the hip") from None
@@ -109,6 +118,44 @@ def _leg(description: WalkerDescription, names: list[str], side: float, midpoint
     foot = foot.model_copy(update={"centre": _shifted(foot.centre, at)})
     mass, com, inertia = bodies[0]
     return SpaceLeg(mass=mass, com=com, inertia=inertia, foot=foot, knee=knee)
+
+
+def _torso(description: WalkerDescription, midpoints: dict[str, float]) -> SpaceTorso | None:
+    """The body off the legs, if any, as the model's torso: hinged about z' at the hinge's midpoint (``midpoints``:
+    its lateral offset from each leg's root), symmetric about the sagittal plane, its elements paired alike
+    against the two legs' roots (the step map's mirror needs a symmetric walker)."""
+    legs = {name for leg in description.legs for name in leg}
+    extra = [b.name for b in description.bodies if b.name not in legs]
+    if not extra:
+        return None
+    where = f"{WHERE}.bodies.{extra[0]}"
+    joint = next((j for j in description.joints if j.child == extra[0] and j.parent in midpoints), None)
+    if len(extra) > 1 or joint is None:
+        raise FormError(where, f"{FORM}, one body off the legs: a torso, a child of a leg's hip body")
+    at = f"{WHERE}.joints.{joint.name}"
+    if not joint.lateral_axis:
+        raise FormError(f"{at}.axis", f"{FORM}: a torso about z' (the lateral axis)")
+    if joint.at != (0.0, 0.0) or joint.lateral != midpoints[joint.parent]:
+        raise FormError(f"{at}.at", f"{FORM}: a torso hinged at the hinge's midpoint")
+    if joint.stops:
+        raise FormError(f"{at}.stops", f"{FORM}: a torso's joint with no stops (they are compliant's)")
+    mass, com, inertia = _body(description, extra[0], 1.0, None)
+    if com[1] != 0.0 or inertia.xy != 0.0 or inertia.yz != 0.0:
+        raise FormError(f"{where}.com_lateral", f"{FORM}: a torso symmetric about the sagittal plane")
+    paired: dict[str, list[tuple]] = {name: [] for name in midpoints}
+    for element in joint.elements:
+        against = element.against or joint.parent
+        if against not in paired:
+            raise FormError(f"{at}.elements.{element.name}.against", f"{FORM}: a torso's elements against the legs")
+        values = {k: v for k, v in element.values().items() if v is not None}
+        paired[against].append((element.law, tuple(sorted(values.items()))))
+    first, second = (sorted(group) for group in paired.values())
+    if first != second:
+        raise FormError(f"{at}.elements", f"{FORM}: a torso's elements alike against each leg (a symmetric walker)")
+    if len(first) > MAX_TORSO_ELEMENTS:
+        raise FormError(f"{at}.elements", f"{FORM}: a torso of at most {MAX_TORSO_ELEMENTS} elements against each leg")
+    elements = tuple(SpaceElement(law=law, **dict(values)) for law, values in first)
+    return SpaceTorso(mass=mass, com=(com[0], com[2]), inertia=inertia, elements=elements)
 
 
 def _shifted(point: Vector3, by: Vector3) -> Vector3:

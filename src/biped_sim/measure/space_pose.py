@@ -49,6 +49,7 @@ class SpacePoses:
     legs: np.ndarray  # (ns, 2, 5, 3): hinge midpoint, hip point, centre of mass, hip point, foot end (_walker_points)
     feet: np.ndarray  # (ns, 2, k, 3): the foot's closed curves of CIRCLE_POINTS, a row of NaN between two (k by shape)
     hip: np.ndarray  # (ns, 3): the hinge's midpoint
+    torso: np.ndarray  # (ns, 2, 3): the hinge's midpoint and a torso's centre of mass (NaN without a torso)
 
 
 def rotation_matrices(e: np.ndarray) -> np.ndarray:
@@ -195,10 +196,12 @@ def _poses(
     legs: tuple[LegGeometry, LegGeometry],
     placed: list[Placement],
     shanks: list[Placement] | None = None,
+    torso: np.ndarray | None = None,
 ) -> SpacePoses:
     """The poses of both legs, each ``placed`` at its walker frame's origin (ns, 3) and turned by its rotation
     (ns, 3, 3) in the rigid slope frame, in the spatial formulation's slope frame; the polyline's last point (the
-    foot's end) and the foot placed by ``shanks`` (a kneed leg's shank; default ``placed``)."""
+    foot's end) and the foot placed by ``shanks`` (a kneed leg's shank; default ``placed``); a ``torso``'s line
+    (ns, 2, 3), spatial slope frame, if any."""
     polylines, feet = [], []
     for k, (leg, (origin, rotation), (low_origin, low_rotation)) in enumerate(
         zip(legs, placed, shanks or placed, strict=True)
@@ -209,15 +212,17 @@ def _poses(
         polylines.append(points @ TO_SPATIAL.T)
         feet.append((low_origin[:, None, :] + foot_outline(leg, low_rotation, space.leg_length())) @ TO_SPATIAL.T)
     legs_3d = np.stack(polylines, axis=1)
-    return SpacePoses(time, legs_3d, np.stack(feet, axis=1), legs_3d[:, 0, 0])
+    torso = np.full((len(time), 2, 3), np.nan) if torso is None else torso
+    return SpacePoses(time, legs_3d, np.stack(feet, axis=1), legs_3d[:, 0, 0], torso)
 
 
 def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> SpacePoses:
     """The 3D poses of a rigid run (:mod:`biped_sim.simulate.space_rigid`): its state holds the stance leg's
     attitude, the hinge angle and the stance contact point in the rigid model's slope frame (x downhill, y left,
-    z the normal), a kneed walker's swing knee angle after them; the stance leg is the left until the first strike,
-    then the leg of the last strike (the step table's ``foot``). The hinge's midpoint sits above the contact point
-    by the stance foot's bottom; a swing shank turns about its knee."""
+    z the normal), a kneed walker's swing knee angle after them, a torso's angle from the stance leg; the stance leg
+    is the left until the first strike, then the leg of the last strike (the step table's ``foot``). The hinge's
+    midpoint sits above the contact point by the stance foot's bottom; a swing shank turns about its knee; a torso is
+    drawn from the hinge's midpoint to its centre of mass."""
     space, model = run.config.walker.space, space_walker_model(run.config)  # type: ignore[union-attr]
     stance = np.zeros(len(run.time), dtype=int)
     for at, foot in zip(run.steps["strike_time"], run.steps["foot"], strict=True):
@@ -234,4 +239,11 @@ def rigid_space_poses(run: RunData, legs: tuple[LegGeometry, LegGeometry]) -> Sp
             shank_turns[1 - leg, i] = turns[1 - leg, i] @ rot_y(x[KNEE_ANGLE])
             shank_origins[1 - leg, i] += (turns[1 - leg, i] - shank_turns[1 - leg, i]) @ knee
     placed = [(hinge, turns[0]), (hinge, turns[1])]
-    return _poses(run.time, space, legs, placed, [(shank_origins[k], shank_turns[k]) for k in (0, 1)])
+    torso = None
+    if model.torso is not None:
+        com = model.parts[-1].com  # the torso is the last part, its joint at the hinge's midpoint
+        stance_turns = turns[stance, np.arange(len(run.time))]
+        angles = run.state[:, model.torso_angle]
+        tilted = np.array([turn @ rot_y(a) @ com for turn, a in zip(stance_turns, angles, strict=True)])
+        torso = np.stack([hinge, hinge + tilted], axis=1) @ TO_SPATIAL.T
+    return _poses(run.time, space, legs, placed, [(shank_origins[k], shank_turns[k]) for k in (0, 1)], torso)

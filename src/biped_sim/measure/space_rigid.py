@@ -81,7 +81,8 @@ def space_samples(
     model: SpaceModel, trace: SpaceTrace, start: np.ndarray, times: np.ndarray, states: np.ndarray
 ) -> SpaceSamples:
     """The samples' state, hip and energy terms in the run's frame (module docstring of
-    :mod:`biped_sim.rigid.space_walk`); ``start``: the run's first state, the energy balance's reference."""
+    :mod:`biped_sim.rigid.space_walk`); ``start``: the run's first state, the energy balance's reference (a torso's
+    elements' work integrated in the state: ``TORSO_NAMES``)."""
     sample_step = np.concatenate(trace.sample_step)
     frames = trace.frames
     signs = np.array([frames[k].sign for k in sample_step])
@@ -101,8 +102,9 @@ def space_samples(
     push_work = np.zeros(len(times))
     for at, work, _ in trace.pushes:
         push_work[times >= at] += work  # a sample at a push's time holds the state after it
-    residual = terms.sum(axis=1) - sum(frame_energy(model, frames[0], start)) + dissipated - push_work
-    energy = RigidEnergy(terms[:, 0], terms[:, 1], dissipated, np.zeros(len(times)), push_work, residual)
+    elements = states[:, model.torso_angle + 2] - start[model.torso_angle + 2] if model.torso else np.zeros(len(times))
+    residual = terms.sum(axis=1) - sum(frame_energy(model, frames[0], start)) + dissipated + elements - push_work
+    energy = RigidEnergy(terms[:, 0], terms[:, 1], dissipated, elements, push_work, residual)
     return SpaceSamples(world, hip @ TO_SPATIAL.T, energy)
 
 

@@ -2,7 +2,8 @@
 
 Poincare section: just after a strike, mirrored so that the stance leg is the left leg (a symmetric gait is a
 fixed point: the right leg's step is the left's mirror image). Its coordinates: heading (measured from the
-downhill direction), bank, pitch, the stance leg's angular velocity (slope frame) and the hinge rate. The hinge
+downhill direction), bank, pitch, the stance leg's angular velocity (slope frame) and the hinge rate, and a torso's
+angle and rate. The hinge
 angle is not one: the strike puts the trailing foot on the ground, which fixes it (solved from the others, the
 root near minus twice the pitch; its multiplier would be exactly zero). On a slope the heading is a state like the
 others (gravity's downhill component turns the walker); on level ground the map is the same in every heading, so
@@ -19,7 +20,7 @@ import math
 import numpy as np
 
 from biped_sim.config import Config
-from biped_sim.config.space_description import SpaceDescription
+from biped_sim.config.space_description import SPACE_STATE_KEYS, SPACE_TORSO_KEYS, SpaceDescription
 from biped_sim.rigid.limit_cycle import (
     FD_STEP,
     RIGID_TOLERANCE,
@@ -36,7 +37,7 @@ from biped_sim.rigid.limit_cycle import (
 )
 from biped_sim.rigid.space_integration import space_clearance, space_scratch
 from biped_sim.rigid.space_kernels import space_params
-from biped_sim.rigid.space_model import STATE_NAMES, SpaceModel, space_model
+from biped_sim.rigid.space_model import SpaceModel, space_model
 from biped_sim.rigid.space_step import SINGULAR, SINGULAR_REASON, SpaceStep, space_step
 from biped_sim.rigid.step import RTOL
 
@@ -53,12 +54,13 @@ class SpaceSection:
         self.model = model
         self.params = space_params(model)
         self.heading = model.slope != 0.0
-        self.indices = ((0,) if self.heading else ()) + (1, 2, *RATES)
+        torso = (model.torso_angle, model.torso_angle + 1) if model.torso else ()
+        self.indices = ((0,) if self.heading else ()) + (1, 2, *RATES, *torso)
 
     @property
     def names(self) -> tuple[str, ...]:
         """The coordinates' names."""
-        return tuple(STATE_NAMES[i] for i in self.indices)
+        return tuple(self.model.state_names[i] for i in self.indices)
 
     def to_section(self, x: np.ndarray) -> np.ndarray:
         """A post-strike state's section coordinates."""
@@ -86,6 +88,11 @@ class SpaceSection:
     def _clearance(self, x: np.ndarray, beta: float) -> float:
         x[3] = beta
         return space_clearance(self.params, x)
+
+
+def space_state_keys(model: SpaceModel) -> tuple[str, ...]:
+    """The keys of the walker's post-strike state (``simulation.initial``'s): the legs', a torso's."""
+    return SPACE_STATE_KEYS + (SPACE_TORSO_KEYS if model.torso else ())
 
 
 def space_walker_model(config: Config) -> SpaceModel:
@@ -119,13 +126,15 @@ class SpaceMap:
 
 def scan(model: SpaceModel, section: SpaceSection) -> list[tuple[str, np.ndarray]]:
     """Sagittal post-strike starts (pitch back by the scan's angles, forward pitch rates in sqrt(g / l)); the
-    lateral coordinates start at zero."""
+    lateral coordinates start at zero, a torso upright and at rest (as the planar scan's)."""
     scale = math.sqrt(model.gravity / model.leg_length)
     starts = []
     for k in SCAN_RATES:
         for angle in SCAN_ANGLES:
             x = np.zeros(model.n_state)
             x[2], x[5], x[7] = -0.5 * angle, k * scale, SWING_RATE_RATIO * k * scale
+            if model.torso:  # its pitch and its rate about y zero: its angle and rate from the stance leg's opposite
+                x[model.torso_angle], x[model.torso_angle + 1] = -x[2], -x[5]
             starts.append((f"scan pitch {-0.5 * angle:g}, omega_y {k * scale:.4g}", section.to_section(x)))
     return starts
 
@@ -267,7 +276,7 @@ def _cycle(
     if not section.heading:
         multipliers = np.append(multipliers, 1.0)
     x_plus = section.from_section(z)
-    names = STATE_NAMES[:8]
+    names, state = space_state_keys(step_map.model), step_map.model.state_names
     return LimitCycle(
         dynamics="rigid",
         walker=walker,
@@ -277,8 +286,8 @@ def _cycle(
         residual=residual,
         section_names=section.names,
         section_point=z,
-        fixed_point={name: float(v) for name, v in zip(names, x_plus, strict=False)},
-        touchdown={name: float(v) for name, v in zip(names, step.x_minus, strict=False)},
+        fixed_point={name: float(x_plus[state.index(name)]) for name in names},
+        touchdown={name: float(step.x_minus[state.index(name)]) for name in names},
         step_period=step.period,
         step_length=step.length,
         jacobian=jac,
@@ -290,6 +299,7 @@ def _cycle(
             + ", ".join(section.names),
             "the hinge angle is fixed by the trailing foot on the ground (not a coordinate)"
             + ("; the swing knee starts straight and at rest (not a coordinate)" if step_map.model.knee else "")
+            + ("; the torso's angle is from the stance leg about the hinge axis" if step_map.model.torso else "")
             + ("" if section.heading else "; level ground: heading left out, its multiplier 1 appended"),
             f"step map: compiled DOP853, rtol {RTOL:g}",
             f"multipliers: central differences, relative step {FD_STEP:g}",

@@ -1,23 +1,25 @@
 """The rigid walker in space: Kane's equations of the stance phase and the plastic heel strike.
 
-Generalized speeds u = (omega, beta'): the stance leg's angular velocity (slope frame) and the hinge rate (with
-knees, then the swing knee's rate kappa': its axis is the hinge's, through the knee point; while the knee is
-locked, its rate is 0 and its column left out of the equations). The
-stance foot's material point at contact has zero velocity (pinned point foot; a sphere or ring rolling without
-slip: a nonholonomic constraint, the contact point moving over the ground and over the foot), so every point's
-velocity is linear in u: v = A u, and every part's angular velocity w = B u. With the accelerations
-a = A u' + b and w' = B u' + e (b and e from the motion of the contact point and of the hinge axis), Kane's
-equations are sum A^T m (a - g) + B^T (I w' + w x I w) = 0, i.e. M u' = F with M = sum m A^T A + B^T I B: the
-contact force does no work through the partial velocities, so it never appears. The attitude follows from
-omega = E (psi', phi', theta') (:func:`~biped_sim.rigid.space_model.rate_matrix`) and the contact point from
-the geometric contact point's velocity.
+Generalized speeds u = (omega, beta'): the stance leg's angular velocity (slope frame) and the hinge rate (with a
+torso, then its rate about the hinge axis through the hinge's midpoint; with knees, then the swing knee's rate
+kappa': its axis is the hinge's, through the knee point; while the knee is locked, its rate is 0 and its column
+left out of the equations). A torso's springs and dampers add their couples' generalized forces
+(:func:`~biped_sim.rigid.space_kernels.torso_elements`). The stance foot's material point at contact has zero
+velocity (pinned point foot; a sphere or ring rolling without slip: a nonholonomic constraint, the contact point
+moving over the ground and over the foot), so every point's velocity is linear in u: v = A u, and every part's
+angular velocity w = B u. With the accelerations a = A u' + b and w' = B u' + e (b and e from the motion of the
+contact point and of the hinge axis), Kane's equations are sum A^T m (a - g) + B^T (I w' + w x I w) = 0, i.e.
+M u' = F with M = sum m A^T A + B^T I B: the contact force does no work through the partial velocities, so it never
+appears. The attitude follows from omega = E (psi', phi', theta')
+(:func:`~biped_sim.rigid.space_model.rate_matrix`) and the contact point from the geometric contact point's
+velocity.
 
 The strike is plastic: the landing foot sticks (and then rolls), the trailing foot leaves. The impulse at the
 new contact and the hinge's have no moment about the new contact point (whole walker) nor about the hinge axis
-(trailing leg), and with the new configuration's partial velocities A', B' these balances are
-M' u+ = sum A'^T m v- + B'^T I w-. The walker is then mirrored (y -> -y) so that the new stance leg is the
-left leg again. The knee strike is the same balance in one configuration: the locked walker's speeds keep their
-generalized momentum, (M u+)_i = (M u-)_i for the four speeds that stay (:func:`knee_strike`).
+(trailing leg; a torso's joint none about it either), and with the new configuration's partial velocities A', B'
+these balances are M' u+ = sum A'^T m v- + B'^T I w-. The walker is then mirrored (y -> -y) so that the new stance
+leg is the left leg again. The knee strike is the same balance in one configuration: the locked walker's speeds keep
+their generalized momentum, (M u+)_i = (M u-)_i for the speeds that stay (:func:`knee_strike`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from biped_sim.rigid.space_kernels import space_params, torso_elements, torso_elements_energy
 from biped_sim.rigid.space_model import (
     ELLIPSOID,
     EZ,
@@ -75,13 +78,36 @@ def contact_point_velocity(model: SpaceModel, where: Pose, omega: np.ndarray) ->
 
 
 def speeds(model: SpaceModel, x: np.ndarray) -> np.ndarray:
-    """The generalized speeds u: the stance leg's angular velocity, the hinge rate (and the swing knee's rate)."""
-    return np.append(x[4:8], x[KNEE_RATE]) if model.knee else x[4:8]
+    """The generalized speeds u: the stance leg's angular velocity, the hinge rate, the torso's rate, the swing
+    knee's rate (those the walker has)."""
+    torso = [x[model.torso_angle + 1]] if model.torso else []
+    return np.concatenate((x[4:8], torso, [x[KNEE_RATE]] if model.knee else []))
 
 
 def free_speeds(model: SpaceModel, knee_free: bool) -> int:
     """How many of the speeds (:func:`speeds`) are free: all but a locked knee's rate, the last."""
-    return 5 if model.knee and knee_free else 4
+    return len(speeds(model, np.zeros(model.n_state))) - (1 if model.knee and not knee_free else 0)
+
+
+def set_speeds(model: SpaceModel, x: np.ndarray, u: np.ndarray) -> None:
+    """Write the free speeds ``u`` (the leading ones of :func:`speeds`) into state ``x``, in place."""
+    x[4:8] = u[:4]
+    if model.torso:
+        x[model.torso_angle + 1] = u[4]
+    if model.knee and len(u) == free_speeds(model, knee_free=True):
+        x[KNEE_RATE] = u[-1]
+
+
+def _joints(model: SpaceModel, where: Pose, x: np.ndarray) -> list[list[tuple[np.ndarray, np.ndarray, int]]]:
+    """Per frame, the joints that turn its parts (all about the hinge axis): each one's point, that point's velocity
+    and its speed's index in :func:`speeds` (the hinge's 3, the torso's 4, the knee's the last)."""
+    omega, n = x[4:7], len(speeds(model, x))
+    hinge = (where.origin, cross(omega, where.origin), 3)
+    paths = [[], [hinge], [hinge], [(where.origin, cross(omega, where.origin), 4)]]
+    if model.knee:
+        at = where.point(1, model.knee.point)
+        paths[2] = [hinge, (at, cross(omega, at) + x[7] * cross(where.hinge, at - where.origin), n - 1)]
+    return paths
 
 
 def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
@@ -89,20 +115,19 @@ def part_motions(model: SpaceModel, x: np.ndarray) -> list[PartMotion]:
     where = pose(model, x)
     omega, axis, u = x[4:7], where.hinge, speeds(model, x)
     p_dot = contact_point_velocity(model, where, omega)
-    spin = cross(omega, axis)  # both joints' axes turn with the stance leg
-    joints = [(where.origin, 3)] + ([(where.point(1, model.knee.point), 4)] if model.knee else [])
+    spin = cross(omega, axis)  # every joint's axis turns with the stance leg
+    paths = _joints(model, where, x)
     motions = []
     for part in model.parts:
         r = where.point(part.frame, part.com)
         a_matrix, b_matrix = np.zeros((3, len(u))), np.zeros((3, len(u)))
         a_matrix[:, :3], b_matrix[:, :3] = -_skew(r), np.eye(3)
-        path = joints[: part.frame]  # the hinge turns the swing leg, the knee its shank too
-        for at, k in path:
+        path = paths[part.frame]  # the hinge turns the swing leg, the knee its shank too; the torso its own joint
+        for at, _, k in path:
             a_matrix[:, k], b_matrix[:, k] = cross(axis, r - at), axis
         v, w = a_matrix @ u, b_matrix @ u
         b, e = cross(omega, v - p_dot), np.zeros(3)
-        for at, k in path:  # d/dt of rate_k axis x (r - at), the joint's point moving with the parts above it
-            v_at = cross(omega, at) + (u[3] * cross(axis, at - where.origin) if k == 4 else 0.0)
+        for at, v_at, k in path:  # d/dt of rate_k axis x (r - at), the joint's point moving with the parts above it
             b += u[k] * (cross(spin, r - at) + cross(axis, v - v_at))
             e += u[k] * spin
         turn = where.rotations[part.frame]
@@ -126,27 +151,31 @@ def flow(model: SpaceModel, x: np.ndarray, knee_free: bool = False) -> np.ndarra
         force += m.a_matrix.T @ (m.mass * (gravity - m.b))
         force -= m.b_matrix.T @ (m.inertia @ m.e + cross(m.w, m.inertia @ m.w))
     x_dot = np.zeros(model.n_state)
+    if model.torso:  # its elements' couples (the compiled law, the one source of each law)
+        on_torso, on_hinge, power = torso_elements(space_params(model), x)
+        force[4] += on_torso
+        force[3] += on_hinge
+        at = model.torso_angle
+        x_dot[at], x_dot[at + 2] = x[at + 1], power
     x_dot[:3] = np.linalg.solve(rate_matrix(x[0], x[1]), x[4:7])
     x_dot[3] = x[7]
-    accelerations = np.linalg.solve(mass_matrix(motions)[:n, :n], force[:n])
-    x_dot[4:8] = accelerations[:4]
     x_dot[8:10] = contact_point_velocity(model, pose(model, x), x[4:7])[:2]
     if model.knee:
         x_dot[KNEE_ANGLE] = x[KNEE_RATE]
-        x_dot[KNEE_RATE] = accelerations[4] if knee_free else 0.0
+    set_speeds(model, x_dot, np.linalg.solve(mass_matrix(motions)[:n, :n], force[:n]))  # the speeds' rates
     return x_dot
 
 
 def knee_strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
     """The state just after the swing knee's plastic strike: locked straight, the impulse at the knee and at the
-    stance contact keeping the generalized momentum of the locked system's speeds (``(M u-)`` of its first four,
+    stance contact keeping the generalized momentum of the locked system's speeds (``(M u-)`` of all but the knee's,
     the configuration unchanged: Kane's impulsive balance, as :func:`strike`)."""
     x = np.array(x_minus, dtype=float)
     x[KNEE_ANGLE] = 0.0  # located to rounding: the lock holds it exactly
     mass = mass_matrix(part_motions(model, x))
     momentum = mass @ speeds(model, x_minus)
     n = free_speeds(model, knee_free=False)
-    x[4:8] = np.linalg.solve(mass[:n, :n], momentum[:n])
+    set_speeds(model, x, np.linalg.solve(mass[:n, :n], momentum[:n]))
     x[KNEE_RATE] = 0.0
     return x
 
@@ -157,12 +186,14 @@ def ground_point(x: np.ndarray) -> np.ndarray:
 
 
 def energy_terms(model: SpaceModel, x: np.ndarray) -> tuple[float, float]:
-    """(kinetic, potential) energy (potential zero at the slope frame's origin)."""
+    """(kinetic, potential) energy (potential zero at the slope frame's origin; with a torso, its springs' energy
+    too)."""
     base = ground_point(x)
     gravity = model.gravity_vector
     motions = part_motions(model, x)
     kinetic = sum(0.5 * m.mass * m.v @ m.v + 0.5 * m.w @ m.inertia @ m.w for m in motions)
-    return float(kinetic), float(sum(-m.mass * gravity @ (base + m.r) for m in motions))
+    springs = torso_elements_energy(space_params(model), x) if model.torso else 0.0
+    return float(kinetic), float(sum(-m.mass * gravity @ (base + m.r) for m in motions) + springs)
 
 
 def energy(model: SpaceModel, x: np.ndarray) -> float:
@@ -182,13 +213,18 @@ def swing_foot_point(model: SpaceModel, x: np.ndarray) -> np.ndarray:
 
 
 def landed(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
-    """The configuration after the strike, mirrored: the landing leg is the stance leg, velocities zero."""
+    """The configuration after the strike, mirrored: the landing leg is the stance leg, velocities zero (a torso
+    keeps its attitude: its angle from the new stance leg is the old less the hinge angle; the elements' work
+    carries on)."""
     where = pose(model, x_minus)
     psi, phi, theta = attitude_angles(MIRROR @ where.rotations[1] @ MIRROR)
     contact = MIRROR @ (ground_point(x_minus) + swing_foot_point(model, x_minus))
     x = np.zeros(model.n_state)
     x[:4] = psi, phi, theta, -x_minus[3]
     x[8:10] = contact[:2]
+    if model.torso:
+        at = model.torso_angle
+        x[at], x[at + 2] = x_minus[at] - x_minus[3], x_minus[at + 2]
     return x
 
 
@@ -204,7 +240,7 @@ def strike(model: SpaceModel, x_minus: np.ndarray) -> np.ndarray:
         momentum += new.a_matrix.T @ (old.mass * (MIRROR @ old.v))
         momentum += new.b_matrix.T @ (new.inertia @ (-MIRROR @ old.w))
     n = free_speeds(model, knee_free=False)
-    x_plus[4:8] = np.linalg.solve(mass_matrix(after)[:n, :n], momentum[:n])
+    set_speeds(model, x_plus, np.linalg.solve(mass_matrix(after)[:n, :n], momentum[:n]))
     return x_plus
 
 
@@ -221,8 +257,6 @@ def hip_push(
     a_hip[:, :3] = -_skew(pose(model, x).origin)
     du = np.linalg.solve(mass_matrix(motions)[:n, :n], a_hip.T @ impulse)
     after = np.array(x, dtype=float)
-    after[4:8] += du[:4]
-    if n == 5:
-        after[KNEE_RATE] += du[4]
+    set_speeds(model, after, speeds(model, x)[:n] + du)
     momentum = sum(m.mass * m.a_matrix[:, :n] @ du for m in motions)
     return after, float(momentum[2] - impulse[2])

@@ -4,10 +4,13 @@ hinge rate) over a flat parameter vector, for the integrator's many calls. The p
 :func:`~biped_sim.rigid.space_dynamics.flow` is their reference (tests compare them to rounding).
 
 Parameter vector (:func:`space_params`): gravity (3, slope frame), the number of parts, then per part its frame
-(0 stance leg, 1 swing leg, 2 swing shank), mass, centre of mass (3) and inertia (9, row-major; the walker frame,
-hinge at zero), then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3), tube radius and
-an ellipsoid's quadric (9, row-major), then the swing knee's: whether it is free (1.0; the step map sets it), its
-flexion's sign and its point (3). A state of 12 (with knees) has the knee's angle and rate last.
+(0 stance leg, 1 swing leg, 2 swing shank, 3 torso), mass, centre of mass (3) and inertia (9, row-major; the walker
+frame, hinge at zero), then per foot (stance, swing) its shape code, radius, centre (3), unit normal (3), tube radius
+and an ellipsoid's quadric (9, row-major), then the swing knee's: whether the walker has knees (1.0), whether the
+swing knee is free (1.0; the step map sets it), its flexion's sign and its point (3); then the torso's: its angle's
+index in the state (0: no torso), its elements' count and per element its law's number and parameter vector
+(:func:`~biped_sim.contact.joint_element.element_parameters`). The speeds are the stance leg's angular velocity, the
+hinge rate, the torso's rate and the swing knee's (the last, so that a locked knee leaves the leading block).
 """
 
 from __future__ import annotations
@@ -17,18 +20,23 @@ import math
 import numpy as np
 from numba import njit
 
+from biped_sim.config.space_description import MAX_TORSO_ELEMENTS
+from biped_sim.contact.joint_element import N_ELEMENT_PARAMS, element_energy, element_torque
 from biped_sim.kernel import kernel
 from biped_sim.multibody.linalg import cholesky_solve
-from biped_sim.rigid.space_model import ELLIPSOID, KNEE_ANGLE, KNEE_RATE, N_STATE, RING, SPHERE, TORUS, SpaceModel
+from biped_sim.rigid.space_model import ELLIPSOID, KNEE_ANGLE, KNEE_RATE, RING, SPHERE, TORSO_FRAME, TORUS, SpaceModel
 
-MAX_PARTS = 5  # two legs of a thigh and a shank each, a hip mass
+MAX_PARTS = 6  # two legs of a thigh and a shank each, a hip mass, a torso
 PART_SIZE = 14
 FOOT_SIZE = 18
+ELEMENT_SIZE = 1 + N_ELEMENT_PARAMS
 PARTS = 4
 FEET = PARTS + MAX_PARTS * PART_SIZE
 KNEE = FEET + 2 * FOOT_SIZE
-KNEE_FREE, KNEE_FLEXION, KNEE_POINT = KNEE, KNEE + 1, KNEE + 2
-N_PARAMS = KNEE + 5
+HAS_KNEES, KNEE_FREE, KNEE_FLEXION, KNEE_POINT = KNEE, KNEE + 1, KNEE + 2, KNEE + 3
+TORSO = KNEE + 6
+TORSO_AT, N_ELEMENTS, ELEMENTS = TORSO, TORSO + 1, TORSO + 2
+N_PARAMS = ELEMENTS + MAX_TORSO_ELEMENTS * ELEMENT_SIZE
 
 
 def space_params(model: SpaceModel) -> np.ndarray:
@@ -43,8 +51,13 @@ def space_params(model: SpaceModel) -> np.ndarray:
         o = FEET + k * FOOT_SIZE
         p[o : o + FOOT_SIZE] = [foot.shape, foot.radius, *foot.centre, *foot.normal, foot.tube, *foot.quadric.ravel()]
     if model.knee:
-        p[KNEE_FLEXION] = model.knee.flexion
+        p[HAS_KNEES], p[KNEE_FLEXION] = 1.0, model.knee.flexion
         p[KNEE_POINT : KNEE_POINT + 3] = model.knee.point
+    if model.torso:
+        p[TORSO_AT], p[N_ELEMENTS] = model.torso_angle, len(model.torso.laws)
+        for k, (law, values) in enumerate(zip(model.torso.laws, model.torso.params, strict=True)):
+            o = ELEMENTS + k * ELEMENT_SIZE
+            p[o], p[o + 1 : o + ELEMENT_SIZE] = law, values
     return p
 
 
@@ -171,12 +184,42 @@ def knee_frame(p: np.ndarray, x: np.ndarray, swing: np.ndarray) -> tuple[np.ndar
     """The swing shank's rotation (the swing leg's turned by the knee angle about y) and its frame's shift from
     the hinge's midpoint, R_swing k - R_shank k for the knee's point k (so that the shank turns about the knee);
     the swing leg's and zero without knees."""
-    if x.shape[0] == N_STATE:
+    if p[HAS_KNEES] != 1.0:
         return swing, np.zeros(3)
     c, s = math.cos(x[KNEE_ANGLE]), math.sin(x[KNEE_ANGLE])
     shank = mat_mat(swing, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
     knee = p[KNEE_POINT : KNEE_POINT + 3].copy()
     return shank, mat_vec(swing, knee) - mat_vec(shank, knee)
+
+
+@kernel
+def torso_elements(p: np.ndarray, x: np.ndarray) -> tuple[float, float, float]:
+    """(generalized force on the torso's rate, on the hinge rate, the power dissipated) of the torso's elements,
+    each acting against both legs: its law at the torso's angle relative to each leg in the planar sense (minus
+    the angle about y: t from the stance leg, t - beta from the swing leg), the torque tau on the torso and -tau on
+    the leg; a couple's power tau theta' makes it -tau on the torso's rate and +tau on the hinge rate against the
+    swing leg."""
+    at = int(p[TORSO_AT])
+    on_torso, on_hinge, power = 0.0, 0.0, 0.0
+    for k in range(int(p[N_ELEMENTS])):
+        o = ELEMENTS + k * ELEMENT_SIZE
+        law, values = int(p[o]), p[o + 1 : o + ELEMENT_SIZE]
+        tau, dissipated = element_torque(law, -x[at], -x[at + 1], values)
+        on_torso, power = on_torso - tau, power + dissipated
+        tau, dissipated = element_torque(law, x[3] - x[at], x[7] - x[at + 1], values)
+        on_torso, on_hinge, power = on_torso - tau, on_hinge + tau, power + dissipated
+    return on_torso, on_hinge, power
+
+
+@kernel
+def torso_elements_energy(p: np.ndarray, x: np.ndarray) -> float:
+    """The energy the torso's elements store (their springs')."""
+    at, stored = int(p[TORSO_AT]), 0.0
+    for k in range(int(p[N_ELEMENTS])):
+        o = ELEMENTS + k * ELEMENT_SIZE
+        law, values = int(p[o]), p[o + 1 : o + ELEMENT_SIZE]
+        stored += element_energy(law, -x[at], values) + element_energy(law, x[3] - x[at], values)
+    return stored
 
 
 @kernel
@@ -186,9 +229,11 @@ def _add_part(
 ) -> None:  # fmt: skip
     """The part at parameter offset ``o`` (turned by ``turn``, its frame's origin ``at``) added to Kane's M
     (m A^T A + B^T I B) and F (A^T m (g - b) - B^T (I e + w x I w)), in place, over the speeds ``u``. ``joints``
-    rows: the hinge's midpoint and the knee's point, then their velocities, then omega x axis (both axes turn with
-    the stance leg); the part's frame (p[o]: 0, 1, 2) says how many of the joints turn it (both about ``axis``)."""
-    omega, m, n, frame = u[:3], p[o + 1], u.shape[0], int(p[o])
+    rows: the hinge's midpoint, the knee's point and the torso's joint (the midpoint), then their velocities, then
+    omega x axis (every axis turns with the stance leg); the part's frame (p[o]) says which joints turn it (all
+    about ``axis``): the swing leg the hinge, its shank the knee too, the torso its own joint (:func:`_path`)."""
+    omega, m, n = u[:3], p[o + 1], u.shape[0]
+    first, last = _path(int(p[o]))
     r = at + mat_vec(turn, p[o + 2 : o + 5])
     inertia = mat_mat(mat_mat(turn, np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3))), turn.T)
     a_matrix = np.zeros((3, n))
@@ -197,29 +242,30 @@ def _add_part(
         a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
         a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
         b_matrix[i, i] = 1.0
-    for j in range(frame):  # the hinge turns the swing leg, the knee its shank too: axis x (r - joint_j)
+    for j in range(first, last):  # axis x (r - joint_j) on joint j's speed
         dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
-        a_matrix[0, 3 + j] = axis[1] * dz - axis[2] * dy
-        a_matrix[1, 3 + j] = axis[2] * dx - axis[0] * dz
-        a_matrix[2, 3 + j] = axis[0] * dy - axis[1] * dx
+        k = _slot(j, n)
+        a_matrix[0, k] = axis[1] * dz - axis[2] * dy
+        a_matrix[1, k] = axis[2] * dx - axis[0] * dz
+        a_matrix[2, k] = axis[0] * dy - axis[1] * dx
         for i in range(3):
-            b_matrix[i, 3 + j] = axis[i]
+            b_matrix[i, k] = axis[i]
     v, w = np.zeros(3), np.zeros(3)
     for i in range(3):
         for j in range(n):
             v[i] += a_matrix[i, j] * u[j]
             w[i] += b_matrix[i, j] * u[j]
-    b, turning = cross(omega, v - p_dot), 0.0
-    for j in range(frame):  # d/dt of rate_j axis x (r - joint_j): spin x (r - joint_j) + axis x (v - v_joint_j)
-        rate, spin = u[3 + j], joints[4]
+    b, turning, spin = cross(omega, v - p_dot), 0.0, joints[6]
+    for j in range(first, last):  # d/dt of rate_j axis x (r - joint_j): spin x (r - joint_j) + axis x (v - v_joint_j)
+        rate = u[_slot(j, n)]
         dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
-        vx, vy, vz = v[0] - joints[2 + j, 0], v[1] - joints[2 + j, 1], v[2] - joints[2 + j, 2]
+        vx, vy, vz = v[0] - joints[3 + j, 0], v[1] - joints[3 + j, 1], v[2] - joints[3 + j, 2]
         b[0] += rate * (spin[1] * dz - spin[2] * dy + axis[1] * vz - axis[2] * vy)
         b[1] += rate * (spin[2] * dx - spin[0] * dz + axis[2] * vx - axis[0] * vz)
         b[2] += rate * (spin[0] * dy - spin[1] * dx + axis[0] * vy - axis[1] * vx)
         turning += rate
     linear = m * (p[:3] - b)
-    torque = turning * mat_vec(inertia, joints[4]) + cross(w, mat_vec(inertia, w))  # e = (sum of rates) spin
+    torque = turning * mat_vec(inertia, spin) + cross(w, mat_vec(inertia, w))  # e = (sum of rates) spin
     inertia_b = mat_mat(inertia, b_matrix)
     for i in range(n):
         for j in range(n):
@@ -229,40 +275,63 @@ def _add_part(
             force[i] += a_matrix[k, i] * linear[k] - b_matrix[k, i] * torque[k]
 
 
+@njit(cache=True, inline="always")
+def _path(frame: int) -> tuple[int, int]:
+    """The joints (rows of :func:`_add_part`'s ``joints``, first and past-last) that turn a part of ``frame``."""
+    return (2, 3) if frame == TORSO_FRAME else (0, frame)
+
+
+@njit(cache=True, inline="always")
+def _slot(joint: int, n: int) -> int:
+    """The speed of joint ``joint`` (0 hinge, 1 knee, 2 torso) among ``n``: the hinge's 3, the torso's 4, the knee's
+    the last."""
+    return 3 if joint == 0 else (n - 1 if joint == 1 else 4)
+
+
 @kernel
 def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     """dx/dt of the stance phase: Kane's M u' = F (a Cholesky solve over the free speeds: M is symmetric positive
-    definite) and the attitude's and contact point's rates; a state of 12 has the swing knee, free while
-    p[KNEE_FREE] is 1."""
+    definite) and the attitude's and contact point's rates; with knees, the swing knee free while p[KNEE_FREE] is
+    1; with a torso, its elements' forces and their dissipated power (the work's rate)."""
     stance, swing = rotations(x)
     foot, d = bottom(p, 0, stance)
     axis = stance[:, 1].copy()
     p_dot = contact_rate(p, stance, d, x[4:7].copy())
     shank, shift = knee_frame(p, x, swing)
-    knees = x.shape[0] > N_STATE
-    n = 5 if knees else 4
+    knees, at = p[HAS_KNEES] == 1.0, int(p[TORSO_AT])
+    n = 4 + (1 if at else 0) + (1 if knees else 0)
     u = np.empty(n)
     for i in range(4):
         u[i] = x[4 + i]
-    joints = np.empty((5, 3))  # _add_part's: the joints' points, their velocities, omega x axis
+    joints = np.empty((7, 3))  # _add_part's: the joints' points, their velocities, omega x axis
     for i in range(3):
-        joints[0, i] = -foot[i]
-        joints[1, i] = -foot[i]
+        joints[0, i], joints[1, i], joints[2, i] = -foot[i], -foot[i], -foot[i]
     if knees:
-        u[4] = x[KNEE_RATE]
+        u[n - 1] = x[KNEE_RATE]
         joints[1] += mat_vec(swing, p[KNEE_POINT : KNEE_POINT + 3].copy())
+    torso = stance
+    if at:
+        u[4] = x[at + 1]
+        c, s = math.cos(x[at]), math.sin(x[at])
+        torso = mat_mat(stance, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
     omega = x[4:7]
     rows = (cross(omega, joints[0]), cross(omega, joints[1]) + x[7] * cross(axis, joints[1] - joints[0]))
     spin = cross(omega, axis)
     for i in range(3):  # not slice assignments: their shape check's message compiles numba's string functions
-        joints[2, i], joints[3, i], joints[4, i] = rows[0][i], rows[1][i], spin[i]
+        joints[3, i], joints[4, i], joints[5, i], joints[6, i] = rows[0][i], rows[1][i], rows[0][i], spin[i]
     mass = np.zeros((n, n))
     force = np.zeros(n)
     for k in range(int(p[3])):
         o = PARTS + k * PART_SIZE
-        turn = stance if p[o] == 0.0 else (swing if p[o] == 1.0 else shank)
-        _add_part(p, o, u, turn, joints[0] + shift if p[o] == 2.0 else joints[0], axis, joints, p_dot, mass, force)
-    free = 5 if knees and p[KNEE_FREE] == 1.0 else 4
+        frame = int(p[o])
+        turn = stance if frame == 0 else (swing if frame == 1 else (shank if frame == 2 else torso))
+        _add_part(p, o, u, turn, joints[0] + shift if frame == 2 else joints[0], axis, joints, p_dot, mass, force)
+    power = 0.0
+    if at:
+        on_torso, on_hinge, power = torso_elements(p, x)
+        force[4] += on_torso
+        force[3] += on_hinge
+    free = n - 1 if knees and p[KNEE_FREE] != 1.0 else n
     cholesky_solve(mass, force, free)
     rates = attitude_rates(x)
     x_dot = np.zeros(x.shape[0])
@@ -273,5 +342,7 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     x_dot[8], x_dot[9] = p_dot[0], p_dot[1]
     if knees:
         x_dot[KNEE_ANGLE] = x[KNEE_RATE]
-        x_dot[KNEE_RATE] = force[4] if free == 5 else 0.0
+        x_dot[KNEE_RATE] = force[n - 1] if free == n else 0.0
+    if at:
+        x_dot[at], x_dot[at + 1], x_dot[at + 2] = x[at + 1], force[4], power
     return x_dot

@@ -11,7 +11,10 @@ locked but for the step's first phase, from the strike that unlocks it to the kn
 State ``x`` (the slope frame: x downhill, y left, z along the slope normal): heading psi, bank phi, pitch theta of
 the stance leg, R = Rz(psi) Rx(phi) Ry(theta) (pitch positive with the leg's top downhill), the hinge angle
 beta, the stance leg's angular velocity (slope frame), the hinge rate, and the stance contact point (x, y) on
-the ground: ``STATE_NAMES``; with knees, then the swing knee's angle and rate (``KNEE_NAMES``).
+the ground: ``STATE_NAMES``; with knees, then the swing knee's angle and rate (``KNEE_NAMES``); with a torso, then
+its angle from the stance leg about y (+ with its top forward), its rate and the work its elements dissipated
+(``TORSO_NAMES``: the dampers' work, integrated with the flow for the energy balance). A torso (frame 3) turns
+about the hinge axis through the hinge's midpoint, on no leg's path.
 """
 
 from __future__ import annotations
@@ -21,13 +24,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from biped_sim.config.space_description import SpaceDescription
+from biped_sim.config.space_description import SpaceDescription, SpaceTorso
+from biped_sim.contact.joint_element import JOINT_ELEMENT_LAWS, element_parameters
 from biped_sim.walkers.space_geometry import EZ, MIRROR, attitude, cross, rot_x, rot_y, rot_z
 
 STATE_NAMES = ("heading", "bank", "pitch", "swing_angle", "omega_x", "omega_y", "omega_z", "swing_rate", "x", "y")
 N_STATE = len(STATE_NAMES)
 KNEE_NAMES = ("swing_knee", "swing_knee_rate")
 KNEE_ANGLE, KNEE_RATE = N_STATE, N_STATE + 1
+TORSO_NAMES = ("torso_angle", "torso_rate", "element_work")
+TORSO_FRAME = 3
 POINT, SPHERE, RING, TORUS, ELLIPSOID = 0, 1, 2, 3, 4
 SHAPES = {"point": POINT, "sphere": SPHERE, "ring": RING, "torus": TORUS, "ellipsoid": ELLIPSOID}
 
@@ -48,8 +54,9 @@ def rate_matrix(psi: float, phi: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Part:
-    """A rigid part: on the stance leg (frame 0), the swing leg (frame 1; with a knee its thigh) or the swing shank
-    (frame 2); mass, centre of mass and inertia about it, in the walker frame with the hinge and knee at zero."""
+    """A rigid part: on the stance leg (frame 0), the swing leg (frame 1; with a knee its thigh), the swing shank
+    (frame 2) or the torso (frame 3); mass, centre of mass and inertia about it, in the walker frame with the hinge,
+    knee and torso at zero."""
 
     frame: int
     mass: float
@@ -81,6 +88,15 @@ class Knee:
 
 
 @dataclass(frozen=True)
+class Torso:
+    """The torso's elements: each one's law (its number in the joint-element registry) and parameter vector
+    (:func:`~biped_sim.contact.joint_element.element_parameters`), acting alike against each leg."""
+
+    laws: tuple[int, ...]
+    params: tuple[np.ndarray, ...]
+
+
+@dataclass(frozen=True)
 class SpaceModel:
     """The walker in its frame: parts (the stance leg's, the swing leg's, a hip mass), the two feet, gravity and
     slope, and the swing knee if the legs have knees."""
@@ -91,6 +107,7 @@ class SpaceModel:
     slope: float
     leg_length: float
     knee: Knee | None = None
+    torso: Torso | None = None
 
     @property
     def gravity_vector(self) -> np.ndarray:
@@ -100,16 +117,21 @@ class SpaceModel:
     @property
     def n_state(self) -> int:
         """The state's length: ``STATE_NAMES``, and ``KNEE_NAMES`` with knees."""
-        return N_STATE + (2 if self.knee else 0)
+        return len(self.state_names)
 
     @property
     def state_names(self) -> tuple[str, ...]:
         """The state's names."""
-        return STATE_NAMES + (KNEE_NAMES if self.knee else ())
+        return STATE_NAMES + (KNEE_NAMES if self.knee else ()) + (TORSO_NAMES if self.torso else ())
+
+    @property
+    def torso_angle(self) -> int:
+        """The torso angle's index in the state (its rate and the elements' work follow)."""
+        return N_STATE + (2 if self.knee else 0)
 
     @property
     def swapped(self) -> list[int]:
-        """The parts' order after a strike: each leg's parts take the other's places (the hip's stay)."""
+        """The parts' order after a strike: each leg's parts take the other's places (the hip's and torso's stay)."""
         per_leg = 2 if self.knee else 1
         legs = list(range(2 * per_leg))
         return legs[per_leg:] + legs[:per_leg] + list(range(2 * per_leg, len(self.parts)))
@@ -143,11 +165,24 @@ def space_model(space: SpaceDescription, gravity: float, slope: float) -> SpaceM
     stance, stance_foot = _leg(space, 0)
     swing, swing_foot = _leg(space, 1)
     hip = [Part(0, space.hip_mass, np.zeros(3), np.zeros((3, 3)))] if space.hip_mass else []
-    knee = space.leg.knee
+    knee, torso = space.leg.knee, space.torso
     at = MIRROR @ (np.array([0.0, 0.5 * space.hip_width, 0.0]) + np.array(knee.at)) if knee else None
+    body = []
+    if torso:
+        body = [Part(TORSO_FRAME, torso.mass, np.array([torso.com[0], 0.0, torso.com[1]]), torso.inertia.matrix())]
     return SpaceModel(
-        tuple(stance + swing + hip), (stance_foot, swing_foot), gravity, slope, space.leg_length(),
-        Knee(at, float(knee.flexion)) if knee else None,
+        tuple(stance + swing + hip + body), (stance_foot, swing_foot), gravity, slope,
+        space.leg_length(), Knee(at, float(knee.flexion)) if knee else None, _torso(torso) if torso else None,
+    )  # fmt: skip
+
+
+def _torso(torso: SpaceTorso) -> Torso:
+    """The torso's elements as the model's (their laws' numbers and parameter vectors)."""
+    elements = torso.elements
+    return Torso(
+        tuple(JOINT_ELEMENT_LAWS[e.law].index for e in elements),
+        tuple(element_parameters(e.law, **{name: getattr(e, name) for name in JOINT_ELEMENT_LAWS[e.law].reads})
+              for e in elements),
     )  # fmt: skip
 
 
@@ -195,11 +230,11 @@ def bottom_direction_rate(foot: Foot, rotation: np.ndarray, omega: np.ndarray) -
 @dataclass(frozen=True)
 class Pose:
     """Where the walker is, from its stance contact point (slope frame): the frames' rotations (stance leg, swing
-    leg, swing shank) and origins (where their walker-frame points are measured from: the hinge's midpoint, a
+    leg, swing shank, torso) and origins (where their walker-frame points are measured from: the hinge's midpoint, a
     shank's shifted so that it turns about the knee), the hinge axis, and the stance foot's d (:func:`foot_bottom`)."""
 
-    rotations: tuple[np.ndarray, np.ndarray, np.ndarray]
-    origins: tuple[np.ndarray, np.ndarray, np.ndarray]
+    rotations: tuple[np.ndarray, ...]
+    origins: tuple[np.ndarray, ...]
     hinge: np.ndarray
     stance_d: np.ndarray
 
@@ -214,16 +249,17 @@ class Pose:
 
 
 def pose(model: SpaceModel, x: np.ndarray) -> Pose:
-    """The walker's pose in state ``x``."""
+    """The walker's pose in state ``x`` (a frame the walker lacks: the stance leg's)."""
     stance = attitude(x[0], x[1], x[2])
     swing = stance @ rot_y(x[3])
     bottom, d = foot_bottom(model.feet[0], stance)
     origin = -bottom
-    if model.knee is None:
-        return Pose((stance, swing, swing), (origin, origin, origin), stance[:, 1], d)
-    shank = swing @ rot_y(x[KNEE_ANGLE])
-    knee = model.knee.point
-    return Pose((stance, swing, shank), (origin, origin, origin + swing @ knee - shank @ knee), stance[:, 1], d)
+    shank, shank_origin = swing, origin
+    if model.knee is not None:
+        shank = swing @ rot_y(x[KNEE_ANGLE])
+        shank_origin = origin + swing @ model.knee.point - shank @ model.knee.point
+    torso = stance @ rot_y(x[model.torso_angle]) if model.torso else stance
+    return Pose((stance, swing, shank, torso), (origin, origin, shank_origin, origin), stance[:, 1], d)
 
 
 def swing_clearance(model: SpaceModel, x: np.ndarray) -> float:

@@ -40,8 +40,8 @@ from biped_sim.rigid.space_kernels import KNEE_FREE
 from biped_sim.rigid.space_model import MIRROR, SpaceModel
 from biped_sim.rigid.space_step import SpaceStep, after_phase, begin_step, step_time_limit, struck
 
-MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0, 1.0, 1.0])  # a state's signs under
-# the mirror (the knee's angle and rate last, a kneed walker's)
+MIRRORED = np.array([-1.0, -1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0])  # a state's
+# signs under the mirror (then a kneed walker's knee angle and rate, a torso's angle, rate and work: about y, kept)
 
 
 @dataclass(frozen=True)

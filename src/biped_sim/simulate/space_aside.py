@@ -36,7 +36,15 @@ from biped_sim.rigid.space_integration import (
     space_fall,
     space_scratch,
 )
-from biped_sim.rigid.space_kernels import N_PARAMS, _add_part, contact_rate, knee_frame, rotations, space_flow
+from biped_sim.rigid.space_kernels import (
+    N_PARAMS,
+    _add_part,
+    contact_rate,
+    knee_frame,
+    rotations,
+    space_flow,
+    torso_elements,
+)
 from biped_sim.rigid.space_model import N_STATE
 
 Callee = tuple[Dispatcher, tuple[object, ...]]
@@ -57,14 +65,16 @@ def first_callee() -> Callee:
 
 
 def flow_share() -> tuple[Callee, ...]:
-    """The second process's share: a leg's terms of Kane's equations, the contact point's rate, the flow (the stance
+    """The second process's share: a leg's terms of Kane's equations, the contact point's rate, a torso's elements,
+    the flow (the stance
     foot's lowest point loaded from the run's process by then), a step's attempt and the dense output's extra stages,
     with their arguments' types."""
     p, x, (tab, sc, _) = _stand_ins()
     turn, v = np.zeros((3, 3)), np.zeros(3)
     return (
-        (_add_part, (p, 0, np.zeros(4), turn, v, v, np.zeros((5, 3)), v, np.zeros((4, 4)), np.zeros(4))),
+        (_add_part, (p, 0, np.zeros(4), turn, v, v, np.zeros((7, 3)), v, np.zeros((4, 4)), np.zeros(4))),
         (contact_rate, (p, turn, v, v)),
+        (torso_elements, (p, x)),
         (space_flow, (p, x)),
         (_attempt, (p, tab, sc, 0.0, x)),
         (_prepare_dense, (p, tab, sc, 0.0, x)),

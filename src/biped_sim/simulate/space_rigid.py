@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from biped_sim.config import Config
+from biped_sim.config.space_description import SPACE_TORSO_KEYS
 from biped_sim.errors import ConfigError
 from biped_sim.integrate.driver import TIMEOUT_REASON
 from biped_sim.io.atomic import json_safe
@@ -40,7 +41,7 @@ from biped_sim.rigid.kernels import FALL_HIP_FRACTION
 from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.rigid.space_integration import FALL_BANK, MAX_ATTEMPTS, space_scratch
 from biped_sim.rigid.space_kernels import space_params
-from biped_sim.rigid.space_model import KNEE_NAMES, N_STATE, STATE_NAMES, SpaceModel, pose
+from biped_sim.rigid.space_model import KNEE_NAMES, N_STATE, TORSO_NAMES, SpaceModel, pose
 from biped_sim.rigid.space_step import SINGULAR, SINGULAR_REASON, SpaceStep, step_time_limit
 from biped_sim.rigid.space_walk import Frame, walk_step
 from biped_sim.rigid.step import MAX_STEP_TIME, RTOL
@@ -79,15 +80,16 @@ def check_space_run_size(config: Config) -> None:
     """The run's samples within the memory budget (ConfigError naming the field otherwise): the state, the state in
     the run's frame, the hip and the energy terms per sample. Before its start is sought (the limit cycle's search
     compiles the step map on a cold cache), so that a run too large fails at once."""
-    check_run_size(config, 2 * (N_STATE + len(KNEE_NAMES)) + 8)
+    check_run_size(config, 2 * (N_STATE + len(KNEE_NAMES) + len(TORSO_NAMES)) + 8)
 
 
 def space_start(config: Config) -> SpaceStart:
     """The model of ``config`` and its start (ConfigError naming simulation.initial when there is none)."""
-    keys = check_initial(space_initial(config))
     model = space_walker_model(config)
-    state = np.zeros(model.n_state)  # a swing knee starts straight and at rest
-    state[:8] = [keys[name] for name in STATE_NAMES[:8]]
+    keys = check_initial(space_initial(config), SPACE_TORSO_KEYS if model.torso else ())
+    state = np.zeros(model.n_state)  # a swing knee starts straight and at rest, a torso's keys left out: 0
+    for name, value in keys.items():
+        state[model.state_names.index(name)] = value
     return SpaceStart(model, state)
 
 

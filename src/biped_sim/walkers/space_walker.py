@@ -84,10 +84,14 @@ def start_state(
     return q, qd
 
 
-def check_initial(initial: object) -> dict[str, float]:
-    """The initial state as the rigid gait's keys (ConfigError naming simulation.initial otherwise)."""
-    if not isinstance(initial, dict) or set(initial) != set(SPACE_STATE_KEYS):
-        raise ConfigError("simulation.initial", f"a walker in space starts from the keys {', '.join(SPACE_STATE_KEYS)}")
+def check_initial(initial: object, optional: tuple[str, ...] = ()) -> dict[str, float]:
+    """The initial state as the rigid gait's keys and perhaps ``optional`` ones (a torso's; ConfigError naming
+    simulation.initial otherwise)."""
+    if not isinstance(initial, dict) or not set(SPACE_STATE_KEYS) <= set(initial) <= {*SPACE_STATE_KEYS, *optional}:
+        also = f" (optional: {', '.join(optional)})" if optional else ""
+        raise ConfigError(
+            "simulation.initial", f"a walker in space starts from the keys {', '.join(SPACE_STATE_KEYS)}{also}"
+        )
     return {k: float(v) for k, v in initial.items()}
 
 
