@@ -15,6 +15,10 @@ between the feet at the touchdown that ends the disturbed step, so that the land
 a push (``simulation.pushes``, along the slope) acts at mid-stance (t_d + t_d+1) / 2; rough ground
 (``random`` profile, heights every ``RANDOM_SPACING`` leg lengths) begins at that x.
 
+A walker in space (``Config.in_space``) is pushed across the slope too ('lateral': right and left, on the hinge's
+midpoint), in its own dynamics (its other takes settings of its own: :func:`robustness_configs`); its rigid model
+walks flat ground only, so its rigid study has pushes alone (no steps, rough ground or GSN).
+
 Largest disturbance survived: the size is doubled from a first guess until the walker falls, then bisected to
 ``STEP_TOLERANCE`` leg lengths (steps) or ``PUSH_TOLERANCE`` relative (pushes). The result is the largest size
 seen to survive; a walker that survives some larger sizes too (survival need not be monotonic) is not searched
@@ -43,9 +47,11 @@ from biped_sim.errors import ArgumentError, ConfigError, quote
 from biped_sim.io.tables import Column, Table
 from biped_sim.rigid.build import rigid_walker
 from biped_sim.rigid.limit_cycle import rigid_limit_cycle
+from biped_sim.rigid.space_cycle import space_limit_cycle, space_walker_model
 from biped_sim.simulate import RunResult, simulate
 from biped_sim.simulate.budget import check_run_count
 from biped_sim.simulate.rigid import RigidRunResult
+from biped_sim.simulate.space_rigid import SpaceRunResult
 
 SURVIVAL_STEPS = 10
 SETTLE_STEPS = 10
@@ -90,30 +96,53 @@ class Trial:
 
 
 def _with(
-    config: Config, *, steps: int, ground: dict[str, Any] | None = None, push: float | None = None, t: float = 0.0
+    config: Config,
+    *,
+    steps: int,
+    ground: dict[str, Any] | None = None,
+    push: tuple[float, float] | None = None,
+    t: float = 0.0,
 ) -> Config:
-    """The config of a run of ``steps`` heel strikes, with a ground profile and a push along the slope at t."""
+    """The config of a run of ``steps`` heel strikes, with a ground profile and a push at t (along the slope,
+    lateral: to the right, a walker in space's)."""
     values: dict[str, Any] = {"simulation.max_steps": steps}
     if ground is not None:
         values["ground.profile"] = ground
     if push is not None:
-        values["simulation.pushes"] = [{"time": t, "impulse": [push, 0.0]}]
+        impulse = [push[0], 0.0, push[1]] if config.in_space else [push[0], 0.0]
+        values["simulation.pushes"] = [{"time": t, "impulse": impulse}]
     return derive(config, values)
 
 
 def robustness_configs(config: Config, dynamics: str = "both") -> list[Config]:
-    """``config`` under each dynamics asked for: 'rigid', 'compliant', or 'both' (those the walker has);
-    ArgumentError naming ``dynamics`` for another name, or a single dynamics the walker has no model for."""
+    """``config`` under each dynamics asked for: 'rigid', 'compliant', or 'both' (those the walker has; a walker
+    in space's own: its other dynamics takes settings of its own, its compliant runs many times the rigid one's
+    cost); ArgumentError naming ``dynamics`` for another name, or a single dynamics the walker has no model for."""
     if dynamics not in (*DYNAMICS, "both"):
         raise ArgumentError("dynamics", f"unknown dynamics {quote(dynamics)}; expected rigid, compliant or both")
+    if dynamics == "both" and config.in_space:
+        return [config]
     configs = []
     for kind in DYNAMICS if dynamics == "both" else (dynamics,):
         try:
-            configs.append(derive(config, {"dynamics": kind}))
+            configs.append(_under(config, kind))
         except ConfigError:
             if dynamics != "both":
                 raise ArgumentError("dynamics", f"the {config.walker.kind} walker has no {kind} model") from None
     return configs
+
+
+def _under(config: Config, dynamics: str) -> Config:
+    """``config`` in ``dynamics``: a walker in space's other dynamics with its formulation (compliant: spatial;
+    rigid: the planar default, without spin friction), not a walker in space then (ConfigError)."""
+    values: dict[str, Any] = {"dynamics": dynamics}
+    if config.in_space and dynamics != config.dynamics:
+        space = {"formulation.kind": "spatial"} if dynamics == "compliant" else {"formulation.kind": "planar"}
+        values |= space | ({"friction.spin_radius": 0.0} if dynamics == "rigid" else {})
+    derived = derive(config, values)
+    if config.in_space and not derived.in_space:
+        raise ConfigError("dynamics", f"the walker in space has no {dynamics} model from this config's start")
+    return derived
 
 
 def _strike_times(result: RunResult) -> np.ndarray:
@@ -123,20 +152,31 @@ def _strike_times(result: RunResult) -> np.ndarray:
 
 def _hip_x(result: RunResult, t: float) -> float:
     """The hip's x along the slope at time t (interpolated between samples)."""
-    times = result.time if isinstance(result, RigidRunResult) else result.run.t  # type: ignore[attr-defined]
+    rigid = isinstance(result, RigidRunResult | SpaceRunResult)
+    times = result.time if rigid else result.run.t  # type: ignore[attr-defined]
     return float(np.interp(t, times, result.hip[:, 0]))  # type: ignore[attr-defined]
 
 
-def _total_mass(config: Config) -> float:
-    """The planar walker's mass, the unit of the pushes (1 for the nondimensional walker and per kg of hub)."""
-    return rigid_walker(config).reference_mass
+def _scales(config: Config) -> tuple[float, float, float]:
+    """(leg length, gravity, mass) of the walker's rigid model, either dynamics: the units of the disturbances
+    (the simplest walker's are 1; the mass per kg of hub for the rimless wheel's)."""
+    if config.in_space:
+        model = space_walker_model(config)
+        return model.leg_length, model.gravity, sum(part.mass for part in model.parts)
+    walker = rigid_walker(config)
+    return walker.leg_length, walker.gravity, walker.reference_mass
+
+
+def flat_only(config: Config) -> bool:
+    """Whether the walker walks flat ground only (a walker in space in rigid dynamics): no steps, rough ground or
+    GSN then."""
+    return config.in_space and config.dynamics == "rigid"
 
 
 def gait_start(config: Config) -> Gait:
     """Start the walker of ``config`` on its gait (rigid limit cycle, or settled) and run the reference."""
     require_study(config.walker.kind, "robustness", "robustness pushes a planar walker and steps its ground")
-    model = rigid_walker(config)  # its leg and gravity (the simplest walker's are 1), either dynamics
-    leg, gravity = model.leg_length, model.gravity
+    leg, gravity, mass = _scales(config)
     time_scale = math.sqrt(leg / gravity)
     undisturbed: dict[str, Any] = {
         "ground.profile": {"kind": "flat"}, "simulation.pushes": [], "simulation.max_steps": None,
@@ -145,7 +185,8 @@ def gait_start(config: Config) -> Gait:
     }  # fmt: skip
     d = 1 if config.dynamics == "rigid" else SETTLE_STEPS
     if config.dynamics == "rigid" or config.simulation.initial == "rigid_limit_cycle":  # resolved once for all runs
-        undisturbed["simulation.initial"] = rigid_limit_cycle(config).fixed_point
+        search = space_limit_cycle if config.in_space else rigid_limit_cycle
+        undisturbed["simulation.initial"] = search(config).fixed_point
     base = derive(config, undisturbed)
     reference = simulate(_with(base, steps=d + GSN_STEPS + 2))
     strikes = _strike_times(reference)
@@ -163,22 +204,23 @@ def gait_start(config: Config) -> Gait:
         length=reference.steps.length[d - 1 : d + GSN_STEPS],
         leg_length=leg,
         time_scale=time_scale,
-        push_scale=_total_mass(config) * math.sqrt(gravity * leg),
+        push_scale=mass * math.sqrt(gravity * leg),
     )
 
 
 def trial(gait: Gait, kind: str, size: float, seed: int = 0, steps: int = SURVIVAL_STEPS) -> Trial:
     """Run the gait disturbed once: ``kind`` 'step' (height [leg lengths], < 0 down), 'push' (impulse along the
-    slope [m_total sqrt(g l)], > 0 forward) or 'random' (roughness [leg lengths], ``seed``); then ``steps``
-    heel strikes after the disturbed step."""
+    slope [m_total sqrt(g l)], > 0 forward), 'lateral' (a walker in space's push across the slope, > 0 to the
+    right) or 'random' (roughness [leg lengths], ``seed``); then ``steps`` heel strikes after the disturbed step."""
     d, l = gait.disturbed_step, gait.leg_length
     strikes = d + 1 + steps
     if kind == "step":
         ground = {"kind": "steps", "steps": [{"at": gait.riser_x, "height": size * l}]}
         config = _with(gait.config, steps=strikes, ground=ground)
-    elif kind == "push":
-        t_push = 0.5 * (gait.step_start + gait.step_end)
-        config = _with(gait.config, steps=strikes, push=size * gait.push_scale, t=t_push)
+    elif kind in ("push", "lateral"):
+        t_push, impulse = 0.5 * (gait.step_start + gait.step_end), size * gait.push_scale
+        push = (impulse, 0.0) if kind == "push" else (0.0, impulse)
+        config = _with(gait.config, steps=strikes, push=push, t=t_push)
     else:
         length = 3.0 * (steps + 2) * float(np.max(gait.length))
         ground = {
@@ -228,12 +270,14 @@ def gait_sensitivity(gait: Gait, e: float) -> float:
 
 @dataclass
 class Robustness:
-    """What one dynamics of a walker survives (sizes in leg lengths and m_total sqrt(g l), as in :func:`trial`)."""
+    """What one dynamics of a walker survives (sizes in leg lengths and m_total sqrt(g l), as in :func:`trial`);
+    None, nan or empty: not run (a walker on flat ground only has no steps, rough ground or GSN; a planar walker no
+    lateral pushes)."""
 
     dynamics: str
     walker: str
-    step_down: tuple[float, float | None]  # (largest survived, smallest failed or None: survived MAX_STEP)
-    step_up: tuple[float, float | None]
+    step_down: tuple[float, float | None] | None  # (largest survived, smallest failed or None: survived MAX_STEP)
+    step_up: tuple[float, float | None] | None
     push_forward: tuple[float, float | None]
     push_backward: tuple[float, float | None]
     rough_survival: dict[float, float]  # roughness -> fraction of the seeds survived
@@ -241,6 +285,8 @@ class Robustness:
     leg_length: float
     push_scale: float  # m_total sqrt(g l) in N s (nondimensional for the simplest walker)
     notes: list[str] = field(default_factory=list)
+    push_right: tuple[float, float | None] | None = None  # a walker in space's, across the slope
+    push_left: tuple[float, float | None] | None = None
 
     def to_json(self) -> dict[str, Any]:
         doc = asdict(self)
@@ -252,14 +298,13 @@ def largest_disturbance(
     gait: Gait, kind: str, sign: float, step_tolerance: float = STEP_TOLERANCE
 ) -> tuple[float, float | None]:
     """The largest step (``kind`` 'step', sign -1 down, +1 up; to ``step_tolerance`` leg lengths) or push
-    ('push', +1 forward, -1 backward) survived, with the smallest seen to fail (:func:`largest_survived`)."""
+    ('push', +1 forward, -1 backward; 'lateral', +1 right, -1 left) survived, with the smallest seen to fail
+    (:func:`largest_survived`)."""
     if kind == "step":
         return largest_survived(
             lambda h: trial(gait, "step", sign * h).survived, FIRST_STEP, MAX_STEP, step_tolerance, False
         )
-    return largest_survived(
-        lambda p: trial(gait, "push", sign * p).survived, FIRST_PUSH, MAX_PUSH, PUSH_TOLERANCE, True
-    )
+    return largest_survived(lambda p: trial(gait, kind, sign * p).survived, FIRST_PUSH, MAX_PUSH, PUSH_TOLERANCE, True)
 
 
 def _task(gait: Gait, task: tuple[str, float, int]) -> Any:
@@ -283,44 +328,61 @@ def robustness(
     if seeds < 1:
         raise ArgumentError("seeds", "must be at least 1")
     check_run_count(len(roughness) * seeds, "seeds", "rough-ground runs (roughness levels times seeds)")
-    gait = gait_start(config)
-    tasks = [
-        ("step", -1.0, 0),
-        ("step", 1.0, 0),
-        ("push", 1.0, 0),
-        ("push", -1.0, 0),
-        ("gsn", GSN_STEP[config.dynamics], 0),
-    ]
-    tasks += [("random", level, seed) for level in roughness for seed in range(seeds)]
+    gait, flat = gait_start(config), flat_only(config)
+    searches = [("push", 1.0), ("push", -1.0)] + ([] if flat else [("step", -1.0), ("step", 1.0)])
+    searches += [("lateral", 1.0), ("lateral", -1.0)] if config.in_space else []
+    tasks = [(kind, sign, 0) for kind, sign in searches]
+    if not flat:
+        tasks += [("gsn", GSN_STEP[config.dynamics], 0)]
+        tasks += [("random", level, seed) for level in roughness for seed in range(seeds)]
     if executor is None:
         results = [_task(gait, task) for task in tasks]
     else:
         results = list(executor.map(_task, [gait] * len(tasks), tasks))
-    survived = results[5:]
-    rough = {level: float(np.mean(survived[i * seeds : (i + 1) * seeds])) for i, level in enumerate(roughness)}
-    start = "the rigid limit cycle" if config.dynamics == "rigid" else f"the config's start after {SETTLE_STEPS} steps"
+    found = dict(zip(searches, results, strict=False))
+    survived = results[len(searches) + 1 :]
+    levels = () if flat else roughness
+    rough = {level: float(np.mean(survived[i * seeds : (i + 1) * seeds])) for i, level in enumerate(levels)}
     return Robustness(
         dynamics=config.dynamics,
         walker=config.walker.kind,
-        step_down=results[0],
-        step_up=results[1],
-        push_forward=results[2],
-        push_backward=results[3],
+        step_down=found.get(("step", -1.0)),
+        step_up=found.get(("step", 1.0)),
+        push_forward=found[("push", 1.0)],
+        push_backward=found[("push", -1.0)],
         rough_survival=rough,
-        gsn=results[4],
+        gsn=math.nan if flat else results[len(searches)],
         leg_length=gait.leg_length,
         push_scale=gait.push_scale,
-        notes=[
-            f"started on {start}; disturbed once, one step ahead; survived = {SURVIVAL_STEPS} more heel strikes",
-            f"steps to {STEP_TOLERANCE:g} leg lengths (riser halfway between the feet at the disturbed step's end), "
-            f"pushes on the hip along the slope at mid-stance to {PUSH_TOLERANCE:.0%}; none tried beyond "
-            f"{MAX_STEP:g} leg lengths or {MAX_PUSH:g} m_total sqrt(g l)",
-            f"rough h [l]: the fraction of {seeds} seeds of random ground of roughness h survived (heights every "
-            f"{RANDOM_SPACING:g} leg lengths from the riser's x on)",
-            f"GSN: step down of {GSN_STEP[config.dynamics]:g} leg lengths, (period / sqrt(l/g), length / l) over "
-            f"{GSN_STEPS + 1} steps, per leg length (Hobbelen and Wisse 2007)",
-        ],
+        push_right=found.get(("lateral", 1.0)),
+        push_left=found.get(("lateral", -1.0)),
+        notes=_notes(config, seeds),
     )
+
+
+def _notes(config: Config, seeds: int) -> list[str]:
+    """What the study ran and how (:class:`Robustness`'s notes)."""
+    rigid = config.dynamics == "rigid"
+    start = "the rigid limit cycle" if rigid else f"the config's start after {SETTLE_STEPS} steps"
+    notes = [
+        f"started on {start}; disturbed once, one step ahead; survived = {SURVIVAL_STEPS} more heel strikes",
+        f"pushes on the hip along the slope at mid-stance to {PUSH_TOLERANCE:.0%}; none tried beyond "
+        f"{MAX_PUSH:g} m_total sqrt(g l)",
+    ]
+    if config.in_space:  # the left leg stands on even steps
+        leg = "right" if (1 if rigid else SETTLE_STEPS) % 2 else "left"
+        notes.append(f"push right, left: across the slope on the hinge's midpoint, the {leg} leg standing")
+    if flat_only(config):
+        return [*notes, "rigid in space: flat ground only (no steps, rough ground or GSN)"]
+    return [
+        *notes,
+        f"steps to {STEP_TOLERANCE:g} leg lengths (riser halfway between the feet at the disturbed step's end), "
+        f"none tried beyond {MAX_STEP:g} leg lengths",
+        f"rough h [l]: the fraction of {seeds} seeds of random ground of roughness h survived (heights every "
+        f"{RANDOM_SPACING:g} leg lengths from the riser's x on)",
+        f"GSN: step down of {GSN_STEP[config.dynamics]:g} leg lengths, (period / sqrt(l/g), length / l) over "
+        f"{GSN_STEPS + 1} steps, per leg length (Hobbelen and Wisse 2007)",
+    ]
 
 
 ROBUSTNESS_COLUMNS = [
@@ -332,16 +394,26 @@ ROBUSTNESS_COLUMNS = [
     Column("push_backward", "push backward", "m sqrt(g l)", ".3f"),
     Column("gsn", "GSN", "1/l", ".3g"),
 ]
+LATERAL_COLUMNS = [
+    Column("push_right", "push right", "m sqrt(g l)", ".3f"),
+    Column("push_left", "push left", "m sqrt(g l)", ".3f"),
+]
+SEARCHES = ("step_down", "step_up", "push_forward", "push_backward", "push_right", "push_left")
 
 
 def robustness_table(results: list[Robustness]) -> Table:
-    """The robustness table (largest disturbances survived, rough-ground survival, GSN) of some walkers."""
+    """The robustness table (largest disturbances survived, rough-ground survival, GSN) of some walkers; a walker
+    in space's lateral pushes; blank: not run."""
     levels = sorted({level for r in results for level in r.rough_survival})
-    columns = ROBUSTNESS_COLUMNS + [Column(f"rough_{level:g}", f"rough {level:g}", "l", ".2f") for level in levels]
+    lateral = LATERAL_COLUMNS if any(r.push_right is not None for r in results) else []
+    columns = ROBUSTNESS_COLUMNS[:6] + lateral + ROBUSTNESS_COLUMNS[6:]
+    columns += [Column(f"rough_{level:g}", f"rough {level:g}", "l", ".2f") for level in levels]
     rows = []
     for r in results:
         row: dict[str, Any] = {"walker": r.walker, "dynamics": r.dynamics, "gsn": r.gsn}
-        for key in ("step_down", "step_up", "push_forward", "push_backward"):
+        for key in SEARCHES:
+            if getattr(r, key) is None:
+                continue
             good, bad = getattr(r, key)
             row[key] = good if bad is not None else f">= {good:g}"  # survived the largest size tried
         row.update({f"rough_{level:g}": fraction for level, fraction in r.rough_survival.items()})
