@@ -260,3 +260,22 @@ def test_a_torso_is_drawn_from_the_hinge_to_its_centre_of_mass(model: SpaceModel
     where = pose(model, x)
     expected = [where.origin, where.point(TORSO_FRAME, model.parts[-1].com)]
     np.testing.assert_allclose(poses.torso[0], np.array(expected) @ TO_SPATIAL.T, atol=1e-12)
+
+
+def test_a_push_on_the_hip_with_the_knee_free_and_bent_keeps_the_momenta_its_joints_leave(kneed: SpaceModel) -> None:
+    """An impulse p on the hinge's midpoint, the swing knee free and bent: the walker's angular momentum about the
+    contact point changes by r_hip x p (the ground's impulse acts there), the swing shank's about the knee axis and
+    the torso's about the hinge axis are kept (their joints take no impulse about their axes), to rounding."""
+    rng = np.random.default_rng(2026120514)
+    for x in random_states(kneed, 5, seed=2026120515):
+        impulse = rng.uniform(-0.5, 0.5, 3)
+        after, _ = dyn.hip_push(kneed, x, impulse, knee_free=True)
+        where = pose(kneed, x)
+        change = dyn.angular_momentum(dyn.part_motions(kneed, after), np.zeros(3))
+        change -= dyn.angular_momentum(dyn.part_motions(kneed, x), np.zeros(3))
+        np.testing.assert_allclose(change, np.cross(where.origin, impulse), atol=1e-12)
+        knee = where.point(1, kneed.knee.point)
+        for parts, about in (([3], knee), ([5], where.origin)):  # the swing shank, the torso
+            momenta = [dyn.angular_momentum([dyn.part_motions(kneed, y)[k] for k in parts], about) for y in (x, after)]
+            assert where.hinge @ momenta[1] == pytest.approx(where.hinge @ momenta[0], abs=1e-12)
+        assert after[KNEE_RATE] != x[KNEE_RATE]  # the free knee takes part of the push
