@@ -86,7 +86,7 @@ def speeds(model: SpaceModel, x: np.ndarray) -> np.ndarray:
 
 def free_speeds(model: SpaceModel, knee_free: bool) -> int:
     """How many of the speeds (:func:`speeds`) are free: all but a locked knee's rate, the last."""
-    return len(speeds(model, np.zeros(model.n_state))) - (1 if model.knee and not knee_free else 0)
+    return 4 + (1 if model.torso else 0) + (1 if model.knee and knee_free else 0)
 
 
 def set_speeds(model: SpaceModel, x: np.ndarray, u: np.ndarray) -> None:
@@ -101,12 +101,12 @@ def set_speeds(model: SpaceModel, x: np.ndarray, u: np.ndarray) -> None:
 def _joints(model: SpaceModel, where: Pose, x: np.ndarray) -> list[list[tuple[np.ndarray, np.ndarray, int]]]:
     """Per frame, the joints that turn its parts (all about the hinge axis): each one's point, that point's velocity
     and its speed's index in :func:`speeds` (the hinge's 3, the torso's 4, the knee's the last)."""
-    omega, n = x[4:7], len(speeds(model, x))
-    hinge = (where.origin, cross(omega, where.origin), 3)
-    paths = [[], [hinge], [hinge], [(where.origin, cross(omega, where.origin), 4)]]
+    omega, n, midpoint = x[4:7], len(speeds(model, x)), where.origin
+    hinge = (midpoint, cross(omega, midpoint), 3)
+    paths = [[], [hinge], [hinge], [(*hinge[:2], 4)]]  # the torso's joint: the hinge's midpoint, its own speed
     if model.knee:
         at = where.point(1, model.knee.point)
-        paths[2] = [hinge, (at, cross(omega, at) + x[7] * cross(where.hinge, at - where.origin), n - 1)]
+        paths[2] = [hinge, (at, cross(omega, at) + x[7] * cross(where.hinge, at - midpoint), n - 1)]
     return paths
 
 

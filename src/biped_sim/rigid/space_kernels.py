@@ -186,8 +186,7 @@ def knee_frame(p: np.ndarray, x: np.ndarray, swing: np.ndarray) -> tuple[np.ndar
     the swing leg's and zero without knees."""
     if p[HAS_KNEES] != 1.0:
         return swing, np.zeros(3)
-    c, s = math.cos(x[KNEE_ANGLE]), math.sin(x[KNEE_ANGLE])
-    shank = mat_mat(swing, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
+    shank = turned_y(swing, x[KNEE_ANGLE])
     knee = p[KNEE_POINT : KNEE_POINT + 3].copy()
     return shank, mat_vec(swing, knee) - mat_vec(shank, knee)
 
@@ -229,11 +228,12 @@ def _add_part(
 ) -> None:  # fmt: skip
     """The part at parameter offset ``o`` (turned by ``turn``, its frame's origin ``at``) added to Kane's M
     (m A^T A + B^T I B) and F (A^T m (g - b) - B^T (I e + w x I w)), in place, over the speeds ``u``. ``joints``
-    rows: the hinge's midpoint, the knee's point and the torso's joint (the midpoint), then their velocities, then
-    omega x axis (every axis turns with the stance leg); the part's frame (p[o]) says which joints turn it (all
-    about ``axis``): the swing leg the hinge, its shank the knee too, the torso its own joint (:func:`_path`)."""
-    omega, m, n = u[:3], p[o + 1], u.shape[0]
-    first, last = _path(int(p[o]))
+    rows: the hinge's midpoint (the torso's joint too) and the knee's point, then their velocities, then omega x axis
+    (every axis turns with the stance leg); the part's frame (p[o]) says which joints turn it (all about ``axis``):
+    the swing leg the hinge, its shank the knee too, the torso its own joint at the midpoint (:func:`_joint_count`,
+    :func:`_slot`)."""
+    omega, m, n, frame = u[:3], p[o + 1], u.shape[0], int(p[o])
+    count = _joint_count(frame)
     r = at + mat_vec(turn, p[o + 2 : o + 5])
     inertia = mat_mat(mat_mat(turn, np.ascontiguousarray(p[o + 5 : o + 14]).reshape((3, 3))), turn.T)
     a_matrix = np.zeros((3, n))
@@ -242,9 +242,9 @@ def _add_part(
         a_matrix[i, (i + 1) % 3] = r[(i + 2) % 3]
         a_matrix[i, (i + 2) % 3] = -r[(i + 1) % 3]
         b_matrix[i, i] = 1.0
-    for j in range(first, last):  # axis x (r - joint_j) on joint j's speed
+    for j in range(count):  # axis x (r - joint_j) on joint j's speed
         dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
-        k = _slot(j, n)
+        k = _slot(j, n, frame)
         a_matrix[0, k] = axis[1] * dz - axis[2] * dy
         a_matrix[1, k] = axis[2] * dx - axis[0] * dz
         a_matrix[2, k] = axis[0] * dy - axis[1] * dx
@@ -255,11 +255,11 @@ def _add_part(
         for j in range(n):
             v[i] += a_matrix[i, j] * u[j]
             w[i] += b_matrix[i, j] * u[j]
-    b, turning, spin = cross(omega, v - p_dot), 0.0, joints[6]
-    for j in range(first, last):  # d/dt of rate_j axis x (r - joint_j): spin x (r - joint_j) + axis x (v - v_joint_j)
-        rate = u[_slot(j, n)]
+    b, turning, spin = cross(omega, v - p_dot), 0.0, joints[4]
+    for j in range(count):  # d/dt of rate_j axis x (r - joint_j): spin x (r - joint_j) + axis x (v - v_joint_j)
+        rate = u[_slot(j, n, frame)]
         dx, dy, dz = r[0] - joints[j, 0], r[1] - joints[j, 1], r[2] - joints[j, 2]
-        vx, vy, vz = v[0] - joints[3 + j, 0], v[1] - joints[3 + j, 1], v[2] - joints[3 + j, 2]
+        vx, vy, vz = v[0] - joints[2 + j, 0], v[1] - joints[2 + j, 1], v[2] - joints[2 + j, 2]
         b[0] += rate * (spin[1] * dz - spin[2] * dy + axis[1] * vz - axis[2] * vy)
         b[1] += rate * (spin[2] * dx - spin[0] * dz + axis[2] * vx - axis[0] * vz)
         b[2] += rate * (spin[0] * dy - spin[1] * dx + axis[0] * vy - axis[1] * vx)
@@ -276,16 +276,26 @@ def _add_part(
 
 
 @njit(cache=True, inline="always")
-def _path(frame: int) -> tuple[int, int]:
-    """The joints (rows of :func:`_add_part`'s ``joints``, first and past-last) that turn a part of ``frame``."""
-    return (2, 3) if frame == TORSO_FRAME else (0, frame)
+def _joint_count(frame: int) -> int:
+    """How many of :func:`_add_part`'s joints (the first rows) turn a part of ``frame``: the torso its own joint,
+    at the hinge's midpoint (row 0)."""
+    return 1 if frame == TORSO_FRAME else frame
 
 
 @njit(cache=True, inline="always")
-def _slot(joint: int, n: int) -> int:
-    """The speed of joint ``joint`` (0 hinge, 1 knee, 2 torso) among ``n``: the hinge's 3, the torso's 4, the knee's
-    the last."""
-    return 3 if joint == 0 else (n - 1 if joint == 1 else 4)
+def _slot(joint: int, n: int, frame: int) -> int:
+    """The speed among ``n`` of joint ``joint`` (row 0: the hinge, or the torso's joint for the torso; row 1: the
+    knee) turning a part of ``frame``: the hinge's 3, the torso's 4, the knee's the last."""
+    if joint == 1:
+        return n - 1
+    return 4 if frame == TORSO_FRAME else 3
+
+
+@njit(cache=True, inline="always")  # inlined: a kernel of its own would be one more compile
+def turned_y(rotation: np.ndarray, angle: float) -> np.ndarray:
+    """``rotation`` turned by ``angle`` about its y axis: rotation Ry(angle)."""
+    c, s = math.cos(angle), math.sin(angle)
+    return mat_mat(rotation, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
 
 
 @kernel
@@ -303,22 +313,21 @@ def space_flow(p: np.ndarray, x: np.ndarray) -> np.ndarray:
     u = np.empty(n)
     for i in range(4):
         u[i] = x[4 + i]
-    joints = np.empty((7, 3))  # _add_part's: the joints' points, their velocities, omega x axis
+    joints = np.empty((5, 3))  # _add_part's: the joints' points, their velocities, omega x axis
     for i in range(3):
-        joints[0, i], joints[1, i], joints[2, i] = -foot[i], -foot[i], -foot[i]
+        joints[0, i], joints[1, i] = -foot[i], -foot[i]
     if knees:
         u[n - 1] = x[KNEE_RATE]
         joints[1] += mat_vec(swing, p[KNEE_POINT : KNEE_POINT + 3].copy())
     torso = stance
     if at:
         u[4] = x[at + 1]
-        c, s = math.cos(x[at]), math.sin(x[at])
-        torso = mat_mat(stance, np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
+        torso = turned_y(stance, x[at])
     omega = x[4:7]
     rows = (cross(omega, joints[0]), cross(omega, joints[1]) + x[7] * cross(axis, joints[1] - joints[0]))
     spin = cross(omega, axis)
     for i in range(3):  # not slice assignments: their shape check's message compiles numba's string functions
-        joints[3, i], joints[4, i], joints[5, i], joints[6, i] = rows[0][i], rows[1][i], rows[0][i], spin[i]
+        joints[2, i], joints[3, i], joints[4, i] = rows[0][i], rows[1][i], spin[i]
     mass = np.zeros((n, n))
     force = np.zeros(n)
     for k in range(int(p[3])):

@@ -98,8 +98,8 @@ class Torso:
 
 @dataclass(frozen=True)
 class SpaceModel:
-    """The walker in its frame: parts (the stance leg's, the swing leg's, a hip mass), the two feet, gravity and
-    slope, and the swing knee if the legs have knees."""
+    """The walker in its frame: parts (the stance leg's, the swing leg's, a hip mass, a torso), the two feet,
+    gravity and slope, the swing knee if the legs have knees, the torso's elements if it has a torso."""
 
     parts: tuple[Part, ...]
     feet: tuple[Foot, Foot]
@@ -116,12 +116,12 @@ class SpaceModel:
 
     @property
     def n_state(self) -> int:
-        """The state's length: ``STATE_NAMES``, and ``KNEE_NAMES`` with knees."""
+        """The state's length (:attr:`state_names`)."""
         return len(self.state_names)
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        """The state's names."""
+        """The state's names: ``STATE_NAMES``, then ``KNEE_NAMES`` with knees, ``TORSO_NAMES`` with a torso."""
         return STATE_NAMES + (KNEE_NAMES if self.knee else ()) + (TORSO_NAMES if self.torso else ())
 
     @property

@@ -72,7 +72,7 @@ def flow_share() -> tuple[Callee, ...]:
     p, x, (tab, sc, _) = _stand_ins()
     turn, v = np.zeros((3, 3)), np.zeros(3)
     return (
-        (_add_part, (p, 0, np.zeros(4), turn, v, v, np.zeros((7, 3)), v, np.zeros((4, 4)), np.zeros(4))),
+        (_add_part, (p, 0, np.zeros(4), turn, v, v, np.zeros((5, 3)), v, np.zeros((4, 4)), np.zeros(4))),
         (contact_rate, (p, turn, v, v)),
         (torso_elements, (p, x)),
         (space_flow, (p, x)),
